@@ -1,0 +1,496 @@
+//! The same-orientation extended table (paper section 3, Tables 5–7, eq. 18–22): joints, base and tool
+//! rows, forward kinematics and the geometric Jacobian.
+
+use nalgebra::{Isometry3, Matrix3, Matrix6xX, Unit, Vector3};
+
+use crate::error_params::ErrorParams;
+use crate::frame::{AxisKind, Frame};
+use crate::ChainError;
+
+/// Whether a joint turns or slides along its axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the axis; the joint variable is an angle (radians inside the library).
+    Revolute,
+    /// Translation along the axis; the joint variable is a length (millimetres).
+    Prismatic,
+}
+
+/// Lower and upper bound of a joint variable (radians or millimetres).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointLimits {
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+}
+
+impl JointLimits {
+    /// `true` when `lower ≤ q ≤ upper`.
+    pub fn contains(&self, q: f64) -> bool {
+        q >= self.lower && q <= self.upper
+    }
+
+    /// `q` clamped into the limits.
+    pub fn clamp(&self, q: f64) -> f64 {
+        q.clamp(self.lower, self.upper)
+    }
+}
+
+/// One joint row of the extended table (Table 7).
+///
+/// The row transform, in the canonical grouping (see [`crate::ErrorGrouping`]), is
+/// `Trans(offset + Δp) · Rx(Δθx) · Ry(Δθy) · Rz(Δθz) · Rot_axis(q + zero)` for a revolute joint and
+/// `… · Trans(axis · (q + zero))` for a prismatic one. The offset is expressed in the previous joint's
+/// frame; at the zero configuration of an error-free chain every joint frame has the base's orientation
+/// (the paper's first rule, section 2.3), and the joint turns about one of its own axes (second rule).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Joint {
+    /// Name, used in reports and files.
+    pub name: String,
+    /// Translation (px, py, pz) from the previous joint, mm, in the previous joint's frame.
+    pub offset: Vector3<f64>,
+    /// The joint axis in the joint's own frame: ±X, ±Y, ±Z or any unit axis (imported robots).
+    pub axis: Unit<Vector3<f64>>,
+    /// Revolute or prismatic.
+    pub kind: JointKind,
+    /// Zero offset added to the joint variable (radians or mm).
+    pub zero: f64,
+    /// Limits of the joint variable as commanded (before the zero offset), if known.
+    pub limits: Option<JointLimits>,
+    /// The six error parameters of this row.
+    pub error: ErrorParams,
+}
+
+impl Joint {
+    /// A revolute joint with the given offset (mm) and axis, no zero offset, no limits, no errors.
+    pub fn revolute(name: impl Into<String>, offset: Vector3<f64>, axis: Unit<Vector3<f64>>) -> Self {
+        Self {
+            name: name.into(),
+            offset,
+            axis,
+            kind: JointKind::Revolute,
+            zero: 0.0,
+            limits: None,
+            error: ErrorParams::ZERO,
+        }
+    }
+
+    /// A prismatic joint with the given offset (mm) and axis.
+    pub fn prismatic(name: impl Into<String>, offset: Vector3<f64>, axis: Unit<Vector3<f64>>) -> Self {
+        Self { kind: JointKind::Prismatic, ..Self::revolute(name, offset, axis) }
+    }
+
+    /// Sets the limits.
+    pub fn with_limits(mut self, lower: f64, upper: f64) -> Self {
+        self.limits = Some(JointLimits { lower, upper });
+        self
+    }
+}
+
+/// A fixed row of the table: the base row (row 0 of Table 7) or the tool (last joint → TCP).
+///
+/// Transform: `Trans(translation + Δp) · Rx(Δθx) · Ry(Δθy) · Rz(Δθz) · rotation`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FixedRow {
+    /// Nominal translation, mm.
+    pub translation: Vector3<f64>,
+    /// Nominal rotation.
+    pub rotation: nalgebra::UnitQuaternion<f64>,
+    /// Error parameters of the row.
+    pub error: ErrorParams,
+}
+
+impl FixedRow {
+    /// The identity row.
+    pub fn identity() -> Self {
+        Self::from_isometry(&Isometry3::identity())
+    }
+
+    /// A row with the given nominal pose and no errors.
+    pub fn from_isometry(iso: &Isometry3<f64>) -> Self {
+        Self { translation: iso.translation.vector, rotation: iso.rotation, error: ErrorParams::ZERO }
+    }
+
+    /// The nominal pose, errors ignored.
+    pub fn nominal(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(self.translation.into(), self.rotation)
+    }
+
+    /// The pose including the errors.
+    pub fn pose(&self) -> Isometry3<f64> {
+        self.frame().to_isometry()
+    }
+
+    fn frame(&self) -> Frame {
+        let nominal_rot = *self.rotation.to_rotation_matrix().matrix();
+        Frame::new(self.error.rotation_matrix() * nominal_rot, self.translation + self.error.translation)
+    }
+}
+
+/// Precomputed per-joint data for the FK hot path.
+#[derive(Clone, Debug, PartialEq)]
+struct Link {
+    /// `Trans(offset + Δp) · R(Δθ)`.
+    fixed: Frame,
+    axis: AxisKind,
+    axis_vec: Vector3<f64>,
+    kind: JointKind,
+    zero: f64,
+}
+
+/// A serial chain in the same-orientation extended convention: base row, joints, tool row.
+///
+/// The forward model is eq. 22 in the canonical grouping:
+/// `base_from_tcp = base_row · Π_i (Trans(p_i + Δp_i) · R(Δθ_i) · Rot_axis_i(q_i + zero_i)) · tool_row`.
+/// A `Chain` is an immutable value: changing error parameters returns a new chain.
+///
+/// ```
+/// use approx::assert_relative_eq;
+/// use nalgebra::{Isometry3, Vector3};
+/// use thermokin_chain::{Chain, FixedRow, Joint};
+/// let joints = vec![
+///     Joint::revolute("j1", Vector3::new(0.0, 0.0, 100.0), Vector3::z_axis()),
+///     Joint::revolute("j2", Vector3::new(0.0, 0.0, 200.0), Vector3::y_axis()),
+/// ];
+/// let tool = FixedRow::from_isometry(&Isometry3::translation(0.0, 0.0, 300.0));
+/// let chain = Chain::new(FixedRow::identity(), joints, tool).unwrap();
+/// let q = [0.0, 90f64.to_radians()];
+/// let base_from_tcp = chain.tool_pose(&q).unwrap();
+/// assert_relative_eq!(base_from_tcp.translation.vector, Vector3::new(300.0, 0.0, 300.0), epsilon = 1e-9);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chain {
+    base: FixedRow,
+    joints: Vec<Joint>,
+    tool: FixedRow,
+    base_frame: Frame,
+    tool_frame: Frame,
+    links: Vec<Link>,
+}
+
+impl Chain {
+    /// Builds a chain, checking that every number is finite and every axis has unit length.
+    pub fn new(base: FixedRow, joints: Vec<Joint>, tool: FixedRow) -> Result<Self, ChainError> {
+        check_row("base", &base)?;
+        check_row("tool", &tool)?;
+        let mut links = Vec::with_capacity(joints.len());
+        for (index, joint) in joints.iter().enumerate() {
+            let what = |field: &'static str| ChainError::NonFinite { joint: index + 1, field };
+            if !joint.offset.iter().all(|v| v.is_finite()) {
+                return Err(what("offset"));
+            }
+            if !joint.zero.is_finite() {
+                return Err(what("zero"));
+            }
+            if !joint.error.is_finite() {
+                return Err(what("error"));
+            }
+            let n = joint.axis.norm();
+            if !n.is_finite() || (n - 1.0).abs() > 1e-9 {
+                return Err(ChainError::BadAxis { joint: index + 1 });
+            }
+            if let Some(l) = joint.limits {
+                if !(l.lower.is_finite() && l.upper.is_finite()) || l.lower > l.upper {
+                    return Err(ChainError::BadLimits { joint: index + 1, lower: l.lower, upper: l.upper });
+                }
+            }
+            links.push(Link {
+                fixed: Frame::new(joint.error.rotation_matrix(), joint.offset + joint.error.translation),
+                axis: AxisKind::classify(&joint.axis),
+                axis_vec: joint.axis.into_inner(),
+                kind: joint.kind,
+                zero: joint.zero,
+            });
+        }
+        Ok(Self { base_frame: base.frame(), tool_frame: tool.frame(), base, joints, tool, links })
+    }
+
+    /// Number of joints.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The joints.
+    pub fn joints(&self) -> &[Joint] {
+        &self.joints
+    }
+
+    /// The base row.
+    pub fn base(&self) -> &FixedRow {
+        &self.base
+    }
+
+    /// The tool row (last joint → TCP).
+    pub fn tool(&self) -> &FixedRow {
+        &self.tool
+    }
+
+    /// A copy with the error parameters replaced: `joints[i]` for joint `i`, then base and tool.
+    pub fn with_errors(
+        &self,
+        base: ErrorParams,
+        joints: &[ErrorParams],
+        tool: ErrorParams,
+    ) -> Result<Chain, ChainError> {
+        if joints.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: joints.len() });
+        }
+        let mut base_row = self.base.clone();
+        base_row.error = base;
+        let mut tool_row = self.tool.clone();
+        tool_row.error = tool;
+        let js = self
+            .joints
+            .iter()
+            .zip(joints)
+            .map(|(j, e)| Joint { error: *e, ..j.clone() })
+            .collect();
+        Chain::new(base_row, js, tool_row)
+    }
+
+    /// A copy with every error parameter set to zero: the nominal robot.
+    pub fn nominal(&self) -> Chain {
+        let zeros = vec![ErrorParams::ZERO; self.dof()];
+        // Cannot fail: removing errors keeps every number finite.
+        self.with_errors(ErrorParams::ZERO, &zeros, ErrorParams::ZERO).unwrap_or_else(|_| self.clone())
+    }
+
+    /// A copy with the given joint zero offsets (radians or mm).
+    pub fn with_zeros(&self, zeros: &[f64]) -> Result<Chain, ChainError> {
+        if zeros.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: zeros.len() });
+        }
+        let js = self.joints.iter().zip(zeros).map(|(j, z)| Joint { zero: *z, ..j.clone() }).collect();
+        Chain::new(self.base.clone(), js, self.tool.clone())
+    }
+
+    /// A copy with a different tool row.
+    pub fn with_tool(&self, tool: FixedRow) -> Result<Chain, ChainError> {
+        Chain::new(self.base.clone(), self.joints.clone(), tool)
+    }
+
+    /// A copy with a different base row.
+    pub fn with_base(&self, base: FixedRow) -> Result<Chain, ChainError> {
+        Chain::new(base, self.joints.clone(), self.tool.clone())
+    }
+
+    fn check_q(&self, q: &[f64]) -> Result<(), ChainError> {
+        if q.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: q.len() });
+        }
+        if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+            return Err(ChainError::NonFiniteJoint { joint: i + 1 });
+        }
+        Ok(())
+    }
+
+    /// `true` when every joint value lies within its limits (joints without limits always do).
+    pub fn within_limits(&self, q: &[f64]) -> bool {
+        self.joints.iter().zip(q).all(|(j, &v)| j.limits.is_none_or(|l| l.contains(v)))
+    }
+
+    /// Applies joint `i`'s motion to the frame in front of it (after its fixed row).
+    #[inline(always)]
+    fn apply_joint(link: &Link, frame: &mut Frame, q: f64) {
+        let v = q + link.zero;
+        match link.kind {
+            JointKind::Revolute => {
+                let (s, c) = v.sin_cos();
+                frame.rotate_local(&link.axis, s, c);
+            }
+            JointKind::Prismatic => frame.translate_local(&(link.axis_vec * v)),
+        }
+    }
+
+    /// Forward kinematics, unchecked length: `base_from_tcp`.
+    #[inline]
+    fn tool_frame_unchecked(&self, q: &[f64]) -> Frame {
+        let mut base_from_link = self.base_frame;
+        for (link, &qi) in self.links.iter().zip(q) {
+            base_from_link = base_from_link.mul(&link.fixed);
+            Self::apply_joint(link, &mut base_from_link, qi);
+        }
+        base_from_link.mul(&self.tool_frame)
+    }
+
+    /// The TCP pose in the base frame (`base_from_tcp`), mm. `q` in radians (mm for prismatic joints).
+    pub fn tool_pose(&self, q: &[f64]) -> Result<Isometry3<f64>, ChainError> {
+        self.check_q(q)?;
+        Ok(self.tool_frame_unchecked(q).to_isometry())
+    }
+
+    /// The TCP position and rotation matrix, without building a quaternion (the IK inner loop).
+    pub fn tool_position_rotation(&self, q: &[f64]) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
+        self.check_q(q)?;
+        let f = self.tool_frame_unchecked(q);
+        Ok((f.trans, f.rot))
+    }
+
+    /// Every joint frame in the base frame, after the joint's motion (`base_from_joint_i`), then the TCP:
+    /// `dof + 1` poses.
+    pub fn joint_frames(&self, q: &[f64]) -> Result<Vec<Isometry3<f64>>, ChainError> {
+        self.check_q(q)?;
+        let mut out = Vec::with_capacity(self.dof() + 1);
+        let mut base_from_link = self.base_frame;
+        for (link, &qi) in self.links.iter().zip(q) {
+            base_from_link = base_from_link.mul(&link.fixed);
+            Self::apply_joint(link, &mut base_from_link, qi);
+            out.push(base_from_link.to_isometry());
+        }
+        out.push(base_from_link.mul(&self.tool_frame).to_isometry());
+        Ok(out)
+    }
+
+    /// The geometric Jacobian (6 × dof) at the TCP in the base frame: rows 0–2 linear velocity (mm per
+    /// radian, or mm/mm for a prismatic joint), rows 3–5 angular velocity.
+    ///
+    /// Column i of a revolute joint is `[z_i × (p_tcp − o_i); z_i]` with `z_i` the joint axis and `o_i` its
+    /// origin in the base frame; a prismatic joint gives `[z_i; 0]`.
+    pub fn jacobian(&self, q: &[f64]) -> Result<Matrix6xX<f64>, ChainError> {
+        let mut cols = vec![[0.0; 6]; self.dof()];
+        self.pose_and_jacobian_into(q, &mut cols)?;
+        Ok(Matrix6xX::from_fn(self.dof(), |r, c| cols[c][r]))
+    }
+
+    /// TCP pose and Jacobian together, the Jacobian written column by column into `columns` (length
+    /// `dof`); no allocation. Returns the TCP position and rotation matrix.
+    pub fn pose_and_jacobian_into(
+        &self,
+        q: &[f64],
+        columns: &mut [[f64; 6]],
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
+        self.check_q(q)?;
+        if columns.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: columns.len() });
+        }
+        let mut base_from_link = self.base_frame;
+        for ((link, &qi), col) in self.links.iter().zip(q).zip(columns.iter_mut()) {
+            base_from_link = base_from_link.mul(&link.fixed);
+            // The axis is the same before and after the joint's own motion; store it and the origin now,
+            // the lever arm is completed once the TCP is known.
+            let z = base_from_link.rot * link.axis_vec;
+            let o = base_from_link.trans;
+            *col = [o.x, o.y, o.z, z.x, z.y, z.z];
+            Self::apply_joint(link, &mut base_from_link, qi);
+        }
+        let tcp = base_from_link.mul(&self.tool_frame);
+        let p = tcp.trans;
+        for (link, col) in self.links.iter().zip(columns.iter_mut()) {
+            let o = Vector3::new(col[0], col[1], col[2]);
+            let z = Vector3::new(col[3], col[4], col[5]);
+            *col = match link.kind {
+                JointKind::Revolute => {
+                    let v = z.cross(&(p - o));
+                    [v.x, v.y, v.z, z.x, z.y, z.z]
+                }
+                JointKind::Prismatic => [z.x, z.y, z.z, 0.0, 0.0, 0.0],
+            };
+        }
+        Ok((p, tcp.rot))
+    }
+}
+
+fn check_row(which: &'static str, row: &FixedRow) -> Result<(), ChainError> {
+    let ok = row.translation.iter().all(|v| v.is_finite())
+        && row.rotation.coords.iter().all(|v| v.is_finite())
+        && row.error.is_finite();
+    if ok { Ok(()) } else { Err(ChainError::NonFiniteRow { row: which }) }
+}
+
+/// Layout of the columns of [`Chain::parameter_jacobian`]: six error parameters for the base row, six per
+/// joint, six for the tool row, then one zero offset per joint.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ParameterLayout {
+    /// Number of joints.
+    pub dof: usize,
+}
+
+impl ParameterLayout {
+    /// Total number of columns: `6 (base) + 6·dof + 6 (tool) + dof`.
+    pub fn len(&self) -> usize {
+        12 + 7 * self.dof
+    }
+    /// Never empty (the base and tool rows are always there).
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+    /// First column of the base row.
+    pub fn base(&self) -> usize {
+        0
+    }
+    /// First column of joint `i` (0-based).
+    pub fn joint(&self, i: usize) -> usize {
+        6 + 6 * i
+    }
+    /// First column of the tool row.
+    pub fn tool(&self) -> usize {
+        6 + 6 * self.dof
+    }
+    /// Column of the zero offset of joint `i` (0-based).
+    pub fn zero(&self, i: usize) -> usize {
+        12 + 6 * self.dof + i
+    }
+}
+
+impl Chain {
+    /// The column layout of [`Chain::parameter_jacobian`].
+    pub fn parameter_layout(&self) -> ParameterLayout {
+        ParameterLayout { dof: self.dof() }
+    }
+
+    /// Derivatives of the TCP pose with respect to every error parameter (mm and rad) and every joint zero
+    /// offset, as twists in the base frame at the TCP: rows 0–2 linear, 3–5 angular; columns as in
+    /// [`ParameterLayout`].
+    ///
+    /// Each row is `Trans(p + Δp) · Rx(a) · Ry(b) · Rz(c) · motion` behind a parent frame `P`. A change of
+    /// `Δp` moves everything behind it along `R_P e_k`: column `[R_P e_k; 0]`. A change of `a`, `b`, `c`
+    /// turns everything behind it about the axis `u = R_P e_x`, `R_P Rx(a) e_y`, `R_P Rx(a) Ry(b) e_z`
+    /// through the row's origin `o`: column `[u × (p_tcp − o); u]`. A zero offset acts like the joint.
+    pub fn parameter_jacobian(&self, q: &[f64]) -> Result<Matrix6xX<f64>, ChainError> {
+        self.check_q(q)?;
+        let layout = self.parameter_layout();
+        // Collect (column, direction, origin, is_rotation) first; the lever arms need the TCP.
+        let mut entries: Vec<(usize, Vector3<f64>, Vector3<f64>, bool)> = Vec::with_capacity(layout.len());
+        let mut push_row = |first: usize, parent: &Frame, row_origin: Vector3<f64>, angles: &Vector3<f64>| {
+            for k in 0..3 {
+                entries.push((first + k, parent.rot.column(k).into_owned(), row_origin, false));
+            }
+            let ux = parent.rot.column(0).into_owned();
+            let r_a = parent.rot * Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), angles.x));
+            let uy = r_a.column(1).into_owned();
+            let r_ab = r_a * Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), angles.y));
+            let uz = r_ab.column(2).into_owned();
+            entries.push((first + 3, ux, row_origin, true));
+            entries.push((first + 4, uy, row_origin, true));
+            entries.push((first + 5, uz, row_origin, true));
+        };
+        let world = Frame::new(Matrix3::identity(), Vector3::zeros());
+        let base_origin = self.base.translation + self.base.error.translation;
+        push_row(layout.base(), &world, base_origin, &self.base.error.rotation);
+        let mut frame = self.base_frame;
+        let mut zero_entries = Vec::with_capacity(self.dof());
+        for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
+            let origin = frame.rot * link.fixed.trans + frame.trans;
+            push_row(layout.joint(i), &frame, origin, &self.joints[i].error.rotation);
+            frame = frame.mul(&link.fixed);
+            let z = frame.rot * link.axis_vec;
+            zero_entries.push((layout.zero(i), z, frame.trans, link.kind == JointKind::Revolute));
+            Self::apply_joint(link, &mut frame, qi);
+        }
+        let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
+        push_row(layout.tool(), &frame, tool_origin, &self.tool.error.rotation);
+        let p = frame.mul(&self.tool_frame).trans;
+        let mut jac = Matrix6xX::zeros(layout.len());
+        for (col, u, o, rotation) in entries.into_iter().chain(zero_entries) {
+            if rotation {
+                let v = u.cross(&(p - o));
+                jac.fixed_view_mut::<3, 1>(0, col).copy_from(&v);
+                jac.fixed_view_mut::<3, 1>(3, col).copy_from(&u);
+            } else {
+                jac.fixed_view_mut::<3, 1>(0, col).copy_from(&u);
+            }
+        }
+        Ok(jac)
+    }
+}

@@ -1,0 +1,71 @@
+//! `thermokin-chain`: the kinematic core — DH, modified DH and the same-orientation extended table of
+//! the paper (sections 2.2 and 3), forward kinematics and the geometric Jacobian.
+//!
+//! Units inside: millimetres and radians. Degrees exist only at the file and CLI boundary (other crates).
+//! This crate does no I/O.
+
+mod chain;
+mod dh;
+mod error_params;
+mod frame;
+
+pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
+pub use dh::{DhConvention, DhRow, DhTable};
+pub use error_params::{xyz_angles, xyz_rotation, ErrorGrouping, ErrorParams};
+
+/// Errors of the kinematic core.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ChainError {
+    /// A joint vector of the wrong length.
+    #[error("expected {expected} joint values, got {got}")]
+    WrongJointCount {
+        /// Number of joints of the chain.
+        expected: usize,
+        /// Number given.
+        got: usize,
+    },
+    /// A joint value that is NaN or infinite.
+    #[error("joint {joint}: value is not finite")]
+    NonFiniteJoint {
+        /// 1-based joint number.
+        joint: usize,
+    },
+    /// A parameter of a joint row that is NaN or infinite.
+    #[error("joint {joint}: {field} is not finite")]
+    NonFinite {
+        /// 1-based joint number.
+        joint: usize,
+        /// Which field.
+        field: &'static str,
+    },
+    /// A base or tool row with a NaN or infinite value.
+    #[error("{row} row: a value is not finite")]
+    NonFiniteRow {
+        /// `base` or `tool`.
+        row: &'static str,
+    },
+    /// A joint axis that is zero, not finite or not of unit length.
+    #[error("joint {joint}: the axis must be a finite unit vector")]
+    BadAxis {
+        /// 1-based joint number.
+        joint: usize,
+    },
+    /// Limits that are not finite or have lower > upper.
+    #[error("joint {joint}: bad limits [{lower}, {upper}]")]
+    BadLimits {
+        /// 1-based joint number.
+        joint: usize,
+        /// Lower bound.
+        lower: f64,
+        /// Upper bound.
+        upper: f64,
+    },
+    /// No modified-DH table reproduces this chain.
+    #[error("no modified-DH table exists: joint {joint}: {reason}")]
+    NoModifiedDh {
+        /// 1-based joint number where the construction fails.
+        joint: usize,
+        /// What fails.
+        reason: String,
+    },
+}

@@ -1,0 +1,5 @@
+//! Integration tests of the kinematic core: conventions, conversions, Jacobians.
+
+mod conversions;
+mod jacobians;
+mod support;
