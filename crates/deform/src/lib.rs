@@ -1,1 +1,149 @@
-//! placeholder
+//! `thermokin-deform`: the error-parameter model of the paper — deviation tables (six parameters per row,
+//! section 3, Tables 6–11), how they grow with operating time (section 4: static, linear to the 180-minute
+//! stabilization, exponential, cubic, temperature-driven), and how a table deforms a chain.
+//!
+//! A deviation table never mutates a chain: [`DeviationTable::apply`] returns a new one. The analytic
+//! parameter Jacobian lives with the kinematics ([`Chain::parameter_jacobian`]) and is re-exported here.
+
+mod coppeliasim;
+mod profile;
+
+pub use coppeliasim::{coppeliasim_object_rotation, CoppeliaSimEdits};
+pub use profile::{AfterStabilization, RowFactors, TemperatureLog, TimeProfile};
+pub use thermokin_chain::{ErrorParams, ParameterLayout};
+
+use thermokin_chain::{Chain, ChainError};
+
+/// Errors of the deformation model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeformError {
+    /// A table with a different number of joint rows than the chain has joints.
+    #[error("the deviation table has {rows} joint rows but the robot has {joints} joints")]
+    RowCount {
+        /// Rows in the table.
+        rows: usize,
+        /// Joints in the chain.
+        joints: usize,
+    },
+    /// A profile parameter out of its domain.
+    #[error("profile: {0}")]
+    BadProfile(String),
+    /// A time outside what the profile can answer (negative or not finite, beyond a temperature log).
+    #[error("time {time_min} min: {reason}")]
+    BadTime {
+        /// Requested time, minutes.
+        time_min: f64,
+        /// Why it cannot be answered.
+        reason: String,
+    },
+    /// The deformed chain is invalid (non-finite values).
+    #[error(transparent)]
+    Chain(#[from] ChainError),
+}
+
+/// A row of a deviation table.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Row {
+    /// Row 0 (base).
+    Base,
+    /// Joint `i` (0-based).
+    Joint(usize),
+    /// The tool row.
+    Tool,
+}
+
+/// A deviation table: six error parameters for the base row, each joint and the tool row
+/// (ΔX, ΔY, ΔZ in mm; Δθx, Δθy, Δθz in radians inside the library, degrees in files).
+///
+/// The authors' CSV files hold one row per joint (`Dx,Dy,Dz,Dox,Doy,Doz`); their base and tool rows are
+/// zero (Table 9's seventh row, −0.0166 mm, is on joint 6 in the CSV).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviationTable {
+    /// Row 0 of Table 7.
+    pub base: ErrorParams,
+    /// One row per joint.
+    pub joints: Vec<ErrorParams>,
+    /// The tool row.
+    pub tool: ErrorParams,
+}
+
+/// How the parameters of a table act on the chain.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TableSemantics {
+    /// Each row's parameters are the row's error parameters in the canonical grouping:
+    /// `Trans(p + Δp) · Rx · Ry · Rz · Rot_axis(q)` (Table 7's reading; this library's model).
+    Canonical,
+    /// The way the authors' CoppeliaSim script applied a table (paper Appendix A, Figure A5): joint by
+    /// joint, the joint object's world position += (Dx, Dy, Dz) and its world X-Y-Z Euler angles +=
+    /// (Dox, Doy, Doz), children following, with the robot standing at `at` (joint values). The result is
+    /// re-expressed exactly as canonical error parameters.
+    CoppeliaSim(CoppeliaSimEdits),
+}
+
+impl DeviationTable {
+    /// A table of zeros for `dof` joints.
+    pub fn zeros(dof: usize) -> Self {
+        Self { base: ErrorParams::ZERO, joints: vec![ErrorParams::ZERO; dof], tool: ErrorParams::ZERO }
+    }
+
+    /// A table with the given joint rows and zero base and tool rows.
+    pub fn from_joint_rows(joints: Vec<ErrorParams>) -> Self {
+        Self { base: ErrorParams::ZERO, joints, tool: ErrorParams::ZERO }
+    }
+
+    /// Number of joint rows.
+    pub fn dof(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// Every row multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> Self {
+        self.scaled_rows(|_| factor)
+    }
+
+    /// Every row multiplied by its own factor.
+    pub fn scaled_rows(&self, factor: impl Fn(Row) -> f64) -> Self {
+        Self {
+            base: self.base.scaled(factor(Row::Base)),
+            joints: self.joints.iter().enumerate().map(|(i, e)| e.scaled(factor(Row::Joint(i)))).collect(),
+            tool: self.tool.scaled(factor(Row::Tool)),
+        }
+    }
+
+    /// Row-by-row sum.
+    pub fn add(&self, other: &DeviationTable) -> Result<Self, DeformError> {
+        if self.dof() != other.dof() {
+            return Err(DeformError::RowCount { rows: other.dof(), joints: self.dof() });
+        }
+        Ok(Self {
+            base: self.base.add(&other.base),
+            joints: self.joints.iter().zip(&other.joints).map(|(a, b)| a.add(b)).collect(),
+            tool: self.tool.add(&other.tool),
+        })
+    }
+
+    /// `true` when every parameter is zero.
+    pub fn is_zero(&self) -> bool {
+        self.base.is_zero() && self.tool.is_zero() && self.joints.iter().all(ErrorParams::is_zero)
+    }
+
+    /// The deformed chain: a new value, the nominal `chain` untouched. With [`TableSemantics::Canonical`]
+    /// the table's parameters are added to the chain's own error parameters.
+    pub fn apply(&self, chain: &Chain, semantics: &TableSemantics) -> Result<Chain, DeformError> {
+        if self.dof() != chain.dof() {
+            return Err(DeformError::RowCount { rows: self.dof(), joints: chain.dof() });
+        }
+        match semantics {
+            TableSemantics::Canonical => {
+                let joints: Vec<ErrorParams> =
+                    chain.joints().iter().zip(&self.joints).map(|(j, e)| j.error.add(e)).collect();
+                Ok(chain.with_errors(
+                    chain.base().error.add(&self.base),
+                    &joints,
+                    chain.tool().error.add(&self.tool),
+                )?)
+            }
+            TableSemantics::CoppeliaSim(edits) => edits.apply(chain, self),
+        }
+    }
+}

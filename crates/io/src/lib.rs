@@ -1,1 +1,80 @@
-//! placeholder
+//! `thermokin-io`: every file format at the edge of thermokin — robot TOML, deviation tables (the
+//! authors' CSV and TOML), targets CSV, temperature logs, the authors' results files — and atomic writes.
+//!
+//! This is the one boundary where millimetres and degrees become the library's millimetres and radians.
+//! Every error names the file, the line and the field. The readers know nothing about kinematics beyond
+//! building the chain's table.
+
+mod csvtext;
+mod deviation;
+mod paper;
+mod robot;
+mod targets;
+mod write;
+
+pub use deviation::{read_deviation_table, read_deviation_table_for, read_temperature_log};
+pub use paper::{read_paper_results, PaperResultRow};
+pub use robot::{parse_robot_toml, read_robot, LinkMass, Robot};
+pub use targets::{read_targets, Target, DEFAULT_ORIENTATION_DEG};
+pub use write::{write_atomic, write_atomic_with};
+
+use std::path::{Path, PathBuf};
+
+/// An input or output problem, located as precisely as the format allows.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    /// The file could not be read or written at all.
+    #[error("{path}: {message}")]
+    File {
+        /// The file.
+        path: PathBuf,
+        /// What the operating system said.
+        message: String,
+    },
+    /// The content is wrong at a known place.
+    #[error("{path}:{line}: {field}: {message}", path = path.display(), line = line.map_or("?".to_string(), |l| l.to_string()))]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line, when known.
+        line: Option<usize>,
+        /// The field, key or column.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl IoError {
+    pub(crate) fn input(path: &Path, line: Option<usize>, field: impl Into<String>, message: impl Into<String>) -> Self {
+        IoError::Input { path: path.to_path_buf(), line, field: field.into(), message: message.into() }
+    }
+
+    pub(crate) fn file(path: &Path, err: impl std::fmt::Display) -> Self {
+        IoError::File { path: path.to_path_buf(), message: err.to_string() }
+    }
+}
+
+/// Reads a whole file as UTF-8 text, without a leading byte-order mark. Non-UTF-8 content is an error
+/// naming the line of the first bad byte.
+pub fn read_text(path: &Path) -> Result<String, IoError> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::file(path, e))?;
+    match String::from_utf8(bytes) {
+        Ok(mut s) => {
+            if s.starts_with('\u{feff}') {
+                s.drain(..3);
+            }
+            Ok(s)
+        }
+        Err(e) => {
+            let good = e.utf8_error().valid_up_to();
+            let line = e.as_bytes()[..good].iter().filter(|&&b| b == b'\n').count() + 1;
+            Err(IoError::input(path, Some(line), "text", format!("not UTF-8 (byte {good})")))
+        }
+    }
+}
+
+/// 1-based line of a byte offset in `text`.
+pub(crate) fn line_of(text: &str, offset: usize) -> usize {
+    text.as_bytes()[..offset.min(text.len())].iter().filter(|&&b| b == b'\n').count() + 1
+}

@@ -1,0 +1,213 @@
+//! Time profiles: operating time t (minutes) → the deviation table in force at t.
+//!
+//! Paper section 4: the IRB 140 warms up for about 180 minutes before it stabilises; the authors grew the
+//! table linearly with time ("the maximum deformations … applied increasing linearly in each minute"), their
+//! ref. [26] found a cubic regression best, and their transient file keeps growing after minute 180
+//! (NOTES.md), hence linear with and without a plateau.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{DeformError, DeviationTable, Row};
+
+/// What a linear warm-up does after the stabilization time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AfterStabilization {
+    /// Hold the full table (the paper's description of thermal stabilization).
+    Plateau,
+    /// Keep growing at the same rate (what the authors' transient file does).
+    KeepGrowing,
+}
+
+/// How a deviation table grows with operating time. Every time-dependent profile gives a zero table at
+/// t = 0 (the cold robot); [`TimeProfile::Static`] gives the full table at every time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum TimeProfile {
+    /// The full table at every time: a robot already in its deformed state.
+    Static,
+    /// `min(t / stabilization_min, 1) · table` with a plateau, `t / stabilization_min · table` without.
+    Linear {
+        /// Time to thermal stabilization, minutes (paper: 180).
+        stabilization_min: f64,
+        /// Plateau or keep growing after it.
+        after: AfterStabilization,
+    },
+    /// First order: `(1 − e^(−t/τ)) · table`.
+    Exponential {
+        /// Time constant τ, minutes.
+        tau_min: f64,
+    },
+    /// Cubic regression (the paper's ref. [26]): `(c1 t + c2 t² + c3 t³) · table`, t in minutes.
+    Cubic {
+        /// `[c1, c2, c3]` in 1/min, 1/min², 1/min³.
+        coefficients: [f64; 3],
+    },
+    /// Temperature-driven: the table holds coefficients per kelvin, and joint `i`'s row is scaled by the
+    /// temperature rise of its sensor, `T_sensor(t) − T_reference`. The base row follows joint 1's sensor,
+    /// the tool row the last joint's.
+    Temperature {
+        /// The temperature log.
+        log: TemperatureLog,
+        /// For each joint, the log column (sensor name) that drives it.
+        sensors: Vec<String>,
+        /// Reference temperature, °C; the log's first sample of each sensor when absent.
+        reference_c: Option<f64>,
+    },
+}
+
+/// A temperature log: sample times (minutes, strictly increasing) and one series per named sensor (°C).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TemperatureLog {
+    /// Sample times, minutes.
+    pub times_min: Vec<f64>,
+    /// `(sensor name, temperatures)`, each as long as `times_min`.
+    pub sensors: Vec<(String, Vec<f64>)>,
+}
+
+impl TemperatureLog {
+    /// The series of a sensor.
+    pub fn series(&self, name: &str) -> Option<&[f64]> {
+        self.sensors.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice())
+    }
+
+    /// Linear interpolation of a series at `t`; `None` outside the logged interval.
+    pub fn interpolate(&self, values: &[f64], t: f64) -> Option<f64> {
+        let times = &self.times_min;
+        let first = *times.first()?;
+        let last = *times.last()?;
+        if !(first..=last).contains(&t) {
+            return None;
+        }
+        let k = times.partition_point(|&x| x <= t);
+        if k == 0 {
+            return values.first().copied();
+        }
+        if k >= times.len() {
+            return values.last().copied();
+        }
+        let (t0, t1) = (times[k - 1], times[k]);
+        let w = (t - t0) / (t1 - t0);
+        Some(values[k - 1] * (1.0 - w) + values[k] * w)
+    }
+}
+
+/// Scale factors of one time step: base row, each joint row, tool row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RowFactors {
+    /// Base row factor.
+    pub base: f64,
+    /// One factor per joint.
+    pub joints: Vec<f64>,
+    /// Tool row factor.
+    pub tool: f64,
+}
+
+impl TimeProfile {
+    /// The paper's default: linear to 180 minutes, then a plateau.
+    pub fn paper_linear() -> Self {
+        TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::Plateau }
+    }
+
+    /// Checks the profile's own parameters (and, for a temperature profile, its log and sensor names
+    /// against `dof` joints).
+    pub fn validate(&self, dof: usize) -> Result<(), DeformError> {
+        let bad = |s: String| Err(DeformError::BadProfile(s));
+        match self {
+            TimeProfile::Static => Ok(()),
+            TimeProfile::Linear { stabilization_min, .. } => {
+                if !(stabilization_min.is_finite() && *stabilization_min > 0.0) {
+                    return bad(format!("the stabilization time must be positive, got {stabilization_min} min"));
+                }
+                Ok(())
+            }
+            TimeProfile::Exponential { tau_min } => {
+                if !(tau_min.is_finite() && *tau_min > 0.0) {
+                    return bad(format!("the time constant must be positive, got {tau_min} min"));
+                }
+                Ok(())
+            }
+            TimeProfile::Cubic { coefficients } => {
+                if coefficients.iter().any(|c| !c.is_finite()) {
+                    return bad("cubic coefficients must be finite".into());
+                }
+                Ok(())
+            }
+            TimeProfile::Temperature { log, sensors, reference_c } => {
+                if sensors.len() != dof {
+                    return bad(format!("{} sensors named for {dof} joints", sensors.len()));
+                }
+                if log.times_min.len() < 2 {
+                    return bad("the temperature log needs at least two samples".into());
+                }
+                if log.times_min.windows(2).any(|w| !(w[1] > w[0])) || log.times_min.iter().any(|t| !t.is_finite()) {
+                    return bad("temperature log times must be finite and strictly increasing".into());
+                }
+                for s in sensors {
+                    match log.series(s) {
+                        None => return bad(format!("sensor `{s}` is not in the temperature log")),
+                        Some(v) if v.len() != log.times_min.len() || v.iter().any(|x| !x.is_finite()) => {
+                            return bad(format!("sensor `{s}`: every sample must be a finite temperature"));
+                        }
+                        Some(_) => {}
+                    }
+                }
+                if reference_c.is_some_and(|r| !r.is_finite()) {
+                    return bad("the reference temperature must be finite".into());
+                }
+                Ok(())
+            }
+        }
+    }
+
+    /// The scale factor of each row at operating time `t` (minutes).
+    pub fn row_factors(&self, t: f64, dof: usize) -> Result<RowFactors, DeformError> {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(DeformError::BadTime { time_min: t, reason: "time must be finite and ≥ 0".into() });
+        }
+        self.validate(dof)?;
+        let uniform = |f: f64| RowFactors { base: f, joints: vec![f; dof], tool: f };
+        Ok(match self {
+            TimeProfile::Static => uniform(1.0),
+            TimeProfile::Linear { stabilization_min, after } => {
+                let f = t / stabilization_min;
+                uniform(match after {
+                    AfterStabilization::Plateau => f.min(1.0),
+                    AfterStabilization::KeepGrowing => f,
+                })
+            }
+            TimeProfile::Exponential { tau_min } => uniform(-(-t / tau_min).exp_m1()),
+            TimeProfile::Cubic { coefficients: [c1, c2, c3] } => uniform(t * (c1 + t * (c2 + t * c3))),
+            TimeProfile::Temperature { log, sensors, reference_c } => {
+                let mut joints = Vec::with_capacity(dof);
+                for s in sensors {
+                    // validate() guarantees the series exists.
+                    let series = log.series(s).unwrap_or_default();
+                    let now = log.interpolate(series, t).ok_or_else(|| DeformError::BadTime {
+                        time_min: t,
+                        reason: format!(
+                            "outside the temperature log ({} to {} min)",
+                            log.times_min[0],
+                            log.times_min[log.times_min.len() - 1]
+                        ),
+                    })?;
+                    let reference = reference_c.unwrap_or(series[0]);
+                    joints.push(now - reference);
+                }
+                let base = joints.first().copied().unwrap_or(0.0);
+                let tool = joints.last().copied().unwrap_or(0.0);
+                RowFactors { base, joints, tool }
+            }
+        })
+    }
+
+    /// The table in force at time `t`: each row of `table` scaled by its factor.
+    pub fn table_at(&self, table: &DeviationTable, t: f64) -> Result<DeviationTable, DeformError> {
+        let f = self.row_factors(t, table.dof())?;
+        Ok(table.scaled_rows(|row| match row {
+            Row::Base => f.base,
+            Row::Joint(i) => f.joints[i],
+            Row::Tool => f.tool,
+        }))
+    }
+}

@@ -1,0 +1,60 @@
+//! A small CSV front end shared by the readers: records with their line numbers, and numeric cells with
+//! errors that name the file, line and column.
+
+use std::path::Path;
+
+use crate::IoError;
+
+/// One record: its 1-based line and its cells, trimmed.
+pub(crate) struct Record {
+    pub line: usize,
+    pub cells: Vec<String>,
+}
+
+/// Splits CSV text (LF or CRLF, any mix) into records, skipping blank lines. A file whose first line
+/// holds semicolons or tabs but no comma is refused as using the wrong delimiter.
+pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
+    if let Some(first) = text.lines().find(|l| !l.trim().is_empty()) {
+        if !first.contains(',') && (first.contains(';') || first.contains('\t')) {
+            return Err(IoError::input(path, Some(1), "delimiter", "expected commas; this file uses ';' or tabs"));
+        }
+    }
+    // Line by line: none of these formats has a quoted field spanning lines, and this keeps the line
+    // numbers exact whatever the mix of CRLF and LF.
+    let mut out = Vec::new();
+    for (index, raw) in text.split('\n').enumerate() {
+        let line = index + 1;
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        if raw.trim().is_empty() {
+            continue;
+        }
+        let mut reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(raw.as_bytes());
+        let mut record = csv::StringRecord::new();
+        match reader.read_record(&mut record) {
+            Ok(_) => {}
+            Err(e) => return Err(IoError::input(path, Some(line), "csv", e.to_string())),
+        }
+        let cells: Vec<String> = record.iter().map(|c| c.trim().to_string()).collect();
+        if cells.iter().all(|c| c.is_empty()) {
+            continue;
+        }
+        out.push(Record { line, cells });
+    }
+    Ok(out)
+}
+
+/// Parses a finite number from a cell; the error names the column.
+pub(crate) fn number(path: &Path, line: usize, column: &str, cell: &str) -> Result<f64, IoError> {
+    let v: f64 = cell
+        .parse()
+        .map_err(|_| IoError::input(path, Some(line), column, format!("`{cell}` is not a number")))?;
+    if !v.is_finite() {
+        return Err(IoError::input(path, Some(line), column, format!("`{cell}` is not a finite number")));
+    }
+    Ok(v)
+}
+
+/// Finds a column by name (case-insensitive) in a header record.
+pub(crate) fn column(header: &Record, name: &str) -> Option<usize> {
+    header.cells.iter().position(|c| c.eq_ignore_ascii_case(name))
+}

@@ -1,0 +1,64 @@
+//! The authors' results files (`results-static-case-study.csv`, `results-transient-case-study.csv`):
+//! two header rows, one row per target (with a leading `time_min` column in the transient file), then
+//! `MIN`/`MAX` trailer rows.
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+
+use crate::csvtext::{number, records};
+use crate::{read_text, IoError};
+
+/// One row of an authors' results file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PaperResultRow {
+    /// Operating time, minutes (0 in the static file).
+    pub time_min: f64,
+    /// Target label.
+    pub label: String,
+    /// Programmed position, mm.
+    pub programmed_mm: Vector3<f64>,
+    /// Position reached in CoppeliaSim, mm.
+    pub reached_mm: Vector3<f64>,
+    /// Programmed orientation, degrees.
+    pub programmed_deg: Vector3<f64>,
+    /// Orientation reached, degrees.
+    pub reached_deg: Vector3<f64>,
+    /// Joint angles A1..A6, degrees.
+    pub joints_deg: Vec<f64>,
+}
+
+/// Reads either results file (the transient one is recognised by its leading time column).
+pub fn read_paper_results(path: &Path) -> Result<Vec<PaperResultRow>, IoError> {
+    let text = read_text(path)?;
+    let recs = records(path, &text)?;
+    if recs.len() < 3 {
+        return Err(IoError::input(path, None, "rows", "expected two header rows and data rows"));
+    }
+    let transient = recs[1].cells.first().is_some_and(|c| c.to_ascii_lowercase().starts_with("time"));
+    let shift = usize::from(transient);
+    let mut out = Vec::new();
+    for r in &recs[2..] {
+        let label = r.cells.get(shift).cloned().unwrap_or_default();
+        if label.is_empty() || !label.starts_with('P') {
+            continue; // MIN / MAX trailer rows
+        }
+        let need = shift + 25;
+        if r.cells.len() < need {
+            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {need}", r.cells.len())));
+        }
+        let n = |k: usize, name: &str| number(path, r.line, name, &r.cells[shift + k]);
+        let v3 = |k: usize, name: &str| -> Result<Vector3<f64>, IoError> { Ok(Vector3::new(n(k, name)?, n(k + 1, name)?, n(k + 2, name)?)) };
+        let joints = (19..25).map(|k| n(k, &format!("A{}", k - 18))).collect::<Result<Vec<_>, _>>()?;
+        out.push(PaperResultRow {
+            time_min: if transient { number(path, r.line, "Time (min)", &r.cells[0])? } else { 0.0 },
+            label,
+            programmed_mm: v3(1, "programmed X,Y,Z")?,
+            reached_mm: v3(4, "CoppeliaSim X,Y,Z")?,
+            programmed_deg: v3(10, "programmed RX,RY,RZ")?,
+            reached_deg: v3(13, "CoppeliaSim RX,RY,RZ")?,
+            joints_deg: joints,
+        });
+    }
+    Ok(out)
+}

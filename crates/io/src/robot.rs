@@ -1,0 +1,308 @@
+//! Robot description in TOML: the same-orientation extended table (`[[joint]]` rows), or a classic /
+//! modified DH table (`[[dh]]` rows) converted exactly to it. Millimetres and degrees in the file.
+//!
+//! ```toml
+//! name = "ABB IRB 140"
+//! convention = "extended"          # or "dh", "mdh"
+//! [[joint]]
+//! name = "A1"
+//! axis = "Z"                       # "X", "-Y", … or [x, y, z]
+//! offset_mm = [0.0, 0.0, 104.5]    # from the previous joint, in its frame
+//! limits_deg = [-180.0, 180.0]
+//! [tool]
+//! translation_mm = [25.5, 0.0, 0.0]
+//! rotation_xyz_deg = [0.0, 90.0, 0.0]
+//! ```
+
+use std::path::Path;
+
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use serde::Deserialize;
+use thermokin_chain::{xyz_rotation, Chain, DhConvention, DhRow, DhTable, ErrorParams, FixedRow, Joint, JointKind, JointLimits};
+use toml::Spanned;
+
+use crate::{line_of, read_text, IoError};
+
+/// A robot read from a file: its chain and, where given, link masses (for gravity compliance).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Robot {
+    /// Display name.
+    pub name: String,
+    /// The extended table.
+    pub chain: Chain,
+    /// Mass and centre of mass of the link moved by each joint, when known.
+    pub masses: Vec<Option<LinkMass>>,
+}
+
+/// Mass (kg) and centre of mass (mm, in the joint's same-orientation frame) of one link.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkMass {
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Centre of mass, mm, in the frame of the joint that moves the link.
+    pub com_mm: Vector3<f64>,
+}
+
+#[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+enum Convention {
+    #[default]
+    Extended,
+    Dh,
+    Mdh,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotFile {
+    name: Option<String>,
+    #[serde(default)]
+    description: Option<String>,
+    #[serde(default)]
+    convention: Convention,
+    base: Option<Spanned<RowSpec>>,
+    tool: Option<Spanned<RowSpec>>,
+    #[serde(default)]
+    joint: Vec<Spanned<JointSpec>>,
+    #[serde(default)]
+    dh: Vec<Spanned<DhSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RowSpec {
+    #[serde(default)]
+    translation_mm: [f64; 3],
+    #[serde(default)]
+    rotation_xyz_deg: [f64; 3],
+    error: Option<[f64; 6]>,
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum AxisSpec {
+    Name(String),
+    Vector([f64; 3]),
+}
+
+#[derive(Deserialize, Clone, Copy, Default)]
+#[serde(rename_all = "lowercase")]
+enum KindSpec {
+    #[default]
+    Revolute,
+    Prismatic,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointSpec {
+    name: Option<String>,
+    axis: AxisSpec,
+    offset_mm: [f64; 3],
+    #[serde(default, rename = "type")]
+    kind: KindSpec,
+    /// Zero offset: degrees (revolute) or mm (prismatic).
+    #[serde(default)]
+    zero: f64,
+    /// Limits: degrees (revolute) or mm (prismatic).
+    limits: Option<[f64; 2]>,
+    error: Option<[f64; 6]>,
+    mass_kg: Option<f64>,
+    com_mm: Option<[f64; 3]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DhSpec {
+    name: Option<String>,
+    a_mm: f64,
+    alpha_deg: f64,
+    d_mm: f64,
+    #[serde(default)]
+    theta_deg: f64,
+    #[serde(default, rename = "type")]
+    kind: KindSpec,
+    limits: Option<[f64; 2]>,
+}
+
+/// Reads a robot TOML file.
+pub fn read_robot(path: &Path) -> Result<Robot, IoError> {
+    let text = read_text(path)?;
+    parse_robot_toml(path, &text)
+}
+
+/// Parses robot TOML text; `path` is used in error messages.
+pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
+    let file: RobotFile = toml::from_str(text).map_err(|e| {
+        let line = e.span().map(|s| line_of(text, s.start));
+        let message = e.message().to_string();
+        let field = key_in(&message).unwrap_or_else(|| "toml".to_string());
+        IoError::input(path, line, field, message)
+    })?;
+    let _ = &file.description;
+    let name = file.name.clone().unwrap_or_else(|| {
+        path.file_stem().map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned())
+    });
+    let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
+    let base = row(path, text, file.base.as_ref(), "base")?;
+    let tool = row(path, text, file.tool.as_ref(), "tool")?;
+    let (chain, masses) = match file.convention {
+        Convention::Extended => {
+            if !file.dh.is_empty() {
+                return Err(IoError::input(path, at(file.dh[0].span()), "dh", "[[dh]] rows need convention = \"dh\" or \"mdh\""));
+            }
+            if file.joint.is_empty() {
+                return Err(IoError::input(path, None, "joint", "no [[joint]] rows"));
+            }
+            let mut joints = Vec::with_capacity(file.joint.len());
+            let mut masses = Vec::with_capacity(file.joint.len());
+            for (i, spanned) in file.joint.iter().enumerate() {
+                let line = at(spanned.span());
+                let spec = spanned.get_ref();
+                let field = |f: &str| format!("joint[{}].{f}", i + 1);
+                let axis = axis(&spec.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
+                finite(path, line, &field("offset_mm"), &spec.offset_mm)?;
+                finite(path, line, &field("zero"), &[spec.zero])?;
+                let name = spec.name.clone().unwrap_or_else(|| format!("A{}", i + 1));
+                let offset = Vector3::from(spec.offset_mm);
+                let (mut joint, to_internal): (Joint, fn(f64) -> f64) = match spec.kind {
+                    KindSpec::Revolute => (Joint::revolute(name, offset, axis), f64::to_radians),
+                    KindSpec::Prismatic => (Joint::prismatic(name, offset, axis), |v| v),
+                };
+                joint.zero = to_internal(spec.zero);
+                joint.limits = limits(path, line, &field("limits"), spec.limits, to_internal)?;
+                if let Some(e) = spec.error {
+                    finite(path, line, &field("error"), &e)?;
+                    joint.error = ErrorParams::from_mm_deg(e);
+                }
+                joints.push(joint);
+                masses.push(match (spec.mass_kg, spec.com_mm) {
+                    (None, None) => None,
+                    (Some(m), com) => {
+                        let com = com.unwrap_or_default();
+                        finite(path, line, &field("com_mm"), &com)?;
+                        if !(m.is_finite() && m >= 0.0) {
+                            return Err(IoError::input(path, line, field("mass_kg"), format!("must be a finite mass ≥ 0, got {m}")));
+                        }
+                        Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) })
+                    }
+                    (None, Some(_)) => {
+                        return Err(IoError::input(path, line, field("com_mm"), "com_mm needs mass_kg"));
+                    }
+                });
+            }
+            let chain = Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
+            (chain, masses)
+        }
+        conv @ (Convention::Dh | Convention::Mdh) => {
+            if !file.joint.is_empty() {
+                return Err(IoError::input(path, at(file.joint[0].span()), "joint", "[[joint]] rows need convention = \"extended\""));
+            }
+            if file.dh.is_empty() {
+                return Err(IoError::input(path, None, "dh", "no [[dh]] rows"));
+            }
+            let mut rows = Vec::with_capacity(file.dh.len());
+            for (i, spanned) in file.dh.iter().enumerate() {
+                let line = at(spanned.span());
+                let s = spanned.get_ref();
+                let field = |f: &str| format!("dh[{}].{f}", i + 1);
+                finite(path, line, &field("a_mm, alpha_deg, d_mm, theta_deg"), &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg])?;
+                let (kind, to_internal): (JointKind, fn(f64) -> f64) = match s.kind {
+                    KindSpec::Revolute => (JointKind::Revolute, f64::to_radians),
+                    KindSpec::Prismatic => (JointKind::Prismatic, |v| v),
+                };
+                rows.push(DhRow {
+                    name: s.name.clone().unwrap_or_else(|| format!("A{}", i + 1)),
+                    a: s.a_mm,
+                    alpha: s.alpha_deg.to_radians(),
+                    d: s.d_mm,
+                    theta: s.theta_deg.to_radians(),
+                    kind,
+                    limits: limits(path, line, &field("limits"), s.limits, to_internal)?,
+                });
+            }
+            let convention = if conv == Convention::Dh { DhConvention::Classic } else { DhConvention::Modified };
+            if !base.error.is_zero() || !tool.error.is_zero() {
+                return Err(IoError::input(path, None, "error", "DH tables take error parameters only after conversion"));
+            }
+            let table = DhTable { convention, rows, base: base.nominal(), tool: tool.nominal() };
+            let n = table.dof();
+            let chain = table.to_extended().map_err(|e| IoError::input(path, None, "dh", e.to_string()))?;
+            (chain, vec![None; n])
+        }
+    };
+    Ok(Robot { name, chain, masses })
+}
+
+/// The key named in a serde message such as "unknown field `foo`, expected …".
+fn key_in(message: &str) -> Option<String> {
+    let start = message.find('`')? + 1;
+    let end = start + message[start..].find('`')?;
+    Some(message[start..end].to_string())
+}
+
+fn finite(path: &Path, line: Option<usize>, field: &str, values: &[f64]) -> Result<(), IoError> {
+    if values.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(IoError::input(path, line, field, "values must be finite numbers (no nan or inf)"))
+    }
+}
+
+fn limits(
+    path: &Path,
+    line: Option<usize>,
+    field: &str,
+    spec: Option<[f64; 2]>,
+    to_internal: fn(f64) -> f64,
+) -> Result<Option<JointLimits>, IoError> {
+    let Some([lo, hi]) = spec else { return Ok(None) };
+    finite(path, line, field, &[lo, hi])?;
+    if lo > hi {
+        return Err(IoError::input(path, line, field, format!("lower limit {lo} is above upper limit {hi}")));
+    }
+    Ok(Some(JointLimits { lower: to_internal(lo), upper: to_internal(hi) }))
+}
+
+fn axis(spec: &AxisSpec) -> Result<Unit<Vector3<f64>>, String> {
+    match spec {
+        AxisSpec::Name(s) => {
+            let t = s.trim().to_ascii_uppercase();
+            let (sign, letter) = match t.strip_prefix('-') {
+                Some(rest) => (-1.0, rest.to_string()),
+                None => (1.0, t.trim_start_matches('+').to_string()),
+            };
+            let v = match letter.as_str() {
+                "X" => Vector3::x(),
+                "Y" => Vector3::y(),
+                "Z" => Vector3::z(),
+                _ => return Err(format!("`{s}` is not an axis: use X, Y, Z, -X, -Y, -Z or [x, y, z]")),
+            };
+            Ok(Unit::new_unchecked(v * sign))
+        }
+        AxisSpec::Vector(v) => {
+            let v = Vector3::from(*v);
+            let n = v.norm();
+            if !n.is_finite() || n < 1e-9 {
+                return Err(format!("[{}, {}, {}] is not a usable axis (zero or not finite)", v.x, v.y, v.z));
+            }
+            Ok(Unit::new_normalize(v))
+        }
+    }
+}
+
+fn row(path: &Path, text: &str, spec: Option<&Spanned<RowSpec>>, which: &str) -> Result<FixedRow, IoError> {
+    let Some(spanned) = spec else { return Ok(FixedRow::identity()) };
+    let line = Some(line_of(text, spanned.span().start));
+    let s = spanned.get_ref();
+    finite(path, line, &format!("{which}.translation_mm"), &s.translation_mm)?;
+    finite(path, line, &format!("{which}.rotation_xyz_deg"), &s.rotation_xyz_deg)?;
+    let rot = xyz_rotation(&Vector3::from(s.rotation_xyz_deg).map(f64::to_radians));
+    let iso = Isometry3::from_parts(Translation3::from(Vector3::from(s.translation_mm)), UnitQuaternion::from_matrix(&rot));
+    let mut r = FixedRow::from_isometry(&iso);
+    if let Some(e) = s.error {
+        finite(path, line, &format!("{which}.error"), &e)?;
+        r.error = ErrorParams::from_mm_deg(e);
+    }
+    Ok(r)
+}

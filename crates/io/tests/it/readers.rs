@@ -1,0 +1,54 @@
+//! The authors' files load; the TOML and CSV forms agree.
+
+use thermokin_io::{read_deviation_table, read_paper_results, read_targets, read_temperature_log};
+use thermokin_testdata::shared;
+
+#[test]
+fn published_deviation_tables_load() {
+    let Some(case) = shared("data/paper-coppeliasim/deformations-case-study.csv") else { return };
+    let t = read_deviation_table(&case).unwrap();
+    assert_eq!(t.dof(), 6);
+    for row in &t.joints {
+        assert_eq!(row.to_mm_deg().map(|v| (v * 1e9).round() / 1e9), [1.0; 6]);
+    }
+    let Some(measured) = shared("data/paper-coppeliasim/deformations-measured.csv") else { return };
+    let m = read_deviation_table(&measured).unwrap();
+    assert_eq!(m.dof(), 6);
+    // Table 9 row 1 ΔX and Table 8 row 1 Δθz.
+    assert_eq!(m.joints[0].translation.x, -0.0200698);
+    assert!((m.joints[0].rotation.z.to_degrees() + 0.0137).abs() < 1e-12);
+    // Table 9's seventh row (−0.0166 mm along X) sits on joint 6 in the CSV.
+    assert!((m.joints[5].translation.x + 0.0166).abs() < 1e-3, "{:?}", m.joints[5]);
+    let Some(zero) = shared("data/paper-coppeliasim/deformations-zero.csv") else { return };
+    assert!(read_deviation_table(&zero).unwrap().is_zero());
+}
+
+#[test]
+fn targets_and_results_load() {
+    let Some(front) = shared("data/paper-coppeliasim/targets-cube-front.csv") else { return };
+    let t = read_targets(&front).unwrap();
+    assert_eq!(t[0].label, "P1");
+    assert_eq!(t[0].position_mm.as_slice(), &[400.0, 300.0, 250.0]);
+    assert_eq!(t[0].rotation_xyz_deg.as_slice(), &[0.0, 90.0, 0.0]);
+    let Some(stat) = shared("data/paper-coppeliasim/results-static-case-study.csv") else { return };
+    let rows = read_paper_results(&stat).unwrap();
+    assert_eq!(rows.len(), 50);
+    assert_eq!(rows[0].joints_deg[0], 2.810995);
+    assert_eq!(rows[49].label, "P50");
+}
+
+#[test]
+fn toml_table_equals_csv_table() {
+    let dir = std::env::temp_dir().join(format!("thermokin-io-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("t.csv");
+    std::fs::write(&csv, "Dx,Dy,Dz,Dox,Doy,Doz\r\n1,2,3,0.1,0.2,0.3\n0,0,0,0,0,1\r\n").unwrap();
+    let toml = dir.join("t.toml");
+    std::fs::write(&toml, "joints = [[1, 2, 3, 0.1, 0.2, 0.3], [0, 0, 0, 0, 0, 1]]\n").unwrap();
+    assert_eq!(read_deviation_table(&csv).unwrap(), read_deviation_table(&toml).unwrap());
+    let log = dir.join("temps.csv");
+    std::fs::write(&log, "time_min,temp_j1,temp_j2\n0,20,20\n60,25,22\n").unwrap();
+    let l = read_temperature_log(&log).unwrap();
+    assert_eq!(l.series("j1").unwrap(), &[20.0, 25.0]);
+    std::fs::remove_dir_all(&dir).ok();
+}
