@@ -134,8 +134,8 @@ impl ErrorParams {
     }
 
     /// The error parameters whose angular part is the rotation matrix `r` (decomposed as X-Y-Z) and whose
-    /// translation is `translation`. Near `Δθy = ±90°` the split between X and Z is not unique; the
-    /// decomposition then puts it all on X.
+    /// translation is `translation`. At `Δθy = ±90°` the split between X and Z is not unique; the
+    /// decomposition then puts it on Z.
     pub fn from_rotation_matrix(translation: Vector3<f64>, r: &Matrix3<f64>) -> ErrorParams {
         ErrorParams::new(translation, xyz_angles(r))
     }
@@ -162,16 +162,13 @@ pub fn xyz_rotation(angles: &Vector3<f64>) -> Matrix3<f64> {
 /// The angles `(a, b, c)` with `Rx(a) · Ry(b) · Rz(c) = r` (X-Y-Z Euler, CoppeliaSim's convention for
 /// object orientations), with `b` in [−π/2, π/2].
 pub fn xyz_angles(r: &Matrix3<f64>) -> Vector3<f64> {
-    let sb = r[(0, 2)].clamp(-1.0, 1.0);
-    let b = sb.asin();
+    // a from the third column; b and c then from entries combined with a, so that the three angles
+    // rebuild `r` to rounding even next to b = ±90°, where a and c alone are ill-defined (the split of
+    // a ± c then goes to c; at exactly ±90° a = 0).
+    let a = (-r[(1, 2)]).atan2(r[(2, 2)]);
+    let (sa, ca) = a.sin_cos();
     let cb = (r[(0, 0)] * r[(0, 0)] + r[(0, 1)] * r[(0, 1)]).sqrt();
-    if cb > 1e-12 {
-        let a = (-r[(1, 2)]).atan2(r[(2, 2)]);
-        let c = (-r[(0, 1)]).atan2(r[(0, 0)]);
-        Vector3::new(a, b, c)
-    } else {
-        // Gimbal lock: only a ± c is defined; put it on a, with c = 0.
-        let a = r[(2, 1)].atan2(r[(1, 1)]);
-        Vector3::new(a, b, 0.0)
-    }
+    let b = r[(0, 2)].atan2(cb);
+    let c = (ca * r[(1, 0)] + sa * r[(2, 0)]).atan2(ca * r[(1, 1)] + sa * r[(2, 1)]);
+    Vector3::new(a, b, c)
 }

@@ -1,1 +1,4 @@
-//! Integration tests.
+//! Integration tests of the error-parameter model.
+
+mod model;
+mod profiles;

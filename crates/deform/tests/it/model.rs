@@ -1,0 +1,151 @@
+//! Deformed chains against hand calculations (eq. 18–20) and the published tables.
+
+use nalgebra::{Isometry3, Matrix4, Rotation3, Vector3};
+use thermokin_chain::{Chain, ErrorGrouping, ErrorParams, FixedRow, Joint};
+use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
+
+fn two_joints() -> Chain {
+    let joints = vec![
+        Joint::revolute("j1", Vector3::new(0.0, 0.0, 100.0), Vector3::z_axis()),
+        Joint::revolute("j2", Vector3::new(50.0, 0.0, 200.0), Vector3::y_axis()),
+    ];
+    Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&Isometry3::translation(0.0, 0.0, 100.0))).unwrap()
+}
+
+#[test]
+fn two_joint_case_by_hand() {
+    // Joint 1 displaced by (1, 2, 3) mm and turned Δθz = 90°; q = (0, 90°).
+    // By hand: row 1 ends at (1, 2, 103) turned Rz(90°); the segment (50, 0, 200) runs along the turned
+    // axes to (1, 52, 303); joint 2 turns 90° about its Y (world −X); the 100 mm tool along its local Z
+    // now points along world +Y: TCP (1, 152, 303).
+    let chain = two_joints();
+    let table = DeviationTable::from_joint_rows(vec![
+        ErrorParams::from_mm_deg([1.0, 2.0, 3.0, 0.0, 0.0, 90.0]),
+        ErrorParams::ZERO,
+    ]);
+    let deformed = table.apply(&chain, &TableSemantics::Canonical).unwrap();
+    let p = deformed.tool_pose(&[0.0, 90f64.to_radians()]).unwrap().translation.vector;
+    assert!((p - Vector3::new(1.0, 152.0, 303.0)).norm() < 1e-12, "{p:?}");
+    // The nominal chain is untouched.
+    assert!(chain.joints().iter().all(|j| j.error.is_zero()));
+    let nominal = chain.tool_pose(&[0.0, 90f64.to_radians()]).unwrap().translation.vector;
+    assert!((nominal - Vector3::new(150.0, 0.0, 300.0)).norm() < 1e-12, "{nominal:?}");
+}
+
+/// Eq. 1–6 written out as 4 × 4 matrices.
+fn t(x: f64, y: f64, z: f64) -> Matrix4<f64> {
+    Matrix4::new(1.0, 0.0, 0.0, x, 0.0, 1.0, 0.0, y, 0.0, 0.0, 1.0, z, 0.0, 0.0, 0.0, 1.0)
+}
+fn rx(a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix4::new(1.0, 0.0, 0.0, 0.0, 0.0, c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0)
+}
+fn ry(a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix4::new(c, 0.0, s, 0.0, 0.0, 1.0, 0.0, 0.0, -s, 0.0, c, 0.0, 0.0, 0.0, 0.0, 1.0)
+}
+fn rz(a: f64) -> Matrix4<f64> {
+    let (s, c) = a.sin_cos();
+    Matrix4::new(c, -s, 0.0, 0.0, s, c, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0)
+}
+
+#[test]
+fn eq_18_to_20_multiplied_out_for_two_joints() {
+    // Per joint, eq. 18 (ΔX, ΔY, ΔZ as three translations), eq. 19 (Rx Ry Rz), eq. 20 (the segment along
+    // the corrected axes), then the joint rotation (eq. 22). That is the eq. 21 grouping; the library's
+    // canonical parameters come from ErrorParams::regroup.
+    let chain = two_joints();
+    let e21: [[f64; 6]; 2] = [[0.3, -0.2, 0.5, 0.7, -0.4, 1.1], [-0.6, 0.1, 0.2, -0.9, 0.8, 0.3]];
+    let q = [0.4, -0.7];
+    let mut by_hand = Matrix4::identity();
+    for ((j, e), qi) in chain.joints().iter().zip(e21).zip(q) {
+        let (dx, dy, dz) = (e[0], e[1], e[2]);
+        let (ax, ay, az) = (e[3].to_radians(), e[4].to_radians(), e[5].to_radians());
+        by_hand = by_hand * t(dx, 0.0, 0.0) * t(0.0, dy, 0.0) * t(0.0, 0.0, dz); // eq. 18
+        by_hand = by_hand * rx(ax) * ry(ay) * rz(az); // eq. 19
+        by_hand *= t(j.offset.x, j.offset.y, j.offset.z); // eq. 20
+        by_hand *= if j.name == "j1" { rz(qi) } else { ry(qi) }; // eq. 4–6
+    }
+    by_hand *= t(0.0, 0.0, 100.0);
+    let rows: Vec<ErrorParams> = chain
+        .joints()
+        .iter()
+        .zip(e21)
+        .map(|(j, e)| ErrorParams::from_mm_deg(e).regroup(ErrorGrouping::PaperEq21, ErrorGrouping::Canonical, &j.offset))
+        .collect();
+    let deformed = DeviationTable::from_joint_rows(rows).apply(&chain, &TableSemantics::Canonical).unwrap();
+    let ours = deformed.tool_pose(&q).unwrap().to_homogeneous();
+    assert!((ours - by_hand).abs().max() < 1e-12, "{ours} vs {by_hand}");
+}
+
+fn irb140() -> Chain {
+    thermokin_io_free_irb140()
+}
+
+/// Table 9's nominal IRB 140, built here without the TOML reader (this crate does not depend on it).
+fn thermokin_io_free_irb140() -> Chain {
+    let axes = [Vector3::z_axis(), Vector3::y_axis(), Vector3::y_axis(), Vector3::x_axis(), Vector3::y_axis(), Vector3::x_axis()];
+    let offsets = [[0.0, 0.0, 104.5], [70.0, 65.0, 247.5], [0.0, -123.0, 360.0], [238.5, 58.0, 0.0], [141.5, 0.0, 0.0], [39.5, 0.0, 0.0]];
+    let joints = axes.iter().zip(offsets).enumerate().map(|(i, (a, o))| Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a)).collect();
+    let tool = Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, 90f64.to_radians(), 0.0));
+    Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&tool)).unwrap()
+}
+
+#[test]
+fn home_displacement_under_the_case_study_table() {
+    // Every joint 1 mm off along each axis and turned 1° about each (Tables 10–11). At home no joint
+    // turns, so the rows only stack: p_tcp = Σ_i R^(i−1) (p_i + d) + R^6 t_tool with R = Rx(1°)Ry(1°)Rz(1°).
+    let chain = irb140();
+    let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6]);
+    let deformed = table.apply(&chain, &TableSemantics::Canonical).unwrap();
+    let one = 1f64.to_radians();
+    let r = Rotation3::from_axis_angle(&Vector3::x_axis(), one)
+        * Rotation3::from_axis_angle(&Vector3::y_axis(), one)
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), one);
+    let d = Vector3::new(1.0, 1.0, 1.0);
+    let mut acc = Rotation3::identity();
+    let mut p = Vector3::zeros();
+    for j in chain.joints() {
+        p += acc * (j.offset + d);
+        acc *= r;
+    }
+    p += acc * Vector3::new(25.5, 0.0, 0.0);
+    let ours = deformed.tool_pose(&[0.0; 6]).unwrap().translation.vector;
+    assert!((ours - p).norm() < 1e-9, "{ours:?} vs {p:?}");
+    let nominal = chain.tool_pose(&[0.0; 6]).unwrap().translation.vector;
+    let shift = (ours - nominal).norm();
+    eprintln!("home TCP displacement under the case-study table: {shift:.3} mm ({:?})", (ours - nominal).as_slice());
+    // "Deviations of the characteristic point of even 20 mm are observed" (results section).
+    assert!(shift > 10.0 && shift < 40.0, "{shift}");
+}
+
+#[test]
+fn coppeliasim_edits_are_re_expressed_exactly() {
+    // Applying the edits by hand (world shift + Euler addition of one joint object, children following)
+    // and reading the TCP must equal the FK of the re-expressed chain, at home and elsewhere.
+    let chain = irb140();
+    let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), ErrorParams::ZERO, ErrorParams::ZERO, ErrorParams::ZERO, ErrorParams::ZERO]);
+    let deformed = table.apply(&chain, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6]))).unwrap();
+    // Joint 2 object: local Z along world Y, i.e. Rx(−90°); adding 1° to its first Euler angle turns it
+    // to Rx(−89°): the joint frame turns Rx(+1°) about joint 2's origin (70, 65, 352).
+    let o2 = Vector3::new(70.0, 65.0, 352.0);
+    let turn = Isometry3::rotation_wrt_point(nalgebra::UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1f64.to_radians()), o2.into());
+    let q = [0.3, -0.2, 0.5, 0.1, 0.4, -0.6];
+    let expected = {
+        // Joint 1 at q1 carries everything; the edit was made at home, so it sits inside joint 1's motion.
+        let frames = chain.joint_frames(&[q[0], 0.0, 0.0, 0.0, 0.0, 0.0]).unwrap();
+        let world_from_j1 = frames[0];
+        let home_j1 = chain.joint_frames(&[0.0; 6]).unwrap()[0];
+        let rest = home_j1.inverse() * turn * chain.tool_pose(&[0.0, q[1], q[2], q[3], q[4], q[5]]).unwrap();
+        world_from_j1 * rest
+    };
+    let ours = deformed.tool_pose(&q).unwrap();
+    assert!((ours.translation.vector - expected.translation.vector).norm() < 1e-9);
+    assert!(ours.rotation.angle_to(&expected.rotation) < 1e-12);
+}
+
+#[test]
+fn row_count_mismatch_is_an_error() {
+    let t = DeviationTable::zeros(5);
+    assert!(t.apply(&irb140(), &TableSemantics::Canonical).is_err());
+}
