@@ -1,1 +1,35 @@
-//! placeholder
+//! `thermokin-ik`: inverse kinematics on any chain (nominal or deformed) — damped least squares /
+//! Levenberg–Marquardt with adaptive damping, the Jacobian and its linear solve in faer on the
+//! allocation-free path, joint limits, random restarts, and a deterministic parallel batch API.
+//!
+//! This is the compensation step of the paper (section 4, Figure 13): the joint angles that bring the
+//! *deformed* model onto the programmed pose.
+//!
+//! # Keeping one arm configuration through a program
+//! A local solver stays on the branch (elbow up/down, wrist flip) of its seed as long as the seed is
+//! close. To keep one configuration through a whole program: seed every target from the previous
+//! solution ([`Seeds::ChainPrevious`], or [`Seeds::PerTarget`] with the previous time step's solutions
+//! in a transient run), set `restarts = 0` (a random restart may land on another branch), and bound the
+//! move with [`Params::max_distance_from_seed`] so that a solution on another branch is reported as a
+//! failure rather than silently accepted.
+
+mod solver;
+
+pub use solver::{solve, solve_batch, Backend, LimitPolicy, Params, Seeds, Solution, Status, Target, Workspace};
+
+/// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum IkError {
+    /// A seed with the wrong number of joints or a non-finite value.
+    #[error("seed: {0}")]
+    BadSeed(String),
+    /// A target with a non-finite value.
+    #[error("target {index}: not finite")]
+    BadTarget {
+        /// 0-based target index.
+        index: usize,
+    },
+    /// Bad solver settings.
+    #[error("params: {0}")]
+    BadParams(String),
+}
