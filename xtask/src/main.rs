@@ -1,1 +1,156 @@
-fn main(){}
+//! Developer workflows (`cargo xtask …`): reproduce the paper, summarise the benchmarks, check the
+//! dependency direction between the crates.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use anyhow::{bail, Context, Result};
+
+const HELP: &str = "\
+cargo xtask <task>
+
+Tasks:
+  reproduce-paper [--check]   Rerun the paper's case studies (Tables 13-18) with the bundled IRB 140,
+                              write docs/paper-reproduction.md and docs/img/*.svg; with --check, compare
+                              with fixtures/golden/paper-reproduction.json and fail on drift.
+  bless-golden                Rewrite fixtures/golden/paper-reproduction.json from a fresh run.
+  bench [--json]              Run the criterion benches and print a summary table (the last line is one
+                              JSON object with --json).
+  deps                        Check that dependencies point one way (the core never depends on I/O,
+                              the CLI or file formats).";
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let root = workspace_root();
+    std::env::set_current_dir(&root).with_context(|| format!("entering {}", root.display()))?;
+    match args.first().map(String::as_str) {
+        Some("reproduce-paper") => reproduce(args.iter().any(|a| a == "--check")),
+        Some("bless-golden") => bless(),
+        Some("bench") => bench(args.iter().any(|a| a == "--json")),
+        Some("deps") => deps(),
+        Some("-h" | "--help") | None => {
+            println!("{HELP}");
+            Ok(())
+        }
+        Some(other) => bail!("unknown task `{other}`\n\n{HELP}"),
+    }
+}
+
+fn workspace_root() -> PathBuf {
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    here.parent().map_or_else(|| here.to_path_buf(), Path::to_path_buf)
+}
+
+fn cargo() -> Command {
+    Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+}
+
+fn run(cmd: &mut Command) -> Result<()> {
+    let status = cmd.status().with_context(|| format!("running {cmd:?}"))?;
+    if !status.success() {
+        bail!("{cmd:?} failed with {status}");
+    }
+    Ok(())
+}
+
+const GOLDEN: &str = "fixtures/golden/paper-reproduction.json";
+
+fn thermokin(extra: &[&str]) -> Result<()> {
+    let mut cmd = cargo();
+    cmd.args(["run", "--quiet", "--release", "--package", "thermokin", "--", "reproduce-paper"]);
+    cmd.args(["--report", "docs/paper-reproduction.md", "--plot", "docs/img"]);
+    cmd.args(extra);
+    run(&mut cmd)
+}
+
+fn reproduce(check: bool) -> Result<()> {
+    std::fs::create_dir_all("docs/img")?;
+    if check {
+        std::fs::create_dir_all("target")?;
+        thermokin(&["--json", "target/paper-reproduction.json", "--check", GOLDEN])
+    } else {
+        thermokin(&[])
+    }
+}
+
+fn bless() -> Result<()> {
+    std::fs::create_dir_all("fixtures/golden")?;
+    thermokin(&["--json", GOLDEN])
+}
+
+/// Median of a criterion estimate file, nanoseconds.
+fn median_ns(bench: &str) -> Option<f64> {
+    let p = Path::new("target/criterion").join(bench).join("new/estimates.json");
+    let text = std::fs::read_to_string(p).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v["median"]["point_estimate"].as_f64()
+}
+
+/// Mean of a criterion estimate file, nanoseconds.
+fn mean_ns(bench: &str) -> Option<f64> {
+    let p = Path::new("target/criterion").join(bench).join("new/estimates.json");
+    let text = std::fs::read_to_string(p).ok()?;
+    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+    v["mean"]["point_estimate"].as_f64()
+}
+
+fn bench(json: bool) -> Result<()> {
+    run(cargo().args(["bench", "--package", "thermokin-chain", "--package", "thermokin-ik", "--bench", "kinematics", "--bench", "ik"]))?;
+    let success = std::fs::read_to_string("target/criterion/ik_random_success.txt").ok().and_then(|s| s.trim().parse::<f64>().ok());
+    let rows: Vec<(&str, Option<f64>, &str, f64)> = vec![
+        ("fk_us", median_ns("fk_irb140_deformed").map(|n| n / 1e3), "median FK, IRB 140 with error parameters", 0.2),
+        ("jacobian_us", median_ns("jacobian_irb140_deformed").map(|n| n / 1e3), "median pose + Jacobian", 0.3),
+        ("ik_near_us", median_ns("ik_near_seed").map(|n| n / 1e3), "median IK from a seed within 0.25 rad", 5.0),
+        ("ik_near_nalgebra_us", median_ns("ik_near_seed_nalgebra_fixed").map(|n| n / 1e3), "same, nalgebra fixed-size step", 5.0),
+        ("ik_random_us", mean_ns("ik_random_seed").map(|n| n / 1e3), "mean IK from random seeds with restarts", 50.0),
+        ("transient_10050_s", mean_ns("transient_10050").map(|n| n / 1e9), "10,050 targets, warm-started (paper's 200 min)", 0.1),
+    ];
+    println!("{:<22} {:>12} {:>8}  {}", "metric", "measured", "goal", "what");
+    for (k, v, what, goal) in &rows {
+        println!("{k:<22} {:>12} {goal:>8}  {what}", v.map_or("n/a".into(), |x| format!("{x:.4}")));
+    }
+    println!("{:<22} {:>12} {:>8}  success rate of random-seed IK over the bench's targets", "ik_random_success", success.map_or("n/a".into(), |x| format!("{x:.4}")), "0.999");
+    if json {
+        let mut obj = serde_json::Map::new();
+        for (k, v, _, _) in rows {
+            obj.insert(k.into(), v.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
+        }
+        obj.insert("ik_random_success".into(), success.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
+        println!("{}", serde_json::Value::Object(obj));
+    }
+    Ok(())
+}
+
+/// Each library crate and the workspace crates it must never depend on (directly or not).
+const FORBIDDEN: &[(&str, &[&str])] = &[
+    ("thermokin-chain", &["thermokin-io", "thermokin-deform", "thermokin-ik", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
+    ("thermokin-deform", &["thermokin-io", "thermokin-ik", "thermokin-compensate", "thermokin", "csv", "clap"]),
+    ("thermokin-ik", &["thermokin-io", "thermokin-deform", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
+    ("thermokin-io", &["thermokin-ik", "thermokin-compensate", "thermokin", "clap"]),
+    ("thermokin-compensate", &["thermokin-io", "thermokin", "toml", "csv", "clap"]),
+];
+
+fn deps() -> Result<()> {
+    let mut bad = Vec::new();
+    for (krate, forbidden) in FORBIDDEN {
+        let out = cargo()
+            .args(["tree", "--edges", "normal", "--prefix", "none", "--format", "{p}", "--package", krate])
+            .output()
+            .context("running cargo tree")?;
+        if !out.status.success() {
+            bail!("cargo tree failed for {krate}: {}", String::from_utf8_lossy(&out.stderr));
+        }
+        let tree = String::from_utf8_lossy(&out.stdout);
+        for f in *forbidden {
+            if tree.lines().any(|l| l.split_whitespace().next() == Some(f)) {
+                bad.push(format!("{krate} depends on {f}"));
+            }
+        }
+    }
+    if bad.is_empty() {
+        println!("deps: dependency direction ok ({} crates checked)", FORBIDDEN.len());
+        Ok(())
+    } else {
+        bail!("dependency direction broken:\n  {}", bad.join("\n  "))
+    }
+}

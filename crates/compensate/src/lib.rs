@@ -1,1 +1,35 @@
-//! placeholder
+//! `thermokin-compensate`: the paper's compensation procedure end to end (section 4, Figure 13).
+//!
+//! For every programmed target, inverse kinematics on the *deformed* model gives the joint angles that
+//! bring the deformed robot onto the programmed pose. Static case: one deformed state. Transient case: a
+//! cycle (the paper's 200 minutes, every minute, the program in a loop) in which the model is updated at
+//! each step from a [`TimeProfile`] and every target re-solved, seeded from its previous solution.
+//!
+//! Each result records the compensated joints, the pose the deformed robot reaches with them, its
+//! deviation from the programmed pose (position per axis; orientation as a rotation vector — per-axis
+//! small-angle errors — never as differences of Euler triplets, which are degenerate at the programmed
+//! RY = 90°), and, for comparison, the deviation of the *uncompensated* program (nominal IK angles run
+//! on the deformed robot).
+
+mod export;
+mod run;
+
+pub use export::{rapid_module, write_joint_csv, write_results_csv, RapidSettings};
+pub use run::{
+    compensate_static, compensate_transient, orientation_error_deg, pose_from_xyz_deg, Axes, Cycle,
+    ProgramTarget, RunOutput, RunSettings, Summary, TargetResult,
+};
+
+/// Errors of a compensation run (per-target failures are records, not errors).
+#[derive(Debug, thiserror::Error)]
+pub enum CompensateError {
+    /// The deformation model could not be built.
+    #[error(transparent)]
+    Deform(#[from] thermokin_deform::DeformError),
+    /// The IK inputs were invalid.
+    #[error(transparent)]
+    Ik(#[from] thermokin_ik::IkError),
+    /// Bad run settings.
+    #[error("{0}")]
+    Settings(String),
+}

@@ -25,8 +25,8 @@ pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
     for (index, raw) in text.split('\n').enumerate() {
         let line = index + 1;
         let raw = raw.strip_suffix('\r').unwrap_or(raw);
-        if raw.trim().is_empty() {
-            continue;
+        if raw.trim().is_empty() || raw.trim_start().starts_with('#') {
+            continue; // blank lines and `#` comment lines (the fixtures carry their provenance so)
         }
         let mut reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(raw.as_bytes());
         let mut record = csv::StringRecord::new();

@@ -1,0 +1,226 @@
+//! Command-line arguments (clap) and the parsers of their small languages (joint lists, poses, profiles).
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use thermokin_deform::{AfterStabilization, TimeProfile};
+
+const AFTER_HELP: &str = "\
+Units: millimetres and degrees everywhere on the command line and in files.
+Orientations: X-Y-Z Euler angles in degrees, R = Rx(rx)·Ry(ry)·Rz(rz) (the paper's and CoppeliaSim's
+convention; (0, 90, 0) points the tool's Z axis along world +X).
+
+Exit status:
+  0  success
+  1  internal failure (a bug, or an output that could not be written)
+  2  bad input: unreadable or malformed file, bad flag value, conflicting flags
+  3  the run finished but some targets were not reached (each is a record in the output)
+  4  reproduce-paper --check found drift from the golden outputs
+
+Examples:
+  thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0
+  thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0
+  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\
+      --targets fixtures/paper/table12-targets.csv --out results.csv --rapid prog.mod
+  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --plot plots/
+  thermokin reproduce-paper";
+
+/// Thermal error compensation for serial industrial robots on the paper's extended forward model.
+#[derive(Parser, Debug)]
+#[command(name = "thermokin", version, about, long_about = None, after_help = AFTER_HELP)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Forward kinematics: the TCP pose for joint angles (optionally on a deformed robot).
+    #[command(after_help = "Example:\n  thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0 --json")]
+    Fk(FkArgs),
+    /// Inverse kinematics: joint angles that reach a pose (optionally on a deformed robot).
+    #[command(after_help = "Example:\n  thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0 --seed 0,30,10,0,-40,0")]
+    Ik(IkArgs),
+    /// Compensate a program of targets for a deviation table, static or over a warm-up cycle.
+    #[command(after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --rapid prog.mod --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved.")]
+    Compensate(CompensateArgs),
+    /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
+    /// authors' full files when ../shared is present.
+    ReproducePaper(ReproduceArgs),
+}
+
+/// The robot and its deformation.
+#[derive(Args, Debug, Clone)]
+pub struct RobotArgs {
+    /// Robot description (TOML: extended, DH or modified DH table).
+    #[arg(long, value_name = "FILE")]
+    pub robot: PathBuf,
+    /// Deviation table (the authors' CSV `Dx,Dy,Dz,Dox,Doy,Doz`, or TOML), mm and degrees.
+    #[arg(long, value_name = "FILE")]
+    pub deformation: Option<PathBuf>,
+    /// Growth of the table with operating time: static, linear:T (plateau after T min), linear-grow:T
+    /// (no plateau, the authors' transient file), exp:TAU, cubic:C1,C2,C3.
+    #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
+    pub profile: Option<TimeProfile>,
+    /// Operating time for fk/ik with --profile, minutes.
+    #[arg(long, value_name = "MIN")]
+    pub time: Option<f64>,
+    /// How the table acts on the robot: canonical (Table 7: Trans·Rx·Ry·Rz at each joint) or
+    /// coppeliasim (the authors' scene: world shift and Euler-angle addition of each joint object, at home).
+    #[arg(long, value_enum, default_value_t = Semantics::Canonical)]
+    pub semantics: Semantics,
+}
+
+/// Deviation-table semantics.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Semantics {
+    /// Table 7's reading (this library's model).
+    Canonical,
+    /// The authors' CoppeliaSim edits, applied at the home configuration.
+    Coppeliasim,
+}
+
+/// `fk` arguments.
+#[derive(Args, Debug)]
+pub struct FkArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Joint values, degrees (mm for prismatic joints), comma separated.
+    #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
+    pub joints: String,
+    /// Print JSON: {"position_mm": [x,y,z], "rotation": [[3x3]], "rpy_deg": [rx,ry,rz]} (X-Y-Z Euler).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `ik` arguments.
+#[derive(Args, Debug)]
+pub struct IkArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Target pose x,y,z (mm),rx,ry,rz (degrees, X-Y-Z Euler); or x,y,z alone with --position-only.
+    #[arg(long, value_name = "X,Y,Z,RX,RY,RZ", allow_hyphen_values = true)]
+    pub pose: String,
+    /// Solve for the position only (orientation free).
+    #[arg(long)]
+    pub position_only: bool,
+    /// Seed joint values, degrees (default: all zero).
+    #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
+    pub seed: Option<String>,
+    /// Random restarts when a solve stalls.
+    #[arg(long, default_value_t = 100)]
+    pub restarts: usize,
+    /// Print JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `compensate` arguments.
+#[derive(Args, Debug)]
+pub struct CompensateArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Program of targets: CSV `,X,Y,Z` (mm) with optional `RX,RY,RZ` (degrees; default 0,90,0).
+    #[arg(long, value_name = "FILE")]
+    pub targets: PathBuf,
+    /// Results CSV in the authors' column layout (written atomically).
+    #[arg(long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Transient cycle length, minutes (with --profile).
+    #[arg(long, value_name = "MIN", default_value_t = 200.0)]
+    pub duration: f64,
+    /// Model update interval, minutes (with --profile).
+    #[arg(long, value_name = "MIN", default_value_t = 1.0)]
+    pub step: f64,
+    /// Seed of the first solve, degrees (default: all zero).
+    #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
+    pub seed: Option<String>,
+    /// Also write the compensated joint targets as CSV.
+    #[arg(long, value_name = "FILE")]
+    pub joints_out: Option<PathBuf>,
+    /// Also write an ABB RAPID module (MoveAbsJ with jointtargets).
+    #[arg(long, value_name = "FILE")]
+    pub rapid: Option<PathBuf>,
+    /// Write SVG plots (deviation vs time; nominal vs deformed structure) into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `reproduce-paper` arguments.
+#[derive(Args, Debug)]
+pub struct ReproduceArgs {
+    /// The transcribed paper tables (Tables 10–18).
+    #[arg(long, value_name = "DIR", default_value = "fixtures/paper")]
+    pub fixtures: PathBuf,
+    /// The bundled IRB 140.
+    #[arg(long, value_name = "FILE", default_value = "configs/irb140.toml")]
+    pub robot: PathBuf,
+    /// The authors' files (compared when present).
+    #[arg(long, value_name = "DIR", default_value = "../shared/data/paper-coppeliasim")]
+    pub shared: PathBuf,
+    /// Write the side-by-side report here (Markdown).
+    #[arg(long, value_name = "FILE")]
+    pub report: Option<PathBuf>,
+    /// Write the plots into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+    /// Write the measured numbers as JSON (the golden file's format).
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Compare with this golden JSON and fail (exit 4) on drift beyond its tolerances.
+    #[arg(long, value_name = "FILE")]
+    pub check: Option<PathBuf>,
+}
+
+/// Parses `static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`.
+pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
+    let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
+    let num = |v: &str| -> Result<f64, String> {
+        let x: f64 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
+        if x.is_finite() { Ok(x) } else { Err(format!("`{v}` is not finite")) }
+    };
+    let positive = |v: &str, what: &str| -> Result<f64, String> {
+        let x = num(v)?;
+        if x > 0.0 { Ok(x) } else { Err(format!("{what} must be positive, got {x}")) }
+    };
+    let p = match kind {
+        "static" if rest.is_empty() => TimeProfile::Static,
+        "linear" => TimeProfile::Linear {
+            stabilization_min: positive(rest, "the stabilization time")?,
+            after: AfterStabilization::Plateau,
+        },
+        "linear-grow" => TimeProfile::Linear {
+            stabilization_min: positive(rest, "the stabilization time")?,
+            after: AfterStabilization::KeepGrowing,
+        },
+        "exp" => TimeProfile::Exponential { tau_min: positive(rest, "the time constant")? },
+        "cubic" => {
+            let c: Vec<f64> = rest.split(',').map(num).collect::<Result<_, _>>()?;
+            let [c1, c2, c3] = c[..] else { return Err("cubic takes three coefficients: cubic:C1,C2,C3".into()) };
+            TimeProfile::Cubic { coefficients: [c1, c2, c3] }
+        }
+        _ => {
+            return Err(format!(
+                "unknown profile `{s}`: use static, linear:T, linear-grow:T, exp:TAU or cubic:C1,C2,C3"
+            ));
+        }
+    };
+    Ok(p)
+}
+
+/// Parses a comma-separated list of finite numbers, naming the flag in errors.
+pub fn parse_list(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
+    s.split(',')
+        .enumerate()
+        .map(|(i, v)| {
+            let x: f64 = v.trim().parse().map_err(|_| anyhow::anyhow!("--{flag}: value {} `{}` is not a number", i + 1, v.trim()))?;
+            anyhow::ensure!(x.is_finite(), "--{flag}: value {} is not finite", i + 1);
+            Ok(x)
+        })
+        .collect()
+}

@@ -1,0 +1,267 @@
+//! Static and transient compensation runs and their summaries (Tables 13, 15, 17, 18).
+
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use serde::Serialize;
+use thermokin_chain::{xyz_rotation, Chain};
+use thermokin_deform::{DeviationTable, TableSemantics, TimeProfile};
+use thermokin_ik::{solve_batch, Params, Seeds, Solution, Status, Target};
+
+use crate::CompensateError;
+
+/// One programmed target.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProgramTarget {
+    /// Label (`P1`, …).
+    pub label: String,
+    /// Programmed TCP pose in the base frame (mm).
+    pub pose: Isometry3<f64>,
+}
+
+/// A pose from a position (mm) and CoppeliaSim X-Y-Z Euler angles (degrees).
+pub fn pose_from_xyz_deg(position_mm: Vector3<f64>, rotation_xyz_deg: Vector3<f64>) -> Isometry3<f64> {
+    let r = xyz_rotation(&rotation_xyz_deg.map(f64::to_radians));
+    Isometry3::from_parts(Translation3::from(position_mm), UnitQuaternion::from_matrix(&r))
+}
+
+/// The orientation error of `reached` against `programmed` as a rotation vector in degrees (world frame):
+/// the axis of `R_reached R_programmedᵀ` times its angle; for small errors, the per-axis rotations.
+pub fn orientation_error_deg(programmed: &Isometry3<f64>, reached: &Isometry3<f64>) -> Vector3<f64> {
+    (reached.rotation * programmed.rotation.inverse()).scaled_axis().map(f64::to_degrees)
+}
+
+/// The run's time axis: from 0 to `duration_min` every `step_min` (the paper: 200 min, every minute).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Cycle {
+    /// Total duration, minutes.
+    pub duration_min: f64,
+    /// Model update interval, minutes.
+    pub step_min: f64,
+}
+
+impl Cycle {
+    /// The paper's transient cycle: 200 minutes, updated every minute (201 states, 0..=200).
+    pub const PAPER: Cycle = Cycle { duration_min: 200.0, step_min: 1.0 };
+
+    /// The update times, 0 included, `duration_min` included when it falls on a step.
+    pub fn times(&self) -> Result<Vec<f64>, CompensateError> {
+        if !(self.step_min.is_finite() && self.step_min > 0.0) {
+            return Err(CompensateError::Settings(format!("step must be positive, got {} min", self.step_min)));
+        }
+        if !(self.duration_min.is_finite() && self.duration_min >= 0.0) {
+            return Err(CompensateError::Settings(format!("duration must be ≥ 0, got {} min", self.duration_min)));
+        }
+        let n = (self.duration_min / self.step_min + 1e-9).floor() as usize;
+        if n > 1_000_000 {
+            return Err(CompensateError::Settings(format!("{} steps is more than a million", n + 1)));
+        }
+        Ok((0..=n).map(|k| k as f64 * self.step_min).collect())
+    }
+}
+
+/// Settings of a run.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunSettings {
+    /// How the deviation table acts on the chain.
+    pub semantics: TableSemantics,
+    /// IK settings.
+    pub ik: Params,
+    /// Seed of the first solve (radians / mm); the program is then chained target to target.
+    pub start: Vec<f64>,
+}
+
+/// One solved target at one time.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TargetResult {
+    /// Operating time, minutes.
+    pub time_min: f64,
+    /// Target label.
+    pub label: String,
+    /// Programmed pose.
+    #[serde(skip)]
+    pub programmed: Isometry3<f64>,
+    /// Pose the deformed robot reaches with the compensated joints.
+    #[serde(skip)]
+    pub reached: Isometry3<f64>,
+    /// Compensated joint values, degrees (mm for prismatic joints).
+    pub joints_deg: Vec<f64>,
+    /// Programmed − reached position, mm (the authors' sign).
+    pub position_deviation_mm: [f64; 3],
+    /// Orientation error as a rotation vector, degrees.
+    pub orientation_deviation_deg: [f64; 3],
+    /// Position error of the uncompensated program (nominal IK angles on the deformed robot), mm.
+    pub uncompensated_error_mm: f64,
+    /// IK outcome.
+    pub status: Status,
+    /// IK iterations.
+    pub iterations: usize,
+}
+
+/// Min and max per axis.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Axes {
+    /// Minimum per axis.
+    pub min: [f64; 3],
+    /// Maximum per axis.
+    pub max: [f64; 3],
+}
+
+impl Axes {
+    fn of(values: impl Iterator<Item = [f64; 3]>) -> Axes {
+        let mut a = Axes { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
+        for v in values {
+            for k in 0..3 {
+                a.min[k] = a.min[k].min(v[k]);
+                a.max[k] = a.max[k].max(v[k]);
+            }
+        }
+        a
+    }
+}
+
+/// The summary of Tables 15, 17 (position) and 13, 18 (orientation), over converged targets.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Solves in the run.
+    pub solves: usize,
+    /// Solves that did not converge.
+    pub failures: usize,
+    /// Programmed − reached, mm.
+    pub position_mm: Axes,
+    /// Orientation error rotation vector, degrees.
+    pub orientation_deg: Axes,
+    /// Largest position error, mm.
+    pub max_position_error_mm: f64,
+    /// Largest orientation error angle, degrees.
+    pub max_orientation_error_deg: f64,
+    /// Largest position error of the uncompensated program, mm.
+    pub max_uncompensated_error_mm: f64,
+}
+
+/// A run's results and summary.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RunOutput {
+    /// One row per target and time, in time order then program order.
+    pub rows: Vec<TargetResult>,
+    /// Min/max over the converged rows.
+    pub summary: Summary,
+}
+
+impl RunOutput {
+    fn new(rows: Vec<TargetResult>) -> Self {
+        let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.status == Status::Converged).collect();
+        let summary = Summary {
+            solves: rows.len(),
+            failures: rows.len() - ok.len(),
+            position_mm: Axes::of(ok.iter().map(|r| r.position_deviation_mm)),
+            orientation_deg: Axes::of(ok.iter().map(|r| r.orientation_deviation_deg)),
+            max_position_error_mm: ok.iter().map(|r| Vector3::from(r.position_deviation_mm).norm()).fold(0.0, f64::max),
+            max_orientation_error_deg: ok
+                .iter()
+                .map(|r| Vector3::from(r.orientation_deviation_deg).norm())
+                .fold(0.0, f64::max),
+            max_uncompensated_error_mm: rows.iter().map(|r| r.uncompensated_error_mm).fold(0.0, f64::max),
+        };
+        Self { rows, summary }
+    }
+}
+
+fn to_targets(program: &[ProgramTarget]) -> Vec<Target> {
+    program.iter().map(|t| Target::Pose(t.pose)).collect()
+}
+
+fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
+    chain
+        .joints()
+        .iter()
+        .zip(q)
+        .map(|(j, &v)| match j.kind {
+            thermokin_chain::JointKind::Revolute => v.to_degrees(),
+            thermokin_chain::JointKind::Prismatic => v,
+        })
+        .collect()
+}
+
+fn record(
+    deformed: &Chain,
+    time_min: f64,
+    target: &ProgramTarget,
+    solution: &Solution,
+    nominal_q: &[f64],
+) -> Result<TargetResult, CompensateError> {
+    let reached = deformed.tool_pose(&solution.q).map_err(thermokin_deform::DeformError::from)?;
+    let uncompensated = deformed.tool_pose(nominal_q).map_err(thermokin_deform::DeformError::from)?;
+    let dp = target.pose.translation.vector - reached.translation.vector;
+    let dr = orientation_error_deg(&target.pose, &reached);
+    Ok(TargetResult {
+        time_min,
+        label: target.label.clone(),
+        programmed: target.pose,
+        reached,
+        joints_deg: joints_out(deformed, &solution.q),
+        position_deviation_mm: [dp.x, dp.y, dp.z],
+        orientation_deviation_deg: [dr.x, dr.y, dr.z],
+        uncompensated_error_mm: (target.pose.translation.vector - uncompensated.translation.vector).norm(),
+        status: solution.status,
+        iterations: solution.iterations,
+    })
+}
+
+/// IK of the program on the nominal robot, chained target to target from `start`: the uncompensated
+/// program, and the seeds of the compensated one.
+fn nominal_program(chain: &Chain, program: &[ProgramTarget], settings: &RunSettings) -> Result<Vec<Solution>, CompensateError> {
+    Ok(solve_batch(chain, &to_targets(program), Seeds::ChainPrevious(&settings.start), &settings.ik)?)
+}
+
+/// Static case: one deformed state (the full table), every target solved on it.
+pub fn compensate_static(
+    chain: &Chain,
+    table: &DeviationTable,
+    program: &[ProgramTarget],
+    settings: &RunSettings,
+) -> Result<RunOutput, CompensateError> {
+    let deformed = table.apply(chain, &settings.semantics)?;
+    let nominal = nominal_program(chain, program, settings)?;
+    let seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
+    let solutions = solve_batch(&deformed, &to_targets(program), Seeds::PerTarget(&seeds), &settings.ik)?;
+    let rows = program
+        .iter()
+        .zip(&solutions)
+        .zip(&nominal)
+        .map(|((t, s), n)| record(&deformed, 0.0, t, s, &n.q))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(RunOutput::new(rows))
+}
+
+/// Transient case: at each time of `cycle` the model is updated from `profile` and every target
+/// re-solved, seeded from its solution at the previous step (the first step from the nominal program).
+/// `progress` is called after each step with (steps done, steps in all).
+pub fn compensate_transient(
+    chain: &Chain,
+    table: &DeviationTable,
+    profile: &TimeProfile,
+    cycle: Cycle,
+    program: &[ProgramTarget],
+    settings: &RunSettings,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<RunOutput, CompensateError> {
+    profile.validate(chain.dof())?;
+    let times = cycle.times()?;
+    let targets = to_targets(program);
+    let nominal = nominal_program(chain, program, settings)?;
+    let mut seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
+    let mut rows = Vec::with_capacity(times.len() * program.len());
+    for (k, &t) in times.iter().enumerate() {
+        let deformed = profile.table_at(table, t)?.apply(chain, &settings.semantics)?;
+        let solutions = solve_batch(&deformed, &targets, Seeds::PerTarget(&seeds), &settings.ik)?;
+        for ((target, s), n) in program.iter().zip(&solutions).zip(&nominal) {
+            rows.push(record(&deformed, t, target, s, &n.q)?);
+        }
+        for (seed, s) in seeds.iter_mut().zip(&solutions) {
+            if s.converged() {
+                seed.clone_from(&s.q);
+            }
+        }
+        progress(k + 1, times.len());
+    }
+    Ok(RunOutput::new(rows))
+}
