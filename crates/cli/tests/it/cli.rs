@@ -1,0 +1,173 @@
+//! Runs the built binary the way a user does.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use thermokin_testdata::workspace;
+
+fn thermokin(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_thermokin")).args(args).current_dir(workspace("")).output().expect("runs")
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermokin-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+const ROBOT: &str = "configs/irb140.toml";
+const TABLE: &str = "fixtures/paper/deformations-case-study.toml";
+
+#[test]
+fn fk_json_at_home() {
+    let o = thermokin(&["fk", "--robot", ROBOT, "--joints", "0,0,0,0,0,0", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    let p: Vec<f64> = v["position_mm"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert!((p[0] - 515.0).abs() < 1e-9 && p[1].abs() < 1e-9 && (p[2] - 712.0).abs() < 1e-9, "{p:?}");
+    let rpy: Vec<f64> = v["rpy_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert!((rpy[1] - 90.0).abs() < 1e-9, "{rpy:?}");
+    assert_eq!(v["rotation"].as_array().unwrap().len(), 3);
+}
+
+#[test]
+fn fk_then_ik_round_trip() {
+    let o = thermokin(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--joints", "10,30,10,20,-40,5", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    let p = &v["position_mm"];
+    let r = &v["rpy_deg"];
+    let pose = format!("{},{},{},{},{},{}", p[0], p[1], p[2], r[0], r[1], r[2]);
+    let o = thermokin(&["ik", "--robot", ROBOT, "--deformation", TABLE, "--pose", &pose, "--seed", "0,20,20,0,-45,0", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!(s["status"], "Converged");
+    let q: Vec<f64> = s["joints_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let want = [10.0, 30.0, 10.0, 20.0, -40.0, 5.0];
+    assert!(q.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6), "{q:?}");
+}
+
+#[test]
+fn fk_with_profile_at_90_minutes_is_half_the_table() {
+    let half = thermokin(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--time", "90", "--joints", "0,0,0,0,0,0", "--json"]);
+    assert!(half.status.success(), "{}", stderr(&half));
+    let dir = tmp("half");
+    std::fs::create_dir_all(&dir).unwrap();
+    let halved = dir.join("half.toml");
+    std::fs::write(&halved, "joints = [[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5]]\n").unwrap();
+    let direct = thermokin(&["fk", "--robot", ROBOT, "--deformation", halved.to_str().unwrap(), "--joints", "0,0,0,0,0,0", "--json"]);
+    assert_eq!(stdout(&half), stdout(&direct));
+}
+
+#[test]
+fn bad_input_exit_status_2_with_located_messages() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["fk", "--robot", ROBOT, "--joints", "0,0,0,0,0"], "--joints: 5 values for a robot with 6 joints"),
+        (&["fk", "--robot", ROBOT, "--joints", "0,0,nan,0,0,0"], "--joints: value 3 is not finite"),
+        (&["fk", "--robot", ROBOT, "--joints", "0,0,x,0,0,0"], "--joints: value 3 `x` is not a number"),
+        (&["fk", "--robot", "no/such/robot.toml", "--joints", "0,0,0,0,0,0"], "no/such/robot.toml"),
+        (&["fk", "--robot", ROBOT, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"], "--profile and --time need --deformation"),
+        (&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:-5", "--time", "3", "--joints", "0,0,0,0,0,0"], "must be positive"),
+        (&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"], "--profile needs --time"),
+        (&["ik", "--robot", ROBOT, "--pose", "1,2,3"], "3 values need --position-only"),
+        (&["compensate", "--robot", ROBOT, "--targets", "fixtures/paper/table12-targets.csv", "--out", "/tmp/x.csv"], "compensate needs --deformation"),
+    ];
+    for (args, needle) in cases {
+        let o = thermokin(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(needle), "{args:?}: `{needle}` not in {}", stderr(&o));
+    }
+    // A deviation table with the wrong number of rows names the file.
+    let bad = tmp("five.csv");
+    std::fs::write(&bad, "Dx,Dy,Dz,Dox,Doy,Doz\n1,1,1,1,1,1\n").unwrap();
+    let o = thermokin(&["fk", "--robot", ROBOT, "--deformation", bad.to_str().unwrap(), "--joints", "0,0,0,0,0,0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("five.csv") && stderr(&o).contains("1 joint rows, but the robot has 6 joints"), "{}", stderr(&o));
+}
+
+#[test]
+fn compensate_writes_outputs_and_reports_failures() {
+    let targets = tmp("targets.csv");
+    std::fs::write(&targets, ",X,Y,Z\nP1,641,21,473\nP2,536,235,281\nFAR,3000,0,0\n").unwrap();
+    let out = tmp("results.csv");
+    let rapid = tmp("prog.mod");
+    let plots = tmp("plots");
+    let o = thermokin(&[
+        "compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(),
+        "--out", out.to_str().unwrap(), "--rapid", rapid.to_str().unwrap(), "--plot", plots.to_str().unwrap(),
+        "--seed", "0,20,20,0,-45,0",
+    ]);
+    // One target out of reach: the run finishes, writes everything, and exits 3.
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(csv.lines().filter(|l| ["P1,", "P2,", "FAR,"].iter().any(|p| l.starts_with(p))).count(), 3);
+    assert!(csv.contains("FAR,") && csv.contains("Unreachable"));
+    assert!(std::fs::read_to_string(&rapid).unwrap().contains("MoveAbsJ jt_P1"));
+    assert!(plots.join("structure.svg").exists());
+    assert!(stdout(&o).contains("failed 1"));
+}
+
+#[test]
+fn transient_compensation_with_plot() {
+    let targets = tmp("t2.csv");
+    std::fs::write(&targets, ",X,Y,Z,RX,RY,RZ\nP1,641,21,473,0,90,0\nP2,536,235,281,0,90,0\n").unwrap();
+    let out = tmp("transient.csv");
+    let plots = tmp("tplots");
+    let o = thermokin(&[
+        "compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(),
+        "--out", out.to_str().unwrap(), "--profile", "linear-grow:180", "--duration", "20", "--step", "2",
+        "--plot", plots.to_str().unwrap(), "--seed", "0,20,20,0,-45,0", "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!(summary["solves"], 22);
+    assert!(summary["max_position_error_mm"].as_f64().unwrap() < 1e-6);
+    assert!(plots.join("deviation-vs-time.svg").exists());
+    assert!(std::fs::read_to_string(&out).unwrap().starts_with(",,Programmed coordinate"));
+}
+
+fn no_partial(path: &Path) {
+    let dir = path.parent().unwrap();
+    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(Result::ok).filter(|e| e.file_name().to_string_lossy().contains(".tmp-")).collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
+
+#[test]
+fn a_killed_run_leaves_no_partial_output() {
+    let targets = workspace("fixtures/paper/table12-targets.csv");
+    let out = tmp("killed.csv");
+    std::fs::write(&out, "previous results\n").unwrap();
+    // A long transient run (a month of minutes), killed after half a second.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_thermokin"))
+        .args(["compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(), "--out", out.to_str().unwrap(), "--profile", "linear:180", "--duration", "40000"])
+        .current_dir(workspace(""))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(!status.success());
+    // The previous file is intact and nothing half-written lies beside it.
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous results\n");
+    no_partial(&out);
+}
+
+#[test]
+fn help_teaches_units_examples_and_exit_codes() {
+    let o = thermokin(&["--help"]);
+    let h = stdout(&o);
+    for needle in ["Exit status:", "3  the run finished but some targets were not reached", "Examples:", "millimetres and degrees", "reproduce-paper"] {
+        assert!(h.contains(needle), "`{needle}` missing from --help");
+    }
+    let o = thermokin(&["compensate", "--help"]);
+    assert!(stdout(&o).contains("--profile"));
+    assert!(stdout(&o).contains("linear-grow:T"));
+}
