@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result, bail};
 
 const HELP: &str = "\
 cargo xtask <task>
@@ -95,21 +95,48 @@ fn mean_ns(bench: &str) -> Option<f64> {
 }
 
 fn bench(json: bool) -> Result<()> {
-    run(cargo().args(["bench", "--package", "thermokin-chain", "--package", "thermokin-ik", "--bench", "kinematics", "--bench", "ik"]))?;
-    let success = std::fs::read_to_string("target/criterion/ik_random_success.txt").ok().and_then(|s| s.trim().parse::<f64>().ok());
+    run(cargo().args([
+        "bench",
+        "--package",
+        "thermokin-chain",
+        "--package",
+        "thermokin-ik",
+        "--bench",
+        "kinematics",
+        "--bench",
+        "ik",
+    ]))?;
+    let success = std::fs::read_to_string("target/criterion/ik_random_success.txt")
+        .ok()
+        .and_then(|s| s.trim().parse::<f64>().ok());
     let rows: Vec<(&str, Option<f64>, &str, f64)> = vec![
         ("fk_us", median_ns("fk_irb140_deformed").map(|n| n / 1e3), "median FK, IRB 140 with error parameters", 0.2),
         ("jacobian_us", median_ns("jacobian_irb140_deformed").map(|n| n / 1e3), "median pose + Jacobian", 0.3),
         ("ik_near_us", median_ns("ik_near_seed").map(|n| n / 1e3), "median IK from a seed within 0.25 rad", 5.0),
-        ("ik_near_nalgebra_us", median_ns("ik_near_seed_nalgebra_fixed").map(|n| n / 1e3), "same, nalgebra fixed-size step", 5.0),
+        (
+            "ik_near_nalgebra_us",
+            median_ns("ik_near_seed_nalgebra_fixed").map(|n| n / 1e3),
+            "same, nalgebra fixed-size step",
+            5.0,
+        ),
         ("ik_random_us", mean_ns("ik_random_seed").map(|n| n / 1e3), "mean IK from random seeds with restarts", 50.0),
-        ("transient_10050_s", mean_ns("transient_10050").map(|n| n / 1e9), "10,050 targets, warm-started (paper's 200 min)", 0.1),
+        (
+            "transient_10050_s",
+            mean_ns("program/transient_10050").map(|n| n / 1e9),
+            "10,050 targets, warm-started (paper's 200 min)",
+            0.1,
+        ),
     ];
-    println!("{:<22} {:>12} {:>8}  {}", "metric", "measured", "goal", "what");
+    println!("{:<22} {:>12} {:>8}  what", "metric", "measured", "goal");
     for (k, v, what, goal) in &rows {
         println!("{k:<22} {:>12} {goal:>8}  {what}", v.map_or("n/a".into(), |x| format!("{x:.4}")));
     }
-    println!("{:<22} {:>12} {:>8}  success rate of random-seed IK over the bench's targets", "ik_random_success", success.map_or("n/a".into(), |x| format!("{x:.4}")), "0.999");
+    println!(
+        "{:<22} {:>12} {:>8}  success rate of random-seed IK over the bench's targets",
+        "ik_random_success",
+        success.map_or("n/a".into(), |x| format!("{x:.4}")),
+        "0.999"
+    );
     if json {
         let mut obj = serde_json::Map::new();
         for (k, v, _, _) in rows {
@@ -123,7 +150,19 @@ fn bench(json: bool) -> Result<()> {
 
 /// Each library crate and the workspace crates it must never depend on (directly or not).
 const FORBIDDEN: &[(&str, &[&str])] = &[
-    ("thermokin-chain", &["thermokin-io", "thermokin-deform", "thermokin-ik", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
+    (
+        "thermokin-chain",
+        &[
+            "thermokin-io",
+            "thermokin-deform",
+            "thermokin-ik",
+            "thermokin-compensate",
+            "thermokin",
+            "toml",
+            "csv",
+            "clap",
+        ],
+    ),
     ("thermokin-deform", &["thermokin-io", "thermokin-ik", "thermokin-compensate", "thermokin", "csv", "clap"]),
     ("thermokin-ik", &["thermokin-io", "thermokin-deform", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
     ("thermokin-io", &["thermokin-ik", "thermokin-compensate", "thermokin", "clap"]),

@@ -3,9 +3,9 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix6xX, Unit, Vector3};
 
+use crate::ChainError;
 use crate::error_params::ErrorParams;
 use crate::frame::{AxisKind, Frame};
-use crate::ChainError;
 
 /// Whether a joint turns or slides along its axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -190,10 +190,10 @@ impl Chain {
             if !n.is_finite() || (n - 1.0).abs() > 1e-9 {
                 return Err(ChainError::BadAxis { joint: index + 1 });
             }
-            if let Some(l) = joint.limits {
-                if !(l.lower.is_finite() && l.upper.is_finite()) || l.lower > l.upper {
-                    return Err(ChainError::BadLimits { joint: index + 1, lower: l.lower, upper: l.upper });
-                }
+            if let Some(l) = joint.limits
+                && (!(l.lower.is_finite() && l.upper.is_finite()) || l.lower > l.upper)
+            {
+                return Err(ChainError::BadLimits { joint: index + 1, lower: l.lower, upper: l.upper });
             }
             links.push(Link {
                 fixed: Frame::new(joint.error.rotation_matrix(), joint.offset + joint.error.translation),
@@ -240,12 +240,7 @@ impl Chain {
         base_row.error = base;
         let mut tool_row = self.tool.clone();
         tool_row.error = tool;
-        let js = self
-            .joints
-            .iter()
-            .zip(joints)
-            .map(|(j, e)| Joint { error: *e, ..j.clone() })
-            .collect();
+        let js = self.joints.iter().zip(joints).map(|(j, e)| Joint { error: *e, ..j.clone() }).collect();
         Chain::new(base_row, js, tool_row)
     }
 

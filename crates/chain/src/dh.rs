@@ -8,8 +8,8 @@
 
 use nalgebra::{Isometry3, Matrix3, Translation3, Unit, UnitQuaternion, Vector3};
 
-use crate::chain::{Chain, FixedRow, Joint, JointKind, JointLimits};
 use crate::ChainError;
+use crate::chain::{Chain, FixedRow, Joint, JointKind, JointLimits};
 
 /// One row of a DH or modified-DH table. Lengths in mm, angles in radians.
 ///
@@ -122,12 +122,8 @@ impl DhTable {
         for r in &self.rows {
             let (before, after) = match (self.convention, r.kind) {
                 (DhConvention::Classic, JointKind::Revolute) => (rz(r.theta), tz(r.d) * tx(r.a) * rx(r.alpha)),
-                (DhConvention::Classic, JointKind::Prismatic) => {
-                    (rz(r.theta) * tz(r.d), tx(r.a) * rx(r.alpha))
-                }
-                (DhConvention::Modified, JointKind::Revolute) => {
-                    (rx(r.alpha) * tx(r.a) * rz(r.theta), tz(r.d))
-                }
+                (DhConvention::Classic, JointKind::Prismatic) => (rz(r.theta) * tz(r.d), tx(r.a) * rx(r.alpha)),
+                (DhConvention::Modified, JointKind::Revolute) => (rx(r.alpha) * tx(r.a) * rz(r.theta), tz(r.d)),
                 (DhConvention::Modified, JointKind::Prismatic) => {
                     (rx(r.alpha) * tx(r.a) * rz(r.theta) * tz(r.d), Isometry3::identity())
                 }
@@ -242,9 +238,7 @@ impl Chain {
                 if tilt.abs() > LINE_TOL {
                     return Err(ChainError::NoModifiedDh {
                         joint: 1,
-                        reason: format!(
-                            "the axis is not perpendicular to the base X axis (cos = {tilt:.3e})"
-                        ),
+                        reason: format!("the axis is not perpendicular to the base X axis (cos = {tilt:.3e})"),
                     });
                 }
             }
@@ -304,15 +298,7 @@ impl Chain {
             }
             // Joint variable zero = the chain's zero configuration, so θ (or d) carries the geometry at
             // q = 0 and the joint's own zero offset is already inside it.
-            rows.push(DhRow {
-                name: joint.name.clone(),
-                a,
-                alpha,
-                d,
-                theta,
-                kind: joint.kind,
-                limits: joint.limits,
-            });
+            rows.push(DhRow { name: joint.name.clone(), a, alpha, d, theta, kind: joint.kind, limits: joint.limits });
         }
         let tool = frames[n].inverse() * world_from_tcp;
         Ok(DhTable { convention: DhConvention::Modified, rows, base: Isometry3::identity(), tool })

@@ -32,10 +32,8 @@ pub enum ErrorGrouping {
 
 impl ErrorParams {
     /// All six parameters zero.
-    pub const ZERO: ErrorParams = ErrorParams {
-        translation: Vector3::new(0.0, 0.0, 0.0),
-        rotation: Vector3::new(0.0, 0.0, 0.0),
-    };
+    pub const ZERO: ErrorParams =
+        ErrorParams { translation: Vector3::new(0.0, 0.0, 0.0), rotation: Vector3::new(0.0, 0.0, 0.0) };
 
     /// From millimetres and radians.
     pub fn new(translation: Vector3<f64>, rotation: Vector3<f64>) -> Self {
@@ -59,14 +57,7 @@ impl ErrorParams {
 
     /// The six values as one vector `[ΔX, ΔY, ΔZ, Δθx, Δθy, Δθz]` (mm, rad).
     pub fn as_array(&self) -> [f64; 6] {
-        [
-            self.translation.x,
-            self.translation.y,
-            self.translation.z,
-            self.rotation.x,
-            self.rotation.y,
-            self.rotation.z,
-        ]
+        [self.translation.x, self.translation.y, self.translation.z, self.rotation.x, self.rotation.y, self.rotation.z]
     }
 
     /// Inverse of [`ErrorParams::as_array`].
@@ -112,10 +103,7 @@ impl ErrorParams {
     /// `Trans(p + Δp) · Rx · Ry · Rz`.
     pub fn row_transform(&self, p: &Vector3<f64>) -> Isometry3<f64> {
         let rot = Rotation3::from_matrix_unchecked(self.rotation_matrix());
-        Isometry3::from_parts(
-            Translation3::from(p + self.translation),
-            UnitQuaternion::from_rotation_matrix(&rot),
-        )
+        Isometry3::from_parts(Translation3::from(p + self.translation), UnitQuaternion::from_rotation_matrix(&rot))
     }
 
     /// Converts these parameters, read in grouping `from`, to the equivalent parameters in grouping `to`

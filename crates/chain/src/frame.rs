@@ -25,10 +25,7 @@ impl Frame {
     /// `self · other`.
     #[inline(always)]
     pub fn mul(&self, other: &Frame) -> Frame {
-        Frame {
-            rot: self.rot * other.rot,
-            trans: self.rot * other.trans + self.trans,
-        }
+        Frame { rot: self.rot * other.rot, trans: self.rot * other.trans + self.trans }
     }
 
     /// `self · Trans(v)`.

@@ -11,7 +11,7 @@ mod frame;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
 pub use dh::{DhConvention, DhRow, DhTable};
-pub use error_params::{xyz_angles, xyz_rotation, ErrorGrouping, ErrorParams};
+pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_rotation};
 
 /// Errors of the kinematic core.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -41,10 +41,14 @@ pub enum Command {
     #[command(after_help = "Example:\n  thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0 --json")]
     Fk(FkArgs),
     /// Inverse kinematics: joint angles that reach a pose (optionally on a deformed robot).
-    #[command(after_help = "Example:\n  thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0 --seed 0,30,10,0,-40,0")]
+    #[command(
+        after_help = "Example:\n  thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0 --seed 0,30,10,0,-40,0"
+    )]
     Ik(IkArgs),
     /// Compensate a program of targets for a deviation table, static or over a warm-up cycle.
-    #[command(after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --rapid prog.mod --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved.")]
+    #[command(
+        after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --rapid prog.mod --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
+    )]
     Compensate(CompensateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
     /// authors' full files when ../shared is present.
@@ -90,7 +94,7 @@ pub struct FkArgs {
     /// Joint values, degrees (mm for prismatic joints), comma separated.
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub joints: String,
-    /// Print JSON: {"position_mm": [x,y,z], "rotation": [[3x3]], "rpy_deg": [rx,ry,rz]} (X-Y-Z Euler).
+    /// Print JSON: `{"position_mm": [x,y,z], "rotation": [[3x3]], "rpy_deg": [rx,ry,rz]}` (X-Y-Z Euler).
     #[arg(long)]
     pub json: bool,
 }
@@ -218,7 +222,10 @@ pub fn parse_list(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
     s.split(',')
         .enumerate()
         .map(|(i, v)| {
-            let x: f64 = v.trim().parse().map_err(|_| anyhow::anyhow!("--{flag}: value {} `{}` is not a number", i + 1, v.trim()))?;
+            let x: f64 = v
+                .trim()
+                .parse()
+                .map_err(|_| anyhow::anyhow!("--{flag}: value {} `{}` is not a number", i + 1, v.trim()))?;
             anyhow::ensure!(x.is_finite(), "--{flag}: value {} is not finite", i + 1);
             Ok(x)
         })

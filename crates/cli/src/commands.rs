@@ -3,21 +3,21 @@
 use std::path::Path;
 use std::time::Duration;
 
-use anyhow::{anyhow, Context};
+use anyhow::{Context, anyhow};
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
-use thermokin_chain::{xyz_angles, Chain, JointKind};
+use thermokin_chain::{Chain, JointKind, xyz_angles};
 use thermokin_compensate::{
-    compensate_static, compensate_transient, pose_from_xyz_deg, rapid_module, write_joint_csv, write_results_csv,
-    Cycle, ProgramTarget, RapidSettings, RunOutput, RunSettings,
+    Cycle, ProgramTarget, RapidSettings, RunOutput, RunSettings, compensate_static, compensate_transient,
+    pose_from_xyz_deg, rapid_module, write_joint_csv, write_results_csv,
 };
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
-use thermokin_ik::{solve, Params, Target, Workspace};
-use thermokin_io::{read_deviation_table_for, read_robot, read_targets, write_atomic, write_atomic_with, Robot};
+use thermokin_ik::{Params, Target, Workspace, solve};
+use thermokin_io::{Robot, read_deviation_table_for, read_robot, read_targets, write_atomic, write_atomic_with};
 
-use crate::args::{parse_list, Cli, Command, CompensateArgs, FkArgs, IkArgs, RobotArgs, Semantics};
-use crate::{exit, plots, reproduce, Failure};
+use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, RobotArgs, Semantics, parse_list};
+use crate::{Failure, exit, plots, reproduce};
 
 /// Runs a parsed command line; returns the exit status.
 pub fn run(cli: Cli) -> Result<u8, Failure> {
@@ -74,7 +74,11 @@ fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
 /// Degrees (or mm) → the library's radians (or mm), per joint kind.
 pub fn joints_in(chain: &Chain, flag: &str, values: &[f64]) -> Result<Vec<f64>, Failure> {
     if values.len() != chain.dof() {
-        return Err(Failure::input(anyhow!("--{flag}: {} values for a robot with {} joints", values.len(), chain.dof())));
+        return Err(Failure::input(anyhow!(
+            "--{flag}: {} values for a robot with {} joints",
+            values.len(),
+            chain.dof()
+        )));
     }
     Ok(chain
         .joints()
@@ -124,7 +128,9 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     let target = match (v.len(), a.position_only) {
         (6, false) => Target::Pose(pose_from_xyz_deg(Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]))),
         (3, true) | (6, true) => Target::Position(Vector3::new(v[0], v[1], v[2])),
-        (3, false) => return Err(Failure::input(anyhow!("--pose: 3 values need --position-only (or give x,y,z,rx,ry,rz)"))),
+        (3, false) => {
+            return Err(Failure::input(anyhow!("--pose: 3 values need --position-only (or give x,y,z,rx,ry,rz)")));
+        }
         (n, _) => return Err(Failure::input(anyhow!("--pose: expected 6 values (x,y,z,rx,ry,rz), got {n}"))),
     };
     let seed = match &a.seed {
@@ -221,13 +227,16 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
         write_atomic(p, module.as_bytes()).map_err(Failure::internal)?;
     }
     if let Some(dir) = &a.plot {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display())).map_err(Failure::internal)?;
+        std::fs::create_dir_all(dir)
+            .with_context(|| format!("creating {}", dir.display()))
+            .map_err(Failure::internal)?;
         if transient {
             plots::deviation_vs_time(&dir.join("deviation-vs-time.svg"), run).map_err(Failure::internal)?;
         }
         if let Some(table) = &loaded.table {
             let deformed = table.apply(&loaded.robot.chain, &loaded.semantics).map_err(Failure::input)?;
-            plots::structure(&dir.join("structure.svg"), &loaded.robot.chain, &deformed, 20.0).map_err(Failure::internal)?;
+            plots::structure(&dir.join("structure.svg"), &loaded.robot.chain, &deformed, 20.0)
+                .map_err(Failure::internal)?;
         }
     }
     Ok(())
@@ -242,11 +251,21 @@ fn print_summary(run: &RunOutput, as_json: bool) {
     println!("solves {}  failed {}", s.solves, s.failures);
     println!(
         "position deviation (programmed − reached), mm:  min {:+.3e} {:+.3e} {:+.3e}   max {:+.3e} {:+.3e} {:+.3e}",
-        s.position_mm.min[0], s.position_mm.min[1], s.position_mm.min[2], s.position_mm.max[0], s.position_mm.max[1], s.position_mm.max[2]
+        s.position_mm.min[0],
+        s.position_mm.min[1],
+        s.position_mm.min[2],
+        s.position_mm.max[0],
+        s.position_mm.max[1],
+        s.position_mm.max[2]
     );
     println!(
         "orientation deviation (rotation vector), deg:   min {:+.3e} {:+.3e} {:+.3e}   max {:+.3e} {:+.3e} {:+.3e}",
-        s.orientation_deg.min[0], s.orientation_deg.min[1], s.orientation_deg.min[2], s.orientation_deg.max[0], s.orientation_deg.max[1], s.orientation_deg.max[2]
+        s.orientation_deg.min[0],
+        s.orientation_deg.min[1],
+        s.orientation_deg.min[2],
+        s.orientation_deg.max[0],
+        s.orientation_deg.max[1],
+        s.orientation_deg.max[2]
     );
     println!(
         "largest error: compensated {:.3e} mm, {:.3e}°; uncompensated program {:.3} mm",

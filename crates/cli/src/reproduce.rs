@@ -5,19 +5,19 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use anyhow::{anyhow, Context};
+use anyhow::{Context, anyhow};
 use nalgebra::Vector3;
 use serde::Deserialize;
-use serde_json::{json, Value};
+use serde_json::{Value, json};
 use thermokin_chain::Chain;
-use thermokin_compensate::{compensate_static, compensate_transient, Cycle, RunOutput, RunSettings, Summary};
+use thermokin_compensate::{Cycle, RunOutput, RunSettings, Summary, compensate_static, compensate_transient};
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
-use thermokin_io::{read_deviation_table, read_paper_results, read_robot, write_atomic, PaperResultRow};
+use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, read_robot, write_atomic};
 
 use crate::args::ReproduceArgs;
 use crate::commands::{program, progress_bar};
-use crate::{exit, plots, Failure};
+use crate::{Failure, exit, plots};
 
 #[derive(Deserialize)]
 struct MinMax {
@@ -48,7 +48,9 @@ fn labelled_rows(path: &Path) -> Result<Vec<(String, Vec<f64>)>, Failure> {
         let mut cells = line.split(',');
         let label = cells.next().unwrap_or_default().to_string();
         let values = cells
-            .map(|c| c.trim().parse::<f64>().map_err(|_| anyhow!("{}:{}: `{c}` is not a number", path.display(), i + 1)))
+            .map(|c| {
+                c.trim().parse::<f64>().map_err(|_| anyhow!("{}:{}: `{c}` is not a number", path.display(), i + 1))
+            })
             .collect::<Result<Vec<_>, _>>()
             .map_err(Failure::input)?;
         out.push((label, values));
@@ -104,8 +106,13 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
     let settings = RunSettings { semantics: coppelia.clone(), ik: Params::default(), start };
 
     let static_run = compensate_static(&chain, &table, &prog, &settings).map_err(Failure::input)?;
-    let canonical_run = compensate_static(&chain, &table, &prog, &RunSettings { semantics: TableSemantics::Canonical, ..settings.clone() })
-        .map_err(Failure::input)?;
+    let canonical_run = compensate_static(
+        &chain,
+        &table,
+        &prog,
+        &RunSettings { semantics: TableSemantics::Canonical, ..settings.clone() },
+    )
+    .map_err(Failure::input)?;
     let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
     let bar = progress_bar(201, "transient case");
     let transient_run = compensate_transient(&chain, &table, &profile, Cycle::PAPER, &prog, &settings, |done, _| {
@@ -119,7 +126,18 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
 
     let deformed = table.apply(&chain, &coppelia).map_err(Failure::input)?;
     let deformed_canonical = table.apply(&chain, &TableSemantics::Canonical).map_err(Failure::input)?;
-    let m = measure(&a, &chain, &deformed, &deformed_canonical, &static_run, &canonical_run, &transient_run, &printed, &table14, &table16)?;
+    let m = measure(
+        &a,
+        &chain,
+        &deformed,
+        &deformed_canonical,
+        &static_run,
+        &canonical_run,
+        &transient_run,
+        &printed,
+        &table14,
+        &table16,
+    )?;
 
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
@@ -207,21 +225,62 @@ fn measure(
     let s = &static_run.summary;
     let c = &canonical_run.summary;
     let _ = writeln!(w, "## Static case: Tables 13 and 15 (min / max per axis)\n");
-    let _ = writeln!(w, "| quantity | published (Tables 15, 13) | ours, CoppeliaSim semantics | ours, canonical semantics |");
+    let _ = writeln!(
+        w,
+        "| quantity | published (Tables 15, 13) | ours, CoppeliaSim semantics | ours, canonical semantics |"
+    );
     let _ = writeln!(w, "|---|---|---|---|");
     let fmt3 = |v: &[f64; 3]| format!("{:.4e}, {:.4e}, {:.4e}", v[0], v[1], v[2]);
-    let _ = writeln!(w, "| ΔX, ΔY, ΔZ min | {} | {} | {} |", fmt3(&printed.static_case.position_mm.min), fmt3(&s.position_mm.min), fmt3(&c.position_mm.min));
-    let _ = writeln!(w, "| ΔX, ΔY, ΔZ max | {} | {} | {} |", fmt3(&printed.static_case.position_mm.max), fmt3(&s.position_mm.max), fmt3(&c.position_mm.max));
-    let _ = writeln!(w, "| Δθ min | {} | {} | {} |", fmt3(&printed.static_case.orientation_deg.min), fmt3(&s.orientation_deg.min), fmt3(&c.orientation_deg.min));
-    let _ = writeln!(w, "| Δθ max | {} | {} | {} |", fmt3(&printed.static_case.orientation_deg.max), fmt3(&s.orientation_deg.max), fmt3(&c.orientation_deg.max));
-    let _ = writeln!(w, "| largest error | 0.0099 mm, 0.02° | {:.2e} mm, {:.2e}° | {:.2e} mm, {:.2e}° |", s.max_position_error_mm, s.max_orientation_error_deg, c.max_position_error_mm, c.max_orientation_error_deg);
-    let _ = writeln!(w, "| uncompensated program, largest error | (\"even 20 mm\") | {:.3} mm | {:.3} mm |", s.max_uncompensated_error_mm, c.max_uncompensated_error_mm);
+    let _ = writeln!(
+        w,
+        "| ΔX, ΔY, ΔZ min | {} | {} | {} |",
+        fmt3(&printed.static_case.position_mm.min),
+        fmt3(&s.position_mm.min),
+        fmt3(&c.position_mm.min)
+    );
+    let _ = writeln!(
+        w,
+        "| ΔX, ΔY, ΔZ max | {} | {} | {} |",
+        fmt3(&printed.static_case.position_mm.max),
+        fmt3(&s.position_mm.max),
+        fmt3(&c.position_mm.max)
+    );
+    let _ = writeln!(
+        w,
+        "| Δθ min | {} | {} | {} |",
+        fmt3(&printed.static_case.orientation_deg.min),
+        fmt3(&s.orientation_deg.min),
+        fmt3(&c.orientation_deg.min)
+    );
+    let _ = writeln!(
+        w,
+        "| Δθ max | {} | {} | {} |",
+        fmt3(&printed.static_case.orientation_deg.max),
+        fmt3(&s.orientation_deg.max),
+        fmt3(&c.orientation_deg.max)
+    );
+    let _ = writeln!(
+        w,
+        "| largest error | 0.0099 mm, 0.02° | {:.2e} mm, {:.2e}° | {:.2e} mm, {:.2e}° |",
+        s.max_position_error_mm, s.max_orientation_error_deg, c.max_position_error_mm, c.max_orientation_error_deg
+    );
+    let _ = writeln!(
+        w,
+        "| uncompensated program, largest error | (\"even 20 mm\") | {:.3} mm | {:.3} mm |",
+        s.max_uncompensated_error_mm, c.max_uncompensated_error_mm
+    );
     let _ = writeln!(w, "| failed targets | 0 | {} | {} |\n", s.failures, c.failures);
 
     // Table 16 vs ours, and Table 14 vs FK of the published angles.
     let _ = writeln!(w, "## Static case: Table 16 (joint angles) and Table 14 (coordinates reached)\n");
-    let _ = writeln!(w, "`FK(T16)` is the FK of the published joint angles on our deformed model; its gap to Table 14 is the part of the authors' model ours does not explain.\n");
-    let _ = writeln!(w, "| target | A1..A6 published (Table 16) | A1..A6 ours | max Δ [°] | Table 14 X, Y, Z | FK(T16) − Table 14 [mm] |");
+    let _ = writeln!(
+        w,
+        "`FK(T16)` is the FK of the published joint angles on our deformed model; its gap to Table 14 is the part of the authors' model ours does not explain.\n"
+    );
+    let _ = writeln!(
+        w,
+        "| target | A1..A6 published (Table 16) | A1..A6 ours | max Δ [°] | Table 14 X, Y, Z | FK(T16) − Table 14 [mm] |"
+    );
     let _ = writeln!(w, "|---|---|---|---|---|---|");
     let mut joint_diff = [0.0f64; 6];
     let mut t16_rows = Vec::new();
@@ -265,14 +324,25 @@ fn measure(
     // Transient.
     let t = &transient_run.summary;
     let _ = writeln!(w, "## Transient case: Tables 17 and 18 (200 minutes, every minute, 10,050 solves)\n");
-    let _ = writeln!(w, "The table grows linearly, t/180 of the case-study table at minute t, without a plateau (what the authors' file does). Each target is re-solved every minute from its previous solution.\n");
+    let _ = writeln!(
+        w,
+        "The table grows linearly, t/180 of the case-study table at minute t, without a plateau (what the authors' file does). Each target is re-solved every minute from its previous solution.\n"
+    );
     let _ = writeln!(w, "| quantity | published (Tables 17, 18) | ours |");
     let _ = writeln!(w, "|---|---|---|");
-    let _ = writeln!(w, "| ΔX, ΔY, ΔZ min | {} | {} |", fmt3(&printed.transient.position_mm.min), fmt3(&t.position_mm.min));
-    let _ = writeln!(w, "| ΔX, ΔY, ΔZ max | {} | {} |", fmt3(&printed.transient.position_mm.max), fmt3(&t.position_mm.max));
-    let _ = writeln!(w, "| Δθ min | {} | {} |", fmt3(&printed.transient.orientation_deg.min), fmt3(&t.orientation_deg.min));
-    let _ = writeln!(w, "| Δθ max | {} | {} |", fmt3(&printed.transient.orientation_deg.max), fmt3(&t.orientation_deg.max));
-    let _ = writeln!(w, "| largest error | 0.199 mm, 0.07° | {:.2e} mm, {:.2e}° |", t.max_position_error_mm, t.max_orientation_error_deg);
+    let _ =
+        writeln!(w, "| ΔX, ΔY, ΔZ min | {} | {} |", fmt3(&printed.transient.position_mm.min), fmt3(&t.position_mm.min));
+    let _ =
+        writeln!(w, "| ΔX, ΔY, ΔZ max | {} | {} |", fmt3(&printed.transient.position_mm.max), fmt3(&t.position_mm.max));
+    let _ =
+        writeln!(w, "| Δθ min | {} | {} |", fmt3(&printed.transient.orientation_deg.min), fmt3(&t.orientation_deg.min));
+    let _ =
+        writeln!(w, "| Δθ max | {} | {} |", fmt3(&printed.transient.orientation_deg.max), fmt3(&t.orientation_deg.max));
+    let _ = writeln!(
+        w,
+        "| largest error | 0.199 mm, 0.07° | {:.2e} mm, {:.2e}° |",
+        t.max_position_error_mm, t.max_orientation_error_deg
+    );
     let _ = writeln!(w, "| uncompensated program, largest error | – | {:.3} mm |", t.max_uncompensated_error_mm);
     let _ = writeln!(w, "| solves, failed | 10,050, 0 | {}, {} |\n", t.solves, t.failures);
 
@@ -290,7 +360,8 @@ fn measure(
     let transient_file = a.shared.join("results-transient-case-study.csv");
     if static_file.exists() && transient_file.exists() {
         let authors_static = read_paper_results(&static_file).map_err(Failure::input)?;
-        let rows: Vec<(Vec<f64>, Vector3<f64>)> = authors_static.iter().map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
+        let rows: Vec<(Vec<f64>, Vector3<f64>)> =
+            authors_static.iter().map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
         let res = fk_residual(deformed, &rows);
         let joint = max_joint_diff(&authors_static, static_run);
         let _ = writeln!(w, "## The authors' full files (`../shared/data/paper-coppeliasim`)\n");
@@ -303,8 +374,11 @@ fn measure(
             joint
         );
         let authors_transient = read_paper_results(&transient_file).map_err(Failure::input)?;
-        let minute0: Vec<(Vec<f64>, Vector3<f64>)> =
-            authors_transient.iter().filter(|r| r.time_min == 0.0).map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
+        let minute0: Vec<(Vec<f64>, Vector3<f64>)> = authors_transient
+            .iter()
+            .filter(|r| r.time_min == 0.0)
+            .map(|r| (r.joints_deg.clone(), r.reached_mm))
+            .collect();
         let nominal_res = fk_residual(chain, &minute0);
         let tjoint = max_joint_diff(&authors_transient, transient_run);
         let _ = writeln!(
@@ -326,9 +400,16 @@ fn measure(
         j["authors_transient_rows"] = json!(authors_transient.len());
         j["authors_transient_max_joint_diff_deg"] = json!(tjoint);
     } else {
-        let _ = writeln!(w, "The authors' full files were not found at `{}`; only the printed tables were compared.\n", a.shared.display());
+        let _ = writeln!(
+            w,
+            "The authors' full files were not found at `{}`; only the printed tables were compared.\n",
+            a.shared.display()
+        );
     }
-    let _ = writeln!(w, "## Plots\n\n![deviation per minute](img/transient-deviation.svg)\n\n![Figure 15](img/figure15-structure.svg)\n");
+    let _ = writeln!(
+        w,
+        "## Plots\n\n![deviation per minute](img/transient-deviation.svg)\n\n![Figure 15](img/figure15-structure.svg)\n"
+    );
     Ok(Measured { json: j, report: r })
 }
 
@@ -336,9 +417,10 @@ fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
     authors
         .iter()
         .filter_map(|a| {
-            ours.rows.iter().find(|o| o.label == a.label && o.time_min == a.time_min).map(|o| {
-                a.joints_deg.iter().zip(&o.joints_deg).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
-            })
+            ours.rows
+                .iter()
+                .find(|o| o.label == a.label && o.time_min == a.time_min)
+                .map(|o| a.joints_deg.iter().zip(&o.joints_deg).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max))
         })
         .fold(0.0, f64::max)
 }
@@ -349,7 +431,9 @@ fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
 /// larger change is a change of the model. Keys present in only one of the two (the shared-data ones
 /// when `../shared` is absent) are skipped.
 fn check(golden: &PathBuf, measured: &Value) -> Result<Vec<String>, Failure> {
-    let text = std::fs::read_to_string(golden).with_context(|| format!("reading {}", golden.display())).map_err(Failure::input)?;
+    let text = std::fs::read_to_string(golden)
+        .with_context(|| format!("reading {}", golden.display()))
+        .map_err(Failure::input)?;
     let g: Value = serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
     let mut drift = Vec::new();
     for case in ["static", "static_canonical", "transient"] {
@@ -373,7 +457,10 @@ fn compare(path: &str, g: &Value, m: &Value, drift: &mut Vec<String>) {
             for (k, gv) in go {
                 if let Some(mv) = mo.get(k) {
                     // The min/max of compensated deviations are rounding noise (~1e-10); bounded above.
-                    if matches!(k.as_str(), "position_mm" | "orientation_deg" | "max_position_error_mm" | "max_orientation_error_deg") {
+                    if matches!(
+                        k.as_str(),
+                        "position_mm" | "orientation_deg" | "max_position_error_mm" | "max_orientation_error_deg"
+                    ) {
                         continue;
                     }
                     compare(&format!("{path}.{k}"), gv, mv, drift);
@@ -390,7 +477,7 @@ fn compare(path: &str, g: &Value, m: &Value, drift: &mut Vec<String>) {
         }
         (Value::Number(gn), Value::Number(mn)) => {
             let (a, b) = (gn.as_f64().unwrap_or(f64::NAN), mn.as_f64().unwrap_or(f64::NAN));
-            if !((a - b).abs() <= 1e-6) {
+            if (a - b).abs() > 1e-6 || a.is_nan() != b.is_nan() {
                 drift.push(format!("{path} = {b}, golden {a}"));
             }
         }

@@ -3,7 +3,7 @@
 //! For every programmed target, inverse kinematics on the *deformed* model gives the joint angles that
 //! bring the deformed robot onto the programmed pose. Static case: one deformed state. Transient case: a
 //! cycle (the paper's 200 minutes, every minute, the program in a loop) in which the model is updated at
-//! each step from a [`TimeProfile`] and every target re-solved, seeded from its previous solution.
+//! each step from a [`TimeProfile`](thermokin_deform::TimeProfile) and every target re-solved, seeded from its previous solution.
 //!
 //! Each result records the compensated joints, the pose the deformed robot reaches with them, its
 //! deviation from the programmed pose (position per axis; orientation as a rotation vector — per-axis
@@ -14,10 +14,10 @@
 mod export;
 mod run;
 
-pub use export::{rapid_module, write_joint_csv, write_results_csv, RapidSettings};
+pub use export::{RapidSettings, rapid_module, write_joint_csv, write_results_csv};
 pub use run::{
-    compensate_static, compensate_transient, orientation_error_deg, pose_from_xyz_deg, Axes, Cycle,
-    ProgramTarget, RunOutput, RunSettings, Summary, TargetResult,
+    Axes, Cycle, ProgramTarget, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
+    orientation_error_deg, pose_from_xyz_deg,
 };
 
 /// Errors of a compensation run (per-target failures are records, not errors).

@@ -2,9 +2,9 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use thermokin_chain::{xyz_rotation, Chain};
+use thermokin_chain::{Chain, xyz_rotation};
 use thermokin_deform::{DeviationTable, TableSemantics, TimeProfile};
-use thermokin_ik::{solve_batch, Params, Seeds, Solution, Status, Target};
+use thermokin_ik::{Params, Seeds, Solution, Status, Target, solve_batch};
 
 use crate::CompensateError;
 
@@ -208,7 +208,11 @@ fn record(
 
 /// IK of the program on the nominal robot, chained target to target from `start`: the uncompensated
 /// program, and the seeds of the compensated one.
-fn nominal_program(chain: &Chain, program: &[ProgramTarget], settings: &RunSettings) -> Result<Vec<Solution>, CompensateError> {
+fn nominal_program(
+    chain: &Chain,
+    program: &[ProgramTarget],
+    settings: &RunSettings,
+) -> Result<Vec<Solution>, CompensateError> {
     Ok(solve_batch(chain, &to_targets(program), Seeds::ChainPrevious(&settings.start), &settings.ik)?)
 }
 

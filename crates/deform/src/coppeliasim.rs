@@ -11,7 +11,7 @@
 //! this model versus ~20 mm for the canonical one.
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use thermokin_chain::{xyz_angles, xyz_rotation, Chain, ErrorParams, JointKind};
+use thermokin_chain::{Chain, ErrorParams, JointKind, xyz_angles, xyz_rotation};
 
 use crate::{DeformError, DeviationTable};
 

@@ -8,7 +8,7 @@
 mod coppeliasim;
 mod profile;
 
-pub use coppeliasim::{coppeliasim_object_rotation, CoppeliaSimEdits};
+pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_object_rotation};
 pub use profile::{AfterStabilization, RowFactors, TemperatureLog, TimeProfile};
 pub use thermokin_chain::{ErrorParams, ParameterLayout};
 

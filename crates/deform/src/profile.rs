@@ -2,7 +2,7 @@
 //!
 //! Paper section 4: the IRB 140 warms up for about 180 minutes before it stabilises; the authors grew the
 //! table linearly with time ("the maximum deformations … applied increasing linearly in each minute"), their
-//! ref. [26] found a cubic regression best, and their transient file keeps growing after minute 180
+//! ref. \[26\] found a cubic regression best, and their transient file keeps growing after minute 180
 //! (NOTES.md), hence linear with and without a plateau.
 
 use serde::{Deserialize, Serialize};
@@ -38,7 +38,7 @@ pub enum TimeProfile {
         /// Time constant τ, minutes.
         tau_min: f64,
     },
-    /// Cubic regression (the paper's ref. [26]): `(c1 t + c2 t² + c3 t³) · table`, t in minutes.
+    /// Cubic regression (the paper's ref. \[26\]): `(c1 t + c2 t² + c3 t³) · table`, t in minutes.
     Cubic {
         /// `[c1, c2, c3]` in 1/min, 1/min², 1/min³.
         coefficients: [f64; 3],
@@ -140,7 +140,7 @@ impl TimeProfile {
                 if log.times_min.len() < 2 {
                     return bad("the temperature log needs at least two samples".into());
                 }
-                if log.times_min.windows(2).any(|w| !(w[1] > w[0])) || log.times_min.iter().any(|t| !t.is_finite()) {
+                if log.times_min.windows(2).any(|w| w[1] <= w[0]) || log.times_min.iter().any(|t| !t.is_finite()) {
                     return bad("temperature log times must be finite and strictly increasing".into());
                 }
                 for s in sensors {

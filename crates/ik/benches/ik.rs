@@ -1,1 +1,128 @@
-fn main(){}
+//! Criterion benches of the IK solver on the bundled IRB 140 under the case-study deformation: near and
+#![allow(missing_docs, clippy::unwrap_used)] // criterion_group! makes an undocumented fn; benches unwrap.
+//! random seeds, the faer and nalgebra steps, and the paper's 10,050-target transient program.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use nalgebra::Vector3;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use thermokin_chain::{Chain, ErrorParams, xyz_rotation};
+use thermokin_deform::{AfterStabilization, DeviationTable, TableSemantics, TimeProfile};
+use thermokin_ik::{Backend, Params, Seeds, Target, Workspace, solve, solve_batch};
+
+fn root() -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn robot() -> Chain {
+    thermokin_io::read_robot(&root().join("configs/irb140.toml")).expect("bundled robot").chain
+}
+
+fn table() -> DeviationTable {
+    DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6])
+}
+
+fn cases(chain: &Chain, n: usize, spread: f64, seed: u64) -> Vec<(Target, Vec<f64>)> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..n)
+        .map(|_| {
+            let q: Vec<f64> =
+                chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect();
+            let s: Vec<f64> = if spread.is_finite() {
+                q.iter()
+                    .zip(chain.joints())
+                    .map(|(v, j)| j.limits.unwrap().clamp(v + rng.random_range(-spread..spread)))
+                    .collect()
+            } else {
+                chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect()
+            };
+            (Target::Pose(chain.tool_pose(&q).unwrap()), s)
+        })
+        .collect()
+}
+
+fn benches(c: &mut Criterion) {
+    let chain = table().apply(&robot(), &TableSemantics::Canonical).unwrap();
+    let mut ws = Workspace::new(6);
+    for (name, backend) in [("ik_near_seed", Backend::Faer), ("ik_near_seed_nalgebra_fixed", Backend::NalgebraFixed6)] {
+        let near = cases(&chain, 1000, 0.25, 1);
+        let params = Params { backend, ..Params::default() };
+        let mut k = 0;
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                let (t, s) = &near[k % near.len()];
+                k += 1;
+                black_box(solve(&chain, t, s, &params, &mut ws, k as u64).unwrap())
+            })
+        });
+    }
+    let random = cases(&chain, 2000, f64::INFINITY, 2);
+    let params = Params::default();
+    let ok = random
+        .iter()
+        .enumerate()
+        .filter(|(i, (t, s))| solve(&chain, t, s, &params, &mut ws, *i as u64).unwrap().converged())
+        .count();
+    let _ = std::fs::create_dir_all(root().join("target/criterion"));
+    let _ = std::fs::write(
+        root().join("target/criterion/ik_random_success.txt"),
+        format!("{}\n", ok as f64 / random.len() as f64),
+    );
+    let mut k = 0;
+    c.bench_function("ik_random_seed", |b| {
+        b.iter(|| {
+            let (t, s) = &random[k % random.len()];
+            k += 1;
+            black_box(solve(&chain, t, s, &params, &mut ws, k as u64).unwrap())
+        })
+    });
+
+    // The paper's transient program: 50 targets of Table 12, 201 model states (minutes 0..=200), each
+    // target seeded from its previous solution.
+    let text = std::fs::read_to_string(root().join("fixtures/paper/table12-targets.csv")).unwrap();
+    let targets: Vec<Target> = text
+        .lines()
+        .filter(|l| l.starts_with('P'))
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
+            let r = xyz_rotation(&Vector3::new(v[3], v[4], v[5]).map(f64::to_radians));
+            Target::Pose(nalgebra::Isometry3::from_parts(
+                Vector3::new(v[0], v[1], v[2]).into(),
+                nalgebra::UnitQuaternion::from_matrix(&r),
+            ))
+        })
+        .collect();
+    let nominal = robot();
+    let start = [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians);
+    let first = solve_batch(&nominal, &targets, Seeds::ChainPrevious(&start), &params).unwrap();
+    let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
+    let states: Vec<Chain> = (0..=200)
+        .map(|t| profile.table_at(&table(), t as f64).unwrap().apply(&nominal, &TableSemantics::Canonical).unwrap())
+        .collect();
+    let mut group = c.benchmark_group("program");
+    group.sample_size(10);
+    group.bench_function("transient_10050", |b| {
+        b.iter(|| {
+            let mut seeds: Vec<Vec<f64>> = first.iter().map(|s| s.q.clone()).collect();
+            let mut solved = 0;
+            for state in &states {
+                let sols = solve_batch(state, &targets, Seeds::PerTarget(&seeds), &params).unwrap();
+                solved += sols.len();
+                for (s, x) in seeds.iter_mut().zip(&sols) {
+                    s.clone_from(&x.q);
+                }
+            }
+            assert_eq!(solved, 10_050);
+        })
+    });
+    group.finish();
+}
+
+criterion_group! {
+    name = group;
+    config = Criterion::default().sample_size(50).measurement_time(std::time::Duration::from_secs(3)).warm_up_time(std::time::Duration::from_millis(500));
+    targets = benches
+}
+criterion_main!(group);

@@ -15,7 +15,7 @@
 
 mod solver;
 
-pub use solver::{solve, solve_batch, Backend, LimitPolicy, Params, Seeds, Solution, Status, Target, Workspace};
+pub use solver::{Backend, LimitPolicy, Params, Seeds, Solution, Status, Target, Workspace, solve, solve_batch};
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

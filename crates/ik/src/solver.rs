@@ -89,8 +89,11 @@ pub struct Params {
     pub initial_damping: f64,
     /// Reject a solution farther than this from its seed (∞-norm over joints, radians or mm).
     pub max_distance_from_seed: Option<f64>,
-    /// Largest move of a revolute joint in one iteration, radians (a trust region).
+    /// Largest move of a revolute joint in one iteration, radians (a trust region), once the TCP is
+    /// within 50 mm of the target.
     pub max_step_rad: f64,
+    /// The same while the TCP is farther than 50 mm from the target.
+    pub max_step_far_rad: f64,
     /// Linear algebra of the step.
     pub backend: Backend,
 }
@@ -109,6 +112,7 @@ impl Default for Params {
             initial_damping: 1e-3,
             max_distance_from_seed: None,
             max_step_rad: 0.3,
+            max_step_far_rad: 1.0,
             backend: Backend::Faer,
         }
     }
@@ -335,6 +339,9 @@ fn step(ws: &mut Workspace, ev: &Eval, lambda: f64, backend: Backend) -> bool {
     true
 }
 
+/// Position error (mm) above which the wide trust region applies.
+const FAR_MM: f64 = 50.0;
+
 /// Restarts drawn near the seed before the uniform ones.
 const LOCAL_RESTARTS: usize = 4;
 
@@ -384,6 +391,12 @@ fn attempt(
         if it % 16 == 15 && Instant::now() > deadline {
             return (Some(ev), it, false);
         }
+        // An attempt still far off after many iterations is in a poor basin (a local minimum or a
+        // limit): a fresh seed is cheaper than crawling on. Near convergence LM is quadratic, so a
+        // solvable attempt is well inside 1 mm by then.
+        if it == params.max_iterations / 5 && ev.pos_err > 5.0 {
+            return (Some(ev), it, false);
+        }
         update_held(chain, q, ws, &ev, params.limits);
         if !step(ws, &ev, lambda, params.backend) {
             lambda *= 10.0;
@@ -402,7 +415,9 @@ fn attempt(
             .filter(|(_, j)| j.kind == JointKind::Revolute)
             .map(|(i, _)| ws.rhs[(i, 0)].abs())
             .fold(0.0, f64::max);
-        let shrink = if largest > params.max_step_rad { params.max_step_rad / largest } else { 1.0 };
+        // Far from the target (a random seed) a wider region crosses the workspace in fewer steps.
+        let region = if ev.pos_err > FAR_MM { params.max_step_far_rad } else { params.max_step_rad };
+        let shrink = if largest > region { region / largest } else { 1.0 };
         for (i, qt) in ws.q_try.iter_mut().enumerate() {
             *qt = q[i] + shrink * ws.rhs[(i, 0)];
         }
@@ -531,10 +546,10 @@ pub fn solve(
             if Instant::now() > deadline {
                 break;
             }
-            q = if restart <= LOCAL_RESTARTS {
-                // First a few restarts near the seed (growing spread), which keep its branch where one
-                // exists; then anywhere inside the limits.
-                let spread = 0.15 * restart as f64;
+            q = if restart % 2 == 1 && restart < 2 * LOCAL_RESTARTS {
+                // Every other early restart near the seed (growing spread), which keeps its branch where
+                // one exists; the others, and all later ones, anywhere inside the limits.
+                let spread = 0.15 * restart.div_ceil(2) as f64;
                 seed.iter().map(|v| v + rng.random_range(-spread..spread)).collect()
             } else {
                 random_seed(chain, &mut rng, seed, params.limits)
@@ -560,11 +575,11 @@ pub fn solve(
             }
             far_found = true;
         }
-        if let Some(e) = ev {
-            if best.is_none_or(|b| e.cost < b.cost) {
-                best = Some(e);
-                ws.best.copy_from_slice(&q);
-            }
+        if let Some(e) = ev
+            && best.is_none_or(|b| e.cost < b.cost)
+        {
+            best = Some(e);
+            ws.best.copy_from_slice(&q);
         }
     }
     let restarts_used = params.restarts;
@@ -576,9 +591,11 @@ pub fn solve(
 /// Why the best solution is not a solution.
 fn classify(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> Status {
     let at_limit = params.limits == LimitPolicy::Enforce
-        && chain.joints().iter().zip(q).any(|(j, &v)| {
-            j.limits.is_some_and(|l| (v - l.lower).abs() < 1e-9 || (v - l.upper).abs() < 1e-9)
-        });
+        && chain
+            .joints()
+            .iter()
+            .zip(q)
+            .any(|(j, &v)| j.limits.is_some_and(|l| (v - l.lower).abs() < 1e-9 || (v - l.upper).abs() < 1e-9));
     if at_limit {
         return Status::JointLimit;
     }
@@ -596,7 +613,11 @@ fn classify(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> Statu
     let (max, min) = (sv.max(), sv.min());
     // Rank deficiency relative to the largest singular value: 1e-6 is far above rounding (~1e-15) and
     // below any well-conditioned pose of a real arm (IRB 140: ≥ 1e-3 away from singularities).
-    if max > 0.0 && min / max < 1e-6 && sv.len() >= rows.min(chain.dof()) { Status::Singular } else { Status::Unreachable }
+    if max > 0.0 && min / max < 1e-6 && sv.len() >= rows.min(chain.dof()) {
+        Status::Singular
+    } else {
+        Status::Unreachable
+    }
 }
 
 fn validate(chain: &Chain, seed: &[f64], params: &Params) -> Result<(), IkError> {
@@ -612,6 +633,7 @@ fn validate(chain: &Chain, seed: &[f64], params: &Params) -> Result<(), IkError>
         && params.length_scale_mm.is_finite()
         && params.initial_damping > 0.0
         && params.max_step_rad > 0.0
+        && params.max_step_far_rad > 0.0
         && params.max_iterations > 0;
     if !ok {
         return Err(IkError::BadParams("tolerances, length scale, damping and iterations must be positive".into()));

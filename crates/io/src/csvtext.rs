@@ -14,10 +14,11 @@ pub(crate) struct Record {
 /// Splits CSV text (LF or CRLF, any mix) into records, skipping blank lines. A file whose first line
 /// holds semicolons or tabs but no comma is refused as using the wrong delimiter.
 pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
-    if let Some(first) = text.lines().find(|l| !l.trim().is_empty()) {
-        if !first.contains(',') && (first.contains(';') || first.contains('\t')) {
-            return Err(IoError::input(path, Some(1), "delimiter", "expected commas; this file uses ';' or tabs"));
-        }
+    if let Some(first) = text.lines().find(|l| !l.trim().is_empty())
+        && !first.contains(',')
+        && (first.contains(';') || first.contains('\t'))
+    {
+        return Err(IoError::input(path, Some(1), "delimiter", "expected commas; this file uses ';' or tabs"));
     }
     // Line by line: none of these formats has a quoted field spanning lines, and this keeps the line
     // numbers exact whatever the mix of CRLF and LF.
@@ -45,9 +46,8 @@ pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
 
 /// Parses a finite number from a cell; the error names the column.
 pub(crate) fn number(path: &Path, line: usize, column: &str, cell: &str) -> Result<f64, IoError> {
-    let v: f64 = cell
-        .parse()
-        .map_err(|_| IoError::input(path, Some(line), column, format!("`{cell}` is not a number")))?;
+    let v: f64 =
+        cell.parse().map_err(|_| IoError::input(path, Some(line), column, format!("`{cell}` is not a number")))?;
     if !v.is_finite() {
         return Err(IoError::input(path, Some(line), column, format!("`{cell}` is not a finite number")));
     }

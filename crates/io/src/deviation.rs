@@ -8,7 +8,7 @@ use thermokin_chain::ErrorParams;
 use thermokin_deform::{DeviationTable, TemperatureLog};
 
 use crate::csvtext::{column, number, records};
-use crate::{line_of, read_text, IoError};
+use crate::{IoError, line_of, read_text};
 
 const HEADER: [&str; 6] = ["Dx", "Dy", "Dz", "Dox", "Doy", "Doz"];
 
@@ -27,7 +27,12 @@ pub fn read_deviation_table(path: &Path) -> Result<DeviationTable, IoError> {
 pub fn read_deviation_table_for(path: &Path, dof: usize) -> Result<DeviationTable, IoError> {
     let table = read_deviation_table(path)?;
     if table.dof() != dof {
-        return Err(IoError::input(path, None, "rows", format!("{} joint rows, but the robot has {dof} joints", table.dof())));
+        return Err(IoError::input(
+            path,
+            None,
+            "rows",
+            format!("{} joint rows, but the robot has {dof} joints", table.dof()),
+        ));
     }
     Ok(table)
 }
@@ -40,11 +45,21 @@ fn parse_csv(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
     let mut index = [0usize; 6];
     for (k, name) in HEADER.iter().enumerate() {
         index[k] = column(header, name).ok_or_else(|| {
-            IoError::input(path, Some(header.line), *name, format!("missing column `{name}` (header: {})", header.cells.join(",")))
+            IoError::input(
+                path,
+                Some(header.line),
+                *name,
+                format!("missing column `{name}` (header: {})", header.cells.join(",")),
+            )
         })?;
     }
     if header.cells.len() != 6 {
-        return Err(IoError::input(path, Some(header.line), "header", format!("expected 6 columns Dx,Dy,Dz,Dox,Doy,Doz, found {}", header.cells.len())));
+        return Err(IoError::input(
+            path,
+            Some(header.line),
+            "header",
+            format!("expected 6 columns Dx,Dy,Dz,Dox,Doy,Doz, found {}", header.cells.len()),
+        ));
     }
     if rows.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no joint rows after the header"));
@@ -72,9 +87,8 @@ struct TableFile {
 }
 
 fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
-    let f: TableFile = toml::from_str(text).map_err(|e| {
-        IoError::input(path, e.span().map(|s| line_of(text, s.start)), "toml", e.message().to_string())
-    })?;
+    let f: TableFile = toml::from_str(text)
+        .map_err(|e| IoError::input(path, e.span().map(|s| line_of(text, s.start)), "toml", e.message().to_string()))?;
     let check = |name: String, v: &[f64; 6]| -> Result<ErrorParams, IoError> {
         if v.iter().all(|x| x.is_finite()) {
             Ok(ErrorParams::from_mm_deg(*v))
@@ -85,7 +99,12 @@ fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
     if f.joints.is_empty() {
         return Err(IoError::input(path, None, "joints", "no joint rows"));
     }
-    let joints = f.joints.iter().enumerate().map(|(i, v)| check(format!("joints[{}]", i + 1), v)).collect::<Result<Vec<_>, _>>()?;
+    let joints = f
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(i, v)| check(format!("joints[{}]", i + 1), v))
+        .collect::<Result<Vec<_>, _>>()?;
     Ok(DeviationTable {
         base: f.base.as_ref().map(|v| check("base".into(), v)).transpose()?.unwrap_or_default(),
         joints,
@@ -101,7 +120,8 @@ pub fn read_temperature_log(path: &Path) -> Result<TemperatureLog, IoError> {
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected time_min and sensor columns"));
     };
-    let t_col = column(header, "time_min").ok_or_else(|| IoError::input(path, Some(header.line), "time_min", "missing column `time_min`"))?;
+    let t_col = column(header, "time_min")
+        .ok_or_else(|| IoError::input(path, Some(header.line), "time_min", "missing column `time_min`"))?;
     let sensors: Vec<(usize, String)> = header
         .cells
         .iter()
@@ -116,18 +136,30 @@ pub fn read_temperature_log(path: &Path) -> Result<TemperatureLog, IoError> {
     let mut series = vec![Vec::with_capacity(rows.len()); sensors.len()];
     for r in rows {
         if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {}", r.cells.len(), header.cells.len())));
+            return Err(IoError::input(
+                path,
+                Some(r.line),
+                "row",
+                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
+            ));
         }
         let t = number(path, r.line, "time_min", &r.cells[t_col])?;
-        if let Some(&prev) = times.last() {
-            if t <= prev {
-                return Err(IoError::input(path, Some(r.line), "time_min", format!("{t} does not increase (previous {prev})")));
-            }
+        if let Some(&prev) = times.last()
+            && t <= prev
+        {
+            return Err(IoError::input(
+                path,
+                Some(r.line),
+                "time_min",
+                format!("{t} does not increase (previous {prev})"),
+            ));
         }
         times.push(t);
         for (k, (i, name)) in sensors.iter().enumerate() {
             series[k].push(number(path, r.line, &header.cells[*i], &r.cells[*i]).map_err(|e| match e {
-                IoError::Input { path, line, message, .. } => IoError::Input { path, line, field: name.clone(), message },
+                IoError::Input { path, line, message, .. } => {
+                    IoError::Input { path, line, field: name.clone(), message }
+                }
                 other => other,
             })?);
         }

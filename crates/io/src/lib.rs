@@ -13,9 +13,9 @@ mod targets;
 mod write;
 
 pub use deviation::{read_deviation_table, read_deviation_table_for, read_temperature_log};
-pub use paper::{read_paper_results, PaperResultRow};
-pub use robot::{parse_robot_toml, read_robot, LinkMass, Robot};
-pub use targets::{read_targets, Target, DEFAULT_ORIENTATION_DEG};
+pub use paper::{PaperResultRow, read_paper_results};
+pub use robot::{LinkMass, Robot, parse_robot_toml, read_robot};
+pub use targets::{DEFAULT_ORIENTATION_DEG, Target, read_targets};
 pub use write::{write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
@@ -46,7 +46,12 @@ pub enum IoError {
 }
 
 impl IoError {
-    pub(crate) fn input(path: &Path, line: Option<usize>, field: impl Into<String>, message: impl Into<String>) -> Self {
+    pub(crate) fn input(
+        path: &Path,
+        line: Option<usize>,
+        field: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
         IoError::Input { path: path.to_path_buf(), line, field: field.into(), message: message.into() }
     }
 

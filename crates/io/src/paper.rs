@@ -7,7 +7,7 @@ use std::path::Path;
 use nalgebra::Vector3;
 
 use crate::csvtext::{number, records};
-use crate::{read_text, IoError};
+use crate::{IoError, read_text};
 
 /// One row of an authors' results file.
 #[derive(Clone, Debug, PartialEq)]
@@ -45,10 +45,17 @@ pub fn read_paper_results(path: &Path) -> Result<Vec<PaperResultRow>, IoError> {
         }
         let need = shift + 25;
         if r.cells.len() < need {
-            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {need}", r.cells.len())));
+            return Err(IoError::input(
+                path,
+                Some(r.line),
+                "row",
+                format!("{} fields, expected {need}", r.cells.len()),
+            ));
         }
         let n = |k: usize, name: &str| number(path, r.line, name, &r.cells[shift + k]);
-        let v3 = |k: usize, name: &str| -> Result<Vector3<f64>, IoError> { Ok(Vector3::new(n(k, name)?, n(k + 1, name)?, n(k + 2, name)?)) };
+        let v3 = |k: usize, name: &str| -> Result<Vector3<f64>, IoError> {
+            Ok(Vector3::new(n(k, name)?, n(k + 1, name)?, n(k + 2, name)?))
+        };
         let joints = (19..25).map(|k| n(k, &format!("A{}", k - 18))).collect::<Result<Vec<_>, _>>()?;
         out.push(PaperResultRow {
             time_min: if transient { number(path, r.line, "Time (min)", &r.cells[0])? } else { 0.0 },

@@ -18,10 +18,12 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
-use thermokin_chain::{xyz_rotation, Chain, DhConvention, DhRow, DhTable, ErrorParams, FixedRow, Joint, JointKind, JointLimits};
+use thermokin_chain::{
+    Chain, DhConvention, DhRow, DhTable, ErrorParams, FixedRow, Joint, JointKind, JointLimits, xyz_rotation,
+};
 use toml::Spanned;
 
-use crate::{line_of, read_text, IoError};
+use crate::{IoError, line_of, read_text};
 
 /// A robot read from a file: its chain and, where given, link masses (for gravity compliance).
 #[derive(Clone, Debug, PartialEq)]
@@ -140,16 +142,22 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         IoError::input(path, line, field, message)
     })?;
     let _ = &file.description;
-    let name = file.name.clone().unwrap_or_else(|| {
-        path.file_stem().map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned())
-    });
+    let name = file
+        .name
+        .clone()
+        .unwrap_or_else(|| path.file_stem().map_or_else(|| "robot".into(), |s| s.to_string_lossy().into_owned()));
     let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
     let base = row(path, text, file.base.as_ref(), "base")?;
     let tool = row(path, text, file.tool.as_ref(), "tool")?;
     let (chain, masses) = match file.convention {
         Convention::Extended => {
             if !file.dh.is_empty() {
-                return Err(IoError::input(path, at(file.dh[0].span()), "dh", "[[dh]] rows need convention = \"dh\" or \"mdh\""));
+                return Err(IoError::input(
+                    path,
+                    at(file.dh[0].span()),
+                    "dh",
+                    "[[dh]] rows need convention = \"dh\" or \"mdh\"",
+                ));
             }
             if file.joint.is_empty() {
                 return Err(IoError::input(path, None, "joint", "no [[joint]] rows"));
@@ -182,7 +190,12 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                         let com = com.unwrap_or_default();
                         finite(path, line, &field("com_mm"), &com)?;
                         if !(m.is_finite() && m >= 0.0) {
-                            return Err(IoError::input(path, line, field("mass_kg"), format!("must be a finite mass ≥ 0, got {m}")));
+                            return Err(IoError::input(
+                                path,
+                                line,
+                                field("mass_kg"),
+                                format!("must be a finite mass ≥ 0, got {m}"),
+                            ));
                         }
                         Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) })
                     }
@@ -191,12 +204,18 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                     }
                 });
             }
-            let chain = Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
+            let chain =
+                Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
             (chain, masses)
         }
         conv @ (Convention::Dh | Convention::Mdh) => {
             if !file.joint.is_empty() {
-                return Err(IoError::input(path, at(file.joint[0].span()), "joint", "[[joint]] rows need convention = \"extended\""));
+                return Err(IoError::input(
+                    path,
+                    at(file.joint[0].span()),
+                    "joint",
+                    "[[joint]] rows need convention = \"extended\"",
+                ));
             }
             if file.dh.is_empty() {
                 return Err(IoError::input(path, None, "dh", "no [[dh]] rows"));
@@ -206,7 +225,12 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                 let line = at(spanned.span());
                 let s = spanned.get_ref();
                 let field = |f: &str| format!("dh[{}].{f}", i + 1);
-                finite(path, line, &field("a_mm, alpha_deg, d_mm, theta_deg"), &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg])?;
+                finite(
+                    path,
+                    line,
+                    &field("a_mm, alpha_deg, d_mm, theta_deg"),
+                    &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg],
+                )?;
                 let (kind, to_internal): (JointKind, fn(f64) -> f64) = match s.kind {
                     KindSpec::Revolute => (JointKind::Revolute, f64::to_radians),
                     KindSpec::Prismatic => (JointKind::Prismatic, |v| v),
@@ -223,7 +247,12 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             }
             let convention = if conv == Convention::Dh { DhConvention::Classic } else { DhConvention::Modified };
             if !base.error.is_zero() || !tool.error.is_zero() {
-                return Err(IoError::input(path, None, "error", "DH tables take error parameters only after conversion"));
+                return Err(IoError::input(
+                    path,
+                    None,
+                    "error",
+                    "DH tables take error parameters only after conversion",
+                ));
             }
             let table = DhTable { convention, rows, base: base.nominal(), tool: tool.nominal() };
             let n = table.dof();
@@ -298,7 +327,8 @@ fn row(path: &Path, text: &str, spec: Option<&Spanned<RowSpec>>, which: &str) ->
     finite(path, line, &format!("{which}.translation_mm"), &s.translation_mm)?;
     finite(path, line, &format!("{which}.rotation_xyz_deg"), &s.rotation_xyz_deg)?;
     let rot = xyz_rotation(&Vector3::from(s.rotation_xyz_deg).map(f64::to_radians));
-    let iso = Isometry3::from_parts(Translation3::from(Vector3::from(s.translation_mm)), UnitQuaternion::from_matrix(&rot));
+    let iso =
+        Isometry3::from_parts(Translation3::from(Vector3::from(s.translation_mm)), UnitQuaternion::from_matrix(&rot));
     let mut r = FixedRow::from_isometry(&iso);
     if let Some(e) = s.error {
         finite(path, line, &format!("{which}.error"), &e)?;

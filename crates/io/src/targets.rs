@@ -7,7 +7,7 @@ use std::path::Path;
 use nalgebra::Vector3;
 
 use crate::csvtext::{column, number, records};
-use crate::{read_text, IoError};
+use crate::{IoError, read_text};
 
 /// The orientation of every target of Table 12, degrees (X-Y-Z Euler: the tool Z axis along world +X).
 pub const DEFAULT_ORIENTATION_DEG: [f64; 3] = [0.0, 90.0, 0.0];
@@ -45,7 +45,12 @@ pub fn read_targets(path: &Path) -> Result<Vec<Target>, IoError> {
     let mut out = Vec::with_capacity(rows.len());
     for r in rows {
         if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {}", r.cells.len(), header.cells.len())));
+            return Err(IoError::input(
+                path,
+                Some(r.line),
+                "row",
+                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
+            ));
         }
         let p = Vector3::new(
             number(path, r.line, "X", &r.cells[pos[0]])?,
@@ -60,7 +65,10 @@ pub fn read_targets(path: &Path) -> Result<Vec<Target>, IoError> {
             ),
             _ => Vector3::from(DEFAULT_ORIENTATION_DEG),
         };
-        let label = label_col.map(|c| r.cells[c].clone()).filter(|s| !s.is_empty()).unwrap_or_else(|| format!("P{}", out.len() + 1));
+        let label = label_col
+            .map(|c| r.cells[c].clone())
+            .filter(|s| !s.is_empty())
+            .unwrap_or_else(|| format!("P{}", out.len() + 1));
         out.push(Target { label, position_mm: p, rotation_xyz_deg: o, line: r.line });
     }
     if out.is_empty() {

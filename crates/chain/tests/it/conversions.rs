@@ -9,7 +9,13 @@ use thermokin_chain::{Chain, ChainError, DhConvention, ErrorGrouping, FixedRow, 
 const MM: f64 = 1e-9;
 const RAD: f64 = 1e-12;
 
-fn assert_same_fk(name: &str, a: impl Fn(&[f64]) -> Isometry3<f64>, b: impl Fn(&[f64]) -> Isometry3<f64>, n: usize, seed: u64) {
+fn assert_same_fk(
+    name: &str,
+    a: impl Fn(&[f64]) -> Isometry3<f64>,
+    b: impl Fn(&[f64]) -> Isometry3<f64>,
+    n: usize,
+    seed: u64,
+) {
     let mut rng = rng(seed);
     let mut worst = (0.0f64, 0.0f64);
     for _ in 0..1000 {
@@ -68,7 +74,11 @@ fn extended_to_modified_dh_of_a_general_chain_from_its_own_mdh() {
 #[test]
 fn extended_to_modified_dh_refuses_a_tilted_first_axis() {
     let joints = vec![
-        Joint::revolute("j1", Vector3::new(0.0, 0.0, 100.0), nalgebra::Unit::new_normalize(Vector3::new(1.0, 0.0, 1.0))),
+        Joint::revolute(
+            "j1",
+            Vector3::new(0.0, 0.0, 100.0),
+            nalgebra::Unit::new_normalize(Vector3::new(1.0, 0.0, 1.0)),
+        ),
         Joint::revolute("j2", Vector3::new(0.0, 0.0, 100.0), Vector3::y_axis()),
     ];
     let chain = Chain::new(FixedRow::identity(), joints, FixedRow::identity()).unwrap();
@@ -87,15 +97,21 @@ fn paper_eq21_grouping_gives_the_same_fk() {
     let mut r = rng(11);
     let chain = irb140_like(&mut r, true);
     // Re-read every joint's parameters as eq. 21 would write them, then build the eq. 21 product by hand.
-    let eq21: Vec<_> = chain.joints().iter().map(|j| j.error.regroup(ErrorGrouping::Canonical, ErrorGrouping::PaperEq21, &j.offset)).collect();
+    let eq21: Vec<_> = chain
+        .joints()
+        .iter()
+        .map(|j| j.error.regroup(ErrorGrouping::Canonical, ErrorGrouping::PaperEq21, &j.offset))
+        .collect();
     let mut r2 = rng(12);
     for _ in 0..200 {
         let q = random_q(&mut r2, 6);
         let mut t = chain.base().pose();
         for ((j, e), &qi) in chain.joints().iter().zip(&eq21).zip(&q) {
             // T_C (eq. 21) = Trans(Δp) · Rx · Ry · Rz · Trans(p); then R_i (eq. 22).
-            let tc = Isometry3::from_parts(e.translation.into(), nalgebra::UnitQuaternion::from_matrix(&e.rotation_matrix()))
-                * Isometry3::translation(j.offset.x, j.offset.y, j.offset.z);
+            let tc = Isometry3::from_parts(
+                e.translation.into(),
+                nalgebra::UnitQuaternion::from_matrix(&e.rotation_matrix()),
+            ) * Isometry3::translation(j.offset.x, j.offset.y, j.offset.z);
             t = t * tc * Isometry3::rotation(j.axis.into_inner() * qi);
         }
         t *= chain.tool().pose();
@@ -126,12 +142,27 @@ fn general_axes_and_prismatic_joints_survive_dh_round_trip() {
 #[test]
 fn bad_chains_are_errors_not_panics() {
     let nan = Joint::revolute("j", Vector3::new(f64::NAN, 0.0, 0.0), Vector3::z_axis());
-    assert!(matches!(Chain::new(FixedRow::identity(), vec![nan], FixedRow::identity()), Err(ChainError::NonFinite { joint: 1, .. })));
-    let zero_axis = Joint { axis: nalgebra::Unit::new_unchecked(Vector3::zeros()), ..Joint::revolute("j", Vector3::zeros(), Vector3::z_axis()) };
-    assert!(matches!(Chain::new(FixedRow::identity(), vec![zero_axis], FixedRow::identity()), Err(ChainError::BadAxis { joint: 1 })));
+    assert!(matches!(
+        Chain::new(FixedRow::identity(), vec![nan], FixedRow::identity()),
+        Err(ChainError::NonFinite { joint: 1, .. })
+    ));
+    let zero_axis = Joint {
+        axis: nalgebra::Unit::new_unchecked(Vector3::zeros()),
+        ..Joint::revolute("j", Vector3::zeros(), Vector3::z_axis())
+    };
+    assert!(matches!(
+        Chain::new(FixedRow::identity(), vec![zero_axis], FixedRow::identity()),
+        Err(ChainError::BadAxis { joint: 1 })
+    ));
     let chain = irb140_like(&mut rng(1), false);
     assert!(matches!(chain.tool_pose(&[0.0; 5]), Err(ChainError::WrongJointCount { expected: 6, got: 5 })));
-    assert!(matches!(chain.tool_pose(&[0.0, f64::INFINITY, 0.0, 0.0, 0.0, 0.0]), Err(ChainError::NonFiniteJoint { joint: 2 })));
+    assert!(matches!(
+        chain.tool_pose(&[0.0, f64::INFINITY, 0.0, 0.0, 0.0, 0.0]),
+        Err(ChainError::NonFiniteJoint { joint: 2 })
+    ));
     let bad_limits = Joint::revolute("j", Vector3::zeros(), Vector3::z_axis()).with_limits(1.0, -1.0);
-    assert!(matches!(Chain::new(FixedRow::identity(), vec![bad_limits], FixedRow::identity()), Err(ChainError::BadLimits { joint: 1, .. })));
+    assert!(matches!(
+        Chain::new(FixedRow::identity(), vec![bad_limits], FixedRow::identity()),
+        Err(ChainError::BadLimits { joint: 1, .. })
+    ));
 }

@@ -47,8 +47,22 @@ pub fn random_error(rng: &mut ChaCha8Rng, mm: f64, rad: f64) -> ErrorParams {
 
 /// A 6R chain shaped like the IRB 140 (Table 9), with random error parameters on every row.
 pub fn irb140_like(rng: &mut ChaCha8Rng, with_errors: bool) -> Chain {
-    let axes = [Vector3::z_axis(), Vector3::y_axis(), Vector3::y_axis(), Vector3::x_axis(), Vector3::y_axis(), Vector3::x_axis()];
-    let offsets = [[0.0, 0.0, 104.5], [70.0, 65.0, 247.5], [0.0, -123.0, 360.0], [238.5, 58.0, 0.0], [141.5, 0.0, 0.0], [39.5, 0.0, 0.0]];
+    let axes = [
+        Vector3::z_axis(),
+        Vector3::y_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+    ];
+    let offsets = [
+        [0.0, 0.0, 104.5],
+        [70.0, 65.0, 247.5],
+        [0.0, -123.0, 360.0],
+        [238.5, 58.0, 0.0],
+        [141.5, 0.0, 0.0],
+        [39.5, 0.0, 0.0],
+    ];
     let joints: Vec<Joint> = axes
         .iter()
         .zip(offsets)
@@ -62,7 +76,10 @@ pub fn irb140_like(rng: &mut ChaCha8Rng, with_errors: bool) -> Chain {
         })
         .collect();
     let mut base = FixedRow::identity();
-    let mut tool = FixedRow::from_isometry(&Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, std::f64::consts::FRAC_PI_2, 0.0)));
+    let mut tool = FixedRow::from_isometry(&Isometry3::new(
+        Vector3::new(25.5, 0.0, 0.0),
+        Vector3::new(0.0, std::f64::consts::FRAC_PI_2, 0.0),
+    ));
     if with_errors {
         base.error = random_error(rng, 1.0, 0.02);
         tool.error = random_error(rng, 1.0, 0.02);
@@ -74,15 +91,32 @@ pub fn irb140_like(rng: &mut ChaCha8Rng, with_errors: bool) -> Chain {
 pub fn general_chain(rng: &mut ChaCha8Rng) -> Chain {
     let joints = (0..6)
         .map(|i| {
-            let axis = Unit::new_normalize(Vector3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0)));
-            let offset = Vector3::new(rng.random_range(-300.0..300.0), rng.random_range(-300.0..300.0), rng.random_range(-300.0..300.0));
-            let mut j = if i == 3 { Joint::prismatic(format!("j{i}"), offset, axis) } else { Joint::revolute(format!("j{i}"), offset, axis) };
+            let axis = Unit::new_normalize(Vector3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ));
+            let offset = Vector3::new(
+                rng.random_range(-300.0..300.0),
+                rng.random_range(-300.0..300.0),
+                rng.random_range(-300.0..300.0),
+            );
+            let mut j = if i == 3 {
+                Joint::prismatic(format!("j{i}"), offset, axis)
+            } else {
+                Joint::revolute(format!("j{i}"), offset, axis)
+            };
             j.zero = rng.random_range(-1.0..1.0);
             j.error = random_error(rng, 2.0, 0.05);
             j
         })
         .collect();
-    Chain::new(FixedRow::from_isometry(&random_iso(rng, 100.0)), joints, FixedRow::from_isometry(&random_iso(rng, 100.0))).expect("valid chain")
+    Chain::new(
+        FixedRow::from_isometry(&random_iso(rng, 100.0)),
+        joints,
+        FixedRow::from_isometry(&random_iso(rng, 100.0)),
+    )
+    .expect("valid chain")
 }
 
 pub fn pose_gap(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {

@@ -44,7 +44,18 @@ fn fk_then_ik_round_trip() {
     let p = &v["position_mm"];
     let r = &v["rpy_deg"];
     let pose = format!("{},{},{},{},{},{}", p[0], p[1], p[2], r[0], r[1], r[2]);
-    let o = thermokin(&["ik", "--robot", ROBOT, "--deformation", TABLE, "--pose", &pose, "--seed", "0,20,20,0,-45,0", "--json"]);
+    let o = thermokin(&[
+        "ik",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--pose",
+        &pose,
+        "--seed",
+        "0,20,20,0,-45,0",
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
     assert_eq!(s["status"], "Converged");
@@ -55,13 +66,35 @@ fn fk_then_ik_round_trip() {
 
 #[test]
 fn fk_with_profile_at_90_minutes_is_half_the_table() {
-    let half = thermokin(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--time", "90", "--joints", "0,0,0,0,0,0", "--json"]);
+    let half = thermokin(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--profile",
+        "linear:180",
+        "--time",
+        "90",
+        "--joints",
+        "0,0,0,0,0,0",
+        "--json",
+    ]);
     assert!(half.status.success(), "{}", stderr(&half));
     let dir = tmp("half");
     std::fs::create_dir_all(&dir).unwrap();
     let halved = dir.join("half.toml");
     std::fs::write(&halved, "joints = [[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5],[0.5,0.5,0.5,0.5,0.5,0.5]]\n").unwrap();
-    let direct = thermokin(&["fk", "--robot", ROBOT, "--deformation", halved.to_str().unwrap(), "--joints", "0,0,0,0,0,0", "--json"]);
+    let direct = thermokin(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        halved.to_str().unwrap(),
+        "--joints",
+        "0,0,0,0,0,0",
+        "--json",
+    ]);
     assert_eq!(stdout(&half), stdout(&direct));
 }
 
@@ -72,11 +105,35 @@ fn bad_input_exit_status_2_with_located_messages() {
         (&["fk", "--robot", ROBOT, "--joints", "0,0,nan,0,0,0"], "--joints: value 3 is not finite"),
         (&["fk", "--robot", ROBOT, "--joints", "0,0,x,0,0,0"], "--joints: value 3 `x` is not a number"),
         (&["fk", "--robot", "no/such/robot.toml", "--joints", "0,0,0,0,0,0"], "no/such/robot.toml"),
-        (&["fk", "--robot", ROBOT, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"], "--profile and --time need --deformation"),
-        (&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:-5", "--time", "3", "--joints", "0,0,0,0,0,0"], "must be positive"),
-        (&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"], "--profile needs --time"),
+        (
+            &["fk", "--robot", ROBOT, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"],
+            "--profile and --time need --deformation",
+        ),
+        (
+            &[
+                "fk",
+                "--robot",
+                ROBOT,
+                "--deformation",
+                TABLE,
+                "--profile",
+                "linear:-5",
+                "--time",
+                "3",
+                "--joints",
+                "0,0,0,0,0,0",
+            ],
+            "must be positive",
+        ),
+        (
+            &["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--joints", "0,0,0,0,0,0"],
+            "--profile needs --time",
+        ),
         (&["ik", "--robot", ROBOT, "--pose", "1,2,3"], "3 values need --position-only"),
-        (&["compensate", "--robot", ROBOT, "--targets", "fixtures/paper/table12-targets.csv", "--out", "/tmp/x.csv"], "compensate needs --deformation"),
+        (
+            &["compensate", "--robot", ROBOT, "--targets", "fixtures/paper/table12-targets.csv", "--out", "/tmp/x.csv"],
+            "compensate needs --deformation",
+        ),
     ];
     for (args, needle) in cases {
         let o = thermokin(args);
@@ -88,7 +145,11 @@ fn bad_input_exit_status_2_with_located_messages() {
     std::fs::write(&bad, "Dx,Dy,Dz,Dox,Doy,Doz\n1,1,1,1,1,1\n").unwrap();
     let o = thermokin(&["fk", "--robot", ROBOT, "--deformation", bad.to_str().unwrap(), "--joints", "0,0,0,0,0,0"]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("five.csv") && stderr(&o).contains("1 joint rows, but the robot has 6 joints"), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("five.csv") && stderr(&o).contains("1 joint rows, but the robot has 6 joints"),
+        "{}",
+        stderr(&o)
+    );
 }
 
 #[test]
@@ -99,9 +160,21 @@ fn compensate_writes_outputs_and_reports_failures() {
     let rapid = tmp("prog.mod");
     let plots = tmp("plots");
     let o = thermokin(&[
-        "compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(),
-        "--out", out.to_str().unwrap(), "--rapid", rapid.to_str().unwrap(), "--plot", plots.to_str().unwrap(),
-        "--seed", "0,20,20,0,-45,0",
+        "compensate",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--targets",
+        targets.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--rapid",
+        rapid.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+        "--seed",
+        "0,20,20,0,-45,0",
     ]);
     // One target out of reach: the run finishes, writes everything, and exits 3.
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
@@ -120,9 +193,26 @@ fn transient_compensation_with_plot() {
     let out = tmp("transient.csv");
     let plots = tmp("tplots");
     let o = thermokin(&[
-        "compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(),
-        "--out", out.to_str().unwrap(), "--profile", "linear-grow:180", "--duration", "20", "--step", "2",
-        "--plot", plots.to_str().unwrap(), "--seed", "0,20,20,0,-45,0", "--json",
+        "compensate",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--targets",
+        targets.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--profile",
+        "linear-grow:180",
+        "--duration",
+        "20",
+        "--step",
+        "2",
+        "--plot",
+        plots.to_str().unwrap(),
+        "--seed",
+        "0,20,20,0,-45,0",
+        "--json",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let summary: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
@@ -134,7 +224,11 @@ fn transient_compensation_with_plot() {
 
 fn no_partial(path: &Path) {
     let dir = path.parent().unwrap();
-    let leftovers: Vec<_> = std::fs::read_dir(dir).unwrap().filter_map(Result::ok).filter(|e| e.file_name().to_string_lossy().contains(".tmp-")).collect();
+    let leftovers: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .filter_map(Result::ok)
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
 
@@ -145,7 +239,21 @@ fn a_killed_run_leaves_no_partial_output() {
     std::fs::write(&out, "previous results\n").unwrap();
     // A long transient run (a month of minutes), killed after half a second.
     let mut child = Command::new(env!("CARGO_BIN_EXE_thermokin"))
-        .args(["compensate", "--robot", ROBOT, "--deformation", TABLE, "--targets", targets.to_str().unwrap(), "--out", out.to_str().unwrap(), "--profile", "linear:180", "--duration", "40000"])
+        .args([
+            "compensate",
+            "--robot",
+            ROBOT,
+            "--deformation",
+            TABLE,
+            "--targets",
+            targets.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--profile",
+            "linear:180",
+            "--duration",
+            "40000",
+        ])
         .current_dir(workspace(""))
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
@@ -164,7 +272,13 @@ fn a_killed_run_leaves_no_partial_output() {
 fn help_teaches_units_examples_and_exit_codes() {
     let o = thermokin(&["--help"]);
     let h = stdout(&o);
-    for needle in ["Exit status:", "3  the run finished but some targets were not reached", "Examples:", "millimetres and degrees", "reproduce-paper"] {
+    for needle in [
+        "Exit status:",
+        "3  the run finished but some targets were not reached",
+        "Examples:",
+        "millimetres and degrees",
+        "reproduce-paper",
+    ] {
         assert!(h.contains(needle), "`{needle}` missing from --help");
     }
     let o = thermokin(&["compensate", "--help"]);

@@ -3,12 +3,12 @@
 
 use nalgebra::Isometry3;
 use thermokin_compensate::{
-    compensate_static, compensate_transient, pose_from_xyz_deg, rapid_module, write_results_csv, Cycle, ProgramTarget,
-    RapidSettings, RunSettings,
+    Cycle, ProgramTarget, RapidSettings, RunSettings, compensate_static, compensate_transient, pose_from_xyz_deg,
+    rapid_module, write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Status};
-use thermokin_io::{read_deviation_table, read_paper_results, read_robot, read_targets, Robot};
+use thermokin_io::{Robot, read_deviation_table, read_paper_results, read_robot, read_targets};
 use thermokin_testdata::workspace;
 
 fn robot() -> Robot {
@@ -28,7 +28,11 @@ fn table() -> DeviationTable {
 }
 
 fn settings(semantics: TableSemantics) -> RunSettings {
-    RunSettings { semantics, ik: Params::default(), start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec() }
+    RunSettings {
+        semantics,
+        ik: Params::default(),
+        start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec(),
+    }
 }
 
 fn coppelia() -> TableSemantics {
@@ -68,7 +72,9 @@ fn static_case_reaches_all_50_targets() {
 fn transient_case_reaches_all_10050_targets() {
     let r = robot();
     let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
-    let run = compensate_transient(&r.chain, &table(), &profile, Cycle::PAPER, &program(), &settings(coppelia()), |_, _| {}).unwrap();
+    let run =
+        compensate_transient(&r.chain, &table(), &profile, Cycle::PAPER, &program(), &settings(coppelia()), |_, _| {})
+            .unwrap();
     assert_eq!(run.rows.len(), 10_050);
     assert_eq!(run.summary.failures, 0);
     let t = table();

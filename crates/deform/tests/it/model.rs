@@ -71,7 +71,9 @@ fn eq_18_to_20_multiplied_out_for_two_joints() {
         .joints()
         .iter()
         .zip(e21)
-        .map(|(j, e)| ErrorParams::from_mm_deg(e).regroup(ErrorGrouping::PaperEq21, ErrorGrouping::Canonical, &j.offset))
+        .map(|(j, e)| {
+            ErrorParams::from_mm_deg(e).regroup(ErrorGrouping::PaperEq21, ErrorGrouping::Canonical, &j.offset)
+        })
         .collect();
     let deformed = DeviationTable::from_joint_rows(rows).apply(&chain, &TableSemantics::Canonical).unwrap();
     let ours = deformed.tool_pose(&q).unwrap().to_homogeneous();
@@ -84,9 +86,28 @@ fn irb140() -> Chain {
 
 /// Table 9's nominal IRB 140, built here without the TOML reader (this crate does not depend on it).
 fn thermokin_io_free_irb140() -> Chain {
-    let axes = [Vector3::z_axis(), Vector3::y_axis(), Vector3::y_axis(), Vector3::x_axis(), Vector3::y_axis(), Vector3::x_axis()];
-    let offsets = [[0.0, 0.0, 104.5], [70.0, 65.0, 247.5], [0.0, -123.0, 360.0], [238.5, 58.0, 0.0], [141.5, 0.0, 0.0], [39.5, 0.0, 0.0]];
-    let joints = axes.iter().zip(offsets).enumerate().map(|(i, (a, o))| Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a)).collect();
+    let axes = [
+        Vector3::z_axis(),
+        Vector3::y_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+    ];
+    let offsets = [
+        [0.0, 0.0, 104.5],
+        [70.0, 65.0, 247.5],
+        [0.0, -123.0, 360.0],
+        [238.5, 58.0, 0.0],
+        [141.5, 0.0, 0.0],
+        [39.5, 0.0, 0.0],
+    ];
+    let joints = axes
+        .iter()
+        .zip(offsets)
+        .enumerate()
+        .map(|(i, (a, o))| Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a))
+        .collect();
     let tool = Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, 90f64.to_radians(), 0.0));
     Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&tool)).unwrap()
 }
@@ -124,12 +145,22 @@ fn coppeliasim_edits_are_re_expressed_exactly() {
     // Applying the edits by hand (world shift + Euler addition of one joint object, children following)
     // and reading the TCP must equal the FK of the re-expressed chain, at home and elsewhere.
     let chain = irb140();
-    let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]), ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]), ErrorParams::ZERO, ErrorParams::ZERO, ErrorParams::ZERO, ErrorParams::ZERO]);
+    let table = DeviationTable::from_joint_rows(vec![
+        ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
+        ErrorParams::ZERO,
+        ErrorParams::ZERO,
+        ErrorParams::ZERO,
+        ErrorParams::ZERO,
+    ]);
     let deformed = table.apply(&chain, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6]))).unwrap();
     // Joint 2 object: local Z along world Y, i.e. Rx(−90°); adding 1° to its first Euler angle turns it
     // to Rx(−89°): the joint frame turns Rx(+1°) about joint 2's origin (70, 65, 352).
     let o2 = Vector3::new(70.0, 65.0, 352.0);
-    let turn = Isometry3::rotation_wrt_point(nalgebra::UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1f64.to_radians()), o2.into());
+    let turn = Isometry3::rotation_wrt_point(
+        nalgebra::UnitQuaternion::from_axis_angle(&Vector3::x_axis(), 1f64.to_radians()),
+        o2.into(),
+    );
     let q = [0.3, -0.2, 0.5, 0.1, 0.4, -0.6];
     let expected = {
         // Joint 1 at q1 carries everything; the edit was made at home, so it sits inside joint 1's motion.

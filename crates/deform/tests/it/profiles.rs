@@ -51,7 +51,8 @@ fn exponential_cubic_and_temperature_values() {
     assert!((e.joints[0] - (1.0 - (-1f64).exp())).abs() < 1e-15);
     let c = TimeProfile::Cubic { coefficients: [0.01, -1e-5, 2e-8] }.row_factors(100.0, 3).unwrap();
     assert!((c.joints[0] - (1.0 - 0.1 + 0.02)).abs() < 1e-12);
-    let p = TimeProfile::Temperature { log: log(), sensors: vec!["a".into(), "b".into(), "a".into()], reference_c: None };
+    let p =
+        TimeProfile::Temperature { log: log(), sensors: vec!["a".into(), "b".into(), "a".into()], reference_c: None };
     // Sensor a at 120 min: 26 + (30 − 26)/2 = 28 °C, rise 8 K; sensor b: 21 + 2 = 23 °C, rise 2 K.
     let f = p.row_factors(120.0, 3).unwrap();
     assert_eq!(f.joints, vec![8.0, 2.0, 8.0]);

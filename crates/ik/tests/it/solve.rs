@@ -7,7 +7,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_deform::{DeviationTable, TableSemantics};
-use thermokin_ik::{solve, solve_batch, IkError, Params, Seeds, Status, Target, Workspace};
+use thermokin_ik::{IkError, Params, Seeds, Status, Target, Workspace, solve, solve_batch};
 use thermokin_testdata::workspace;
 
 fn irb140() -> Chain {
@@ -61,10 +61,20 @@ fn near_seed_case(chain: &Chain, seed: u64) {
         .collect();
     let ts: Vec<Target> = targets.iter().map(|(t, _)| *t).collect();
     let sols = solve_batch(chain, &ts, Seeds::PerTarget(&seeds), &params).unwrap();
-    let failed: Vec<_> = sols.iter().enumerate().filter(|(_, s)| !s.converged()).map(|(i, s)| (i, s.status, s.position_error_mm)).collect();
+    let failed: Vec<_> = sols
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| !s.converged())
+        .map(|(i, s)| (i, s.status, s.position_error_mm))
+        .collect();
     let restarted = sols.iter().filter(|s| s.restarts > 0).count();
     eprintln!("near seeds: {restarted} of 10,000 needed a restart");
-    assert!(failed.is_empty(), "{} of 10,000 near-seed solves failed: {:?}", failed.len(), &failed[..failed.len().min(5)]);
+    assert!(
+        failed.is_empty(),
+        "{} of 10,000 near-seed solves failed: {:?}",
+        failed.len(),
+        &failed[..failed.len().min(5)]
+    );
     for (s, t) in sols.iter().zip(&ts) {
         check_fk(chain, t, &s.q);
     }
@@ -119,7 +129,8 @@ fn far_target_is_unreachable_quickly() {
     assert!(start.elapsed() < Duration::from_secs(1));
     // Inside the reach sphere but outside the joint limits' workspace: reported, not hung.
     let behind_and_low = Target::Position(nalgebra::Vector3::new(-100.0, 0.0, -400.0));
-    let s = solve(&chain, &behind_and_low, &[0.0; 6], &Params { restarts: 5, ..Params::default() }, &mut ws, 0).unwrap();
+    let s =
+        solve(&chain, &behind_and_low, &[0.0; 6], &Params { restarts: 5, ..Params::default() }, &mut ws, 0).unwrap();
     assert!(matches!(s.status, Status::Unreachable | Status::JointLimit | Status::Singular), "{:?}", s.status);
 }
 
@@ -204,7 +215,10 @@ fn bad_inputs_are_errors() {
     assert!(matches!(solve(&chain, &t, &[0.0; 5], &Params::default(), &mut ws, 0), Err(IkError::BadSeed(_))));
     assert!(matches!(solve(&chain, &t, &[f64::NAN; 6], &Params::default(), &mut ws, 0), Err(IkError::BadSeed(_))));
     let nan = Target::Position(nalgebra::Vector3::new(f64::NAN, 0.0, 0.0));
-    assert!(matches!(solve(&chain, &nan, &[0.0; 6], &Params::default(), &mut ws, 3), Err(IkError::BadTarget { index: 3 })));
+    assert!(matches!(
+        solve(&chain, &nan, &[0.0; 6], &Params::default(), &mut ws, 3),
+        Err(IkError::BadTarget { index: 3 })
+    ));
     let p = Params { length_scale_mm: -1.0, ..Params::default() };
     assert!(matches!(solve(&chain, &t, &[0.0; 6], &p, &mut ws, 0), Err(IkError::BadParams(_))));
 }

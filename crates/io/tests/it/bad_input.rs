@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use thermokin_io::{parse_robot_toml, read_deviation_table, read_targets, read_temperature_log, IoError};
+use thermokin_io::{IoError, parse_robot_toml, read_deviation_table, read_targets, read_temperature_log};
 
 fn write(name: &str, content: &[u8]) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("thermokin-bad-{}", std::process::id()));
@@ -32,7 +32,12 @@ fn robot_toml_errors() {
         // unknown key, with its line
         (&format!("{GOOD_JOINT}colour = \"red\"\n"), Some(4), "colour", "unknown field"),
         // a zero axis
-        ("[[joint]]\naxis = [0.0, 0.0, 0.0]\noffset_mm = [0.0, 0.0, 1.0]\n", Some(1), "joint[1].axis", "not a usable axis"),
+        (
+            "[[joint]]\naxis = [0.0, 0.0, 0.0]\noffset_mm = [0.0, 0.0, 1.0]\n",
+            Some(1),
+            "joint[1].axis",
+            "not a usable axis",
+        ),
         // a bad axis name
         ("[[joint]]\naxis = \"W\"\noffset_mm = [0.0, 0.0, 1.0]\n", Some(1), "joint[1].axis", "not an axis"),
         // NaN
@@ -40,7 +45,12 @@ fn robot_toml_errors() {
         // inf in the tool
         (&format!("{GOOD_JOINT}[tool]\ntranslation_mm = [inf, 0.0, 0.0]\n"), Some(4), "tool.translation_mm", "finite"),
         // limits reversed
-        ("[[joint]]\naxis = \"X\"\noffset_mm = [0.0, 0.0, 1.0]\nlimits = [10.0, -10.0]\n", Some(1), "joint[1].limits", "above"),
+        (
+            "[[joint]]\naxis = \"X\"\noffset_mm = [0.0, 0.0, 1.0]\nlimits = [10.0, -10.0]\n",
+            Some(1),
+            "joint[1].limits",
+            "above",
+        ),
         // missing required key
         ("[[joint]]\naxis = \"X\"\n", Some(1), "offset_mm", "missing field"),
         // a string where a number belongs

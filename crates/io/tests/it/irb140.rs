@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_io::{read_paper_results, read_robot, Robot};
+use thermokin_io::{Robot, read_paper_results, read_robot};
 use thermokin_testdata::{shared, workspace};
 
 fn robot(name: &str) -> Robot {
@@ -15,7 +15,9 @@ fn robot(name: &str) -> Robot {
 fn configs(robot: &Robot, n: usize, seed: u64) -> Vec<Vec<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)
-        .map(|_| robot.chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect())
+        .map(|_| {
+            robot.chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect()
+        })
         .collect()
 }
 
@@ -90,7 +92,9 @@ fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
     let rms = (errors.iter().map(Vector3::norm_squared).sum::<f64>() / n).sqrt();
     let mean = errors.iter().sum::<Vector3<f64>>() / n;
     let rms_centred = (errors.iter().map(|e| (e - mean).norm_squared()).sum::<f64>() / n).sqrt();
-    eprintln!("minute 0: FK of the published angles vs CoppeliaSim coordinates: RMS {rms:.4} mm, mean {mean:?}, RMS about the mean {rms_centred:.4} mm");
+    eprintln!(
+        "minute 0: FK of the published angles vs CoppeliaSim coordinates: RMS {rms:.4} mm, mean {mean:?}, RMS about the mean {rms_centred:.4} mm"
+    );
     // The issue asks for ≤ 0.005 mm RMS with the nominal model. Measured with Table 9's 25.5 mm tool:
     // 0.0161 mm (3-D RMS; 0.0093 mm per coordinate), almost all of it a constant offset of
     // (+0.014, −0.001, +0.007) mm: every target has the tool's Z axis along world +X, so that is what a
