@@ -10,7 +10,17 @@ mod error_params;
 mod frame;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
-pub use dh::{DhConvention, DhRow, DhTable};
+/// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
+/// one link: what gravity compliance needs. Description data carried beside the chain.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LinkMass {
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Centre of mass, mm, in the frame of the joint that moves the link.
+    pub com_mm: nalgebra::Vector3<f64>,
+}
+
+pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_rotation};
 
 /// Errors of the kinematic core.

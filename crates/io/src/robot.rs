@@ -36,14 +36,7 @@ pub struct Robot {
     pub masses: Vec<Option<LinkMass>>,
 }
 
-/// Mass (kg) and centre of mass (mm, in the joint's same-orientation frame) of one link.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkMass {
-    /// Mass, kg.
-    pub mass_kg: f64,
-    /// Centre of mass, mm, in the frame of the joint that moves the link.
-    pub com_mm: Vector3<f64>,
-}
+pub use thermokin_chain::LinkMass;
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]

@@ -1,0 +1,333 @@
+//! `thermokin-urdf`: URDF import of a serial chain into the same-orientation extended table, and URDF
+//! export of any chain — deformed or identified — whose FK equals the chain's.
+//!
+//! Import follows the paper's two rules (section 2.3): joint positions and axes are expressed at the zero
+//! configuration with every joint frame keeping the base orientation; fixed joints are folded in. Metres
+//! and radians become millimetres (and radians inside the library) here, at this boundary. The reader
+//! knows nothing about kinematics beyond building the table.
+
+use std::collections::{HashMap, HashSet};
+
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use thermokin_chain::{Chain, ChainError, JointFactor, JointKind, JointLimits, LinkMass};
+
+/// Errors of URDF import and export, naming the element concerned.
+#[derive(Debug, thiserror::Error)]
+pub enum UrdfError {
+    /// The XML could not be parsed as URDF.
+    #[error("{source_name}: malformed URDF: {message}")]
+    Parse {
+        /// File name or description of the source.
+        source_name: String,
+        /// What the parser said.
+        message: String,
+    },
+    /// A problem with one element.
+    #[error("{source_name}: <{element} name=\"{name}\">: {message}")]
+    Element {
+        /// File name or description of the source.
+        source_name: String,
+        /// `joint` or `link`.
+        element: &'static str,
+        /// The element's name.
+        name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A problem with the robot as a whole (root, leaves, path).
+    #[error("{source_name}: {message}")]
+    Structure {
+        /// File name or description of the source.
+        source_name: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The resulting chain is invalid.
+    #[error("{source_name}: {source}")]
+    Chain {
+        /// File name or description of the source.
+        source_name: String,
+        /// The chain error.
+        source: ChainError,
+    },
+}
+
+/// Which part of the tree to import.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ImportOptions {
+    /// Base link; default: the root (the one link that is no joint's child).
+    pub base: Option<String>,
+    /// Tip link; default: the single leaf below the base.
+    pub tip: Option<String>,
+}
+
+/// An imported robot: the chain and the masses of the links each joint moves (from `<inertial>`, fixed
+/// links folded in), in the same-orientation joint frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImportedRobot {
+    /// Robot name from the URDF.
+    pub name: String,
+    /// The extended table.
+    pub chain: Chain,
+    /// Per joint: the mass carried by that joint's link (up to the next moving joint).
+    pub masses: Vec<Option<LinkMass>>,
+    /// Base and tip links used.
+    pub base_link: String,
+    /// Tip link used.
+    pub tip_link: String,
+}
+
+const M_TO_MM: f64 = 1000.0;
+
+fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
+    let [x, y, z] = p.xyz.0;
+    let [r, pi, yw] = p.rpy.0;
+    // URDF rpy: R = Rz(yaw) · Ry(pitch) · Rx(roll), nalgebra's from_euler_angles.
+    Isometry3::from_parts(
+        Translation3::new(x * M_TO_MM, y * M_TO_MM, z * M_TO_MM),
+        UnitQuaternion::from_euler_angles(r, pi, yw),
+    )
+}
+
+/// Imports a serial chain from URDF text. `source_name` is used in messages.
+pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Result<ImportedRobot, UrdfError> {
+    let src = source_name.to_string();
+    let robot = urdf_rs::read_from_string(text)
+        .map_err(|e| UrdfError::Parse { source_name: src.clone(), message: e.to_string() })?;
+    let element = |element: &'static str, name: &str, message: String| UrdfError::Element {
+        source_name: src.clone(),
+        element,
+        name: name.to_string(),
+        message,
+    };
+    let structure = |message: String| UrdfError::Structure { source_name: src.clone(), message };
+
+    let links: HashSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
+    let mut seen_links = HashSet::new();
+    for l in &robot.links {
+        if !seen_links.insert(l.name.as_str()) {
+            return Err(element("link", &l.name, "duplicate link name".into()));
+        }
+    }
+    let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+    let mut seen_joints = HashSet::new();
+    for j in &robot.joints {
+        if !seen_joints.insert(j.name.as_str()) {
+            return Err(element("joint", &j.name, "duplicate joint name".into()));
+        }
+        for (role, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+            if !links.contains(link.as_str()) {
+                return Err(element("joint", &j.name, format!("its {role} link `{link}` does not exist")));
+            }
+        }
+        if j.parent.link == j.child.link {
+            return Err(element("joint", &j.name, "parent and child are the same link (a cycle)".into()));
+        }
+        if let Some(other) = parent_joint.insert(j.child.link.as_str(), j) {
+            return Err(element(
+                "link",
+                &j.child.link,
+                format!("is the child of two joints, `{}` and `{}` (not a tree)", other.name, j.name),
+            ));
+        }
+    }
+    // Cycles: walking up from any link must end at a root.
+    for l in &robot.links {
+        let mut at = l.name.as_str();
+        let mut steps = 0;
+        while let Some(j) = parent_joint.get(at) {
+            at = j.parent.link.as_str();
+            steps += 1;
+            if steps > robot.joints.len() {
+                return Err(element("link", &l.name, "lies on a cycle of joints".into()));
+            }
+        }
+    }
+    let roots: Vec<&str> = robot.links.iter().map(|l| l.name.as_str()).filter(|l| !parent_joint.contains_key(l)).collect();
+    let base = match &options.base {
+        Some(b) if links.contains(b.as_str()) => b.clone(),
+        Some(b) => return Err(structure(format!("base link `{b}` does not exist"))),
+        None => match roots.as_slice() {
+            [one] => (*one).to_string(),
+            [] => return Err(structure("no root link".into())),
+            many => return Err(structure(format!("several root links: {}; choose one with --base", many.join(", ")))),
+        },
+    };
+    // Descendants of the base and their leaves.
+    let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
+    for j in &robot.joints {
+        children.entry(j.parent.link.as_str()).or_default().push(j.child.link.as_str());
+    }
+    let tip = match &options.tip {
+        Some(t) if links.contains(t.as_str()) => t.clone(),
+        Some(t) => return Err(structure(format!("tip link `{t}` does not exist"))),
+        None => {
+            let mut leaves = Vec::new();
+            let mut stack = vec![base.as_str()];
+            while let Some(l) = stack.pop() {
+                match children.get(l) {
+                    Some(c) if !c.is_empty() => stack.extend(c.iter().copied()),
+                    _ => leaves.push(l),
+                }
+            }
+            leaves.sort_unstable();
+            match leaves.as_slice() {
+                [one] => (*one).to_string(),
+                many => {
+                    return Err(structure(format!(
+                        "the tip is ambiguous: leaves below `{base}` are {}; choose one with --tip",
+                        many.join(", ")
+                    )));
+                }
+            }
+        }
+    };
+    // The path tip → base.
+    let mut path: Vec<&urdf_rs::Joint> = Vec::new();
+    let mut at = tip.as_str();
+    while at != base {
+        let Some(j) = parent_joint.get(at) else {
+            return Err(structure(format!("`{tip}` is not below `{base}`: no serial path between them")));
+        };
+        path.push(j);
+        at = j.parent.link.as_str();
+    }
+    path.reverse();
+
+    let inertial = |link: &str| -> Option<(f64, Isometry3<f64>)> {
+        let l = robot.links.iter().find(|l| l.name == link)?;
+        let m = l.inertial.mass.value;
+        (m > 0.0 && m.is_finite()).then(|| (m, pose_mm(&l.inertial.origin)))
+    };
+
+    let mut factors: Vec<JointFactor> = Vec::new();
+    let mut pending = Isometry3::identity();
+    // Mass bookkeeping: (joint index or none for the base, world-at-zero pose of each link).
+    let mut world_at_zero = Isometry3::identity();
+    let mut mass_acc: Vec<(f64, Vector3<f64>)> = Vec::new(); // per joint: Σm, Σ m·c (world at zero)
+    for j in &path {
+        let origin = pose_mm(&j.origin);
+        if j.mimic.is_some() {
+            return Err(element("joint", &j.name, "mimic joints are not supported in a serial chain".into()));
+        }
+        let kind = match j.joint_type {
+            urdf_rs::JointType::Fixed => None,
+            urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => Some(JointKind::Revolute),
+            urdf_rs::JointType::Prismatic => Some(JointKind::Prismatic),
+            ref other => {
+                return Err(element("joint", &j.name, format!("joint type {other:?} is not supported (serial revolute/prismatic chains only)")));
+            }
+        };
+        world_at_zero *= origin;
+        pending *= origin;
+        if let Some(kind) = kind {
+            let axis = Vector3::from(j.axis.xyz.0);
+            let n = axis.norm();
+            if !(n.is_finite() && n > 1e-12) {
+                return Err(element("joint", &j.name, "the axis is zero or not finite".into()));
+            }
+            let lim = &j.limit;
+            let limits = if j.joint_type == urdf_rs::JointType::Continuous {
+                None
+            } else if lim.lower.is_finite() && lim.upper.is_finite() && lim.lower < lim.upper {
+                let scale = if kind == JointKind::Prismatic { M_TO_MM } else { 1.0 };
+                Some(JointLimits { lower: lim.lower * scale, upper: lim.upper * scale })
+            } else {
+                None
+            };
+            factors.push(JointFactor { before: pending, axis: Unit::new_normalize(axis), kind, name: j.name.clone(), limits });
+            pending = Isometry3::identity();
+            mass_acc.push((0.0, Vector3::zeros()));
+        }
+        if let (Some((m, com)), Some(acc)) = (inertial(&j.child.link), mass_acc.last_mut()) {
+            let c = (world_at_zero * com).translation.vector;
+            acc.0 += m;
+            acc.1 += c * m;
+        }
+    }
+    if factors.is_empty() {
+        return Err(structure(format!("no revolute or prismatic joint between `{base}` and `{tip}`")));
+    }
+    let chain = Chain::from_factors(&factors, &pending).map_err(|e| UrdfError::Chain { source_name: src.clone(), source: e })?;
+    let frames = chain.joint_frames(&vec![0.0; chain.dof()]).map_err(|e| UrdfError::Chain { source_name: src.clone(), source: e })?;
+    let masses = mass_acc
+        .iter()
+        .zip(&frames)
+        .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
+        .collect();
+    Ok(ImportedRobot { name: robot.name.clone(), chain, masses, base_link: base, tip_link: tip })
+}
+
+/// Formats a number so that it parses back to the same `f64`.
+fn num(v: f64) -> String {
+    format!("{v:?}")
+}
+
+/// URDF roll, pitch, yaw of a rotation (`R = Rz(yaw) · Ry(pitch) · Rx(roll)`), rebuilding `R` to
+/// rounding even at pitch = ±90°: yaw first, then pitch and roll from entries combined with it (the
+/// `asin` in nalgebra's `euler_angles` loses half the digits there).
+fn rpy(q: &UnitQuaternion<f64>) -> (f64, f64, f64) {
+    let m = q.to_rotation_matrix().into_inner();
+    let yaw = m[(1, 0)].atan2(m[(0, 0)]);
+    let (sy, cy) = yaw.sin_cos();
+    let pitch = (-m[(2, 0)]).atan2(cy * m[(0, 0)] + sy * m[(1, 0)]);
+    let roll = (sy * m[(0, 2)] - cy * m[(1, 2)]).atan2(cy * m[(1, 1)] - sy * m[(0, 1)]);
+    (roll, pitch, yaw)
+}
+
+fn origin_xml(pose: &Isometry3<f64>) -> String {
+    let t = pose.translation.vector / M_TO_MM;
+    let (r, p, y) = rpy(&pose.rotation);
+    format!("<origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>", num(t.x), num(t.y), num(t.z), num(r), num(p), num(y))
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// Exports a chain (nominal, deformed or identified) as URDF whose FK from `base_link` to `tool0` equals
+/// the chain's: every joint's fixed row (error parameters and zero offset included) becomes its
+/// `<origin>`, the tool row a fixed joint. Names and limits are kept (limits in radians and metres).
+pub fn export_urdf(chain: &Chain, robot_name: &str) -> String {
+    let (factors, tail) = chain.to_factors();
+    let mut s = String::new();
+    s.push_str("<?xml version=\"1.0\"?>\n");
+    s.push_str(&format!("<!-- Generated by thermokin: the extended table, error parameters included. -->\n<robot name=\"{}\">\n", xml_escape(robot_name)));
+    s.push_str("  <link name=\"base_link\"/>\n");
+    let mut parent = "base_link".to_string();
+    for (i, f) in factors.iter().enumerate() {
+        let child = format!("link_{}", i + 1);
+        let kind = match (f.kind, f.limits) {
+            (JointKind::Prismatic, _) => "prismatic",
+            (JointKind::Revolute, Some(_)) => "revolute",
+            (JointKind::Revolute, None) => "continuous",
+        };
+        s.push_str(&format!("  <link name=\"{child}\"/>\n"));
+        s.push_str(&format!("  <joint name=\"{}\" type=\"{kind}\">\n", xml_escape(&f.name)));
+        s.push_str(&format!("    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n"));
+        s.push_str(&format!("    {}\n", origin_xml(&f.before)));
+        let a = f.axis.into_inner();
+        s.push_str(&format!("    <axis xyz=\"{} {} {}\"/>\n", num(a.x), num(a.y), num(a.z)));
+        let scale = if f.kind == JointKind::Prismatic { 1.0 / M_TO_MM } else { 1.0 };
+        match f.limits {
+            Some(l) => s.push_str(&format!(
+                "    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n",
+                num(l.lower * scale),
+                num(l.upper * scale)
+            )),
+            None if f.kind == JointKind::Prismatic => {
+                s.push_str("    <limit lower=\"-1000\" upper=\"1000\" effort=\"0\" velocity=\"0\"/>\n")
+            }
+            None => {}
+        }
+        s.push_str("  </joint>\n");
+        parent = child;
+    }
+    s.push_str("  <link name=\"tool0\"/>\n");
+    s.push_str(&format!(
+        "  <joint name=\"tool0_joint\" type=\"fixed\">\n    <parent link=\"{parent}\"/>\n    <child link=\"tool0\"/>\n    {}\n  </joint>\n",
+        origin_xml(&tail)
+    ));
+    s.push_str("</robot>\n");
+    s
+}

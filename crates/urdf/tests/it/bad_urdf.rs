@@ -1,0 +1,49 @@
+//! Malformed URDF, missing links, cycles, unsupported joints: errors naming the element.
+
+use thermokin_urdf::{import_urdf, ImportOptions};
+
+fn err(text: &str, opts: &ImportOptions) -> String {
+    import_urdf(text, "bad.urdf", opts).map(|_| ()).expect_err(text).to_string()
+}
+
+const J: &str = r#"<joint name="j1" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="0" velocity="0"/></joint>"#;
+
+#[test]
+fn located_errors() {
+    let d = ImportOptions::default();
+    let cases: Vec<(String, ImportOptions, &str)> = vec![
+        ("<robot name=\"r\"><link name=\"a\"/>".into(), d.clone(), "malformed URDF"),
+        (format!("<robot name=\"r\"><link name=\"a\"/>{J}</robot>"), d.clone(), "<joint name=\"j1\">: its child link `b` does not exist"),
+        (
+            format!("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>{J}{}</robot>", r#"<joint name="j2" type="fixed"><parent link="b"/><child link="a"/></joint>"#),
+            d.clone(),
+            "cycle",
+        ),
+        (
+            r#"<robot name="r"><link name="a"/><link name="b"/><joint name="f" type="floating"><parent link="a"/><child link="b"/></joint></robot>"#.into(),
+            d.clone(),
+            "<joint name=\"f\">: joint type Floating is not supported",
+        ),
+        (
+            r#"<robot name="r"><link name="a"/><link name="b"/><joint name="z" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 0"/></joint></robot>"#.into(),
+            d.clone(),
+            "<joint name=\"z\">: the axis is zero",
+        ),
+        (
+            format!("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><link name=\"c\"/>{J}{}</robot>", r#"<joint name="j2" type="revolute"><parent link="a"/><child link="c"/><axis xyz="0 0 1"/></joint>"#),
+            d.clone(),
+            "the tip is ambiguous: leaves below `a` are b, c",
+        ),
+        (format!("<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/>{J}</robot>"), ImportOptions { base: None, tip: Some("zz".into()) }, "tip link `zz` does not exist"),
+        (
+            r#"<robot name="r"><link name="a"/><link name="b"/><joint name="m" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><mimic joint="x"/></joint></robot>"#.into(),
+            ImportOptions { base: None, tip: Some("b".into()) },
+            "mimic",
+        ),
+    ];
+    for (text, opts, needle) in cases {
+        let e = err(&text, &opts);
+        assert!(e.contains(needle), "`{needle}` not in: {e}");
+        assert!(e.starts_with("bad.urdf"), "{e}");
+    }
+}
