@@ -166,6 +166,19 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
     ("thermokin-deform", &["thermokin-io", "thermokin-ik", "thermokin-compensate", "thermokin", "csv", "clap"]),
     ("thermokin-ik", &["thermokin-io", "thermokin-deform", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
     ("thermokin-io", &["thermokin-ik", "thermokin-compensate", "thermokin", "clap"]),
+    (
+        "thermokin-urdf",
+        &[
+            "thermokin-io",
+            "thermokin-deform",
+            "thermokin-ik",
+            "thermokin-compensate",
+            "thermokin",
+            "toml",
+            "csv",
+            "clap",
+        ],
+    ),
     ("thermokin-compensate", &["thermokin-io", "thermokin", "toml", "csv", "clap"]),
 ];
 

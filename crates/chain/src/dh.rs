@@ -202,7 +202,13 @@ impl Chain {
                 JointKind::Revolute => Isometry3::rotation(j.axis.into_inner() * j.zero),
                 JointKind::Prismatic => Isometry3::translation(j.axis.x * j.zero, j.axis.y * j.zero, j.axis.z * j.zero),
             };
-            out.push(JointFactor { before: pending * fixed * zero, axis: j.axis, kind: j.kind, name: j.name.clone(), limits: j.limits });
+            out.push(JointFactor {
+                before: pending * fixed * zero,
+                axis: j.axis,
+                kind: j.kind,
+                name: j.name.clone(),
+                limits: j.limits,
+            });
             pending = Isometry3::identity();
         }
         (out, pending * self.tool().pose())

@@ -50,17 +50,57 @@ pub enum Command {
         after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --rapid prog.mod --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
     )]
     Compensate(CompensateArgs),
+    /// URDF: import a serial chain into the extended table (TOML), or export a (deformed) robot as URDF.
+    #[command(subcommand)]
+    Urdf(UrdfCommand),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
     /// authors' full files when ../shared is present.
     ReproducePaper(ReproduceArgs),
 }
 
+/// `urdf` subcommands.
+#[derive(Subcommand, Debug)]
+pub enum UrdfCommand {
+    /// Import a URDF's serial chain (fixed joints folded in) and write it as an extended-table TOML.
+    #[command(after_help = "Example:\n  thermokin urdf import ../shared/urdf/ur5.urdf --tip tool0 -o ur5.toml")]
+    Import {
+        /// The URDF file.
+        file: PathBuf,
+        /// Base link (default: the root).
+        #[arg(long)]
+        base: Option<String>,
+        /// Tip link (default: the single leaf; an error lists the candidates when there are several).
+        #[arg(long)]
+        tip: Option<String>,
+        /// Output TOML (written atomically).
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
+    },
+    /// Export a robot, optionally deformed by a deviation table, as URDF whose FK equals the model's.
+    #[command(
+        after_help = "Example:\n  thermokin urdf export --robot configs/irb140.toml --deformation fixtures/paper/deformations-measured.toml -o deformed.urdf"
+    )]
+    Export {
+        #[command(flatten)]
+        robot: RobotArgs,
+        /// Output URDF (written atomically).
+        #[arg(short, long, value_name = "FILE")]
+        out: PathBuf,
+    },
+}
+
 /// The robot and its deformation.
 #[derive(Args, Debug, Clone)]
 pub struct RobotArgs {
-    /// Robot description (TOML: extended, DH or modified DH table).
+    /// Robot description: TOML (extended, DH or modified DH table) or URDF (.urdf).
     #[arg(long, value_name = "FILE")]
     pub robot: PathBuf,
+    /// URDF base link (default: the root link).
+    #[arg(long, value_name = "LINK")]
+    pub base: Option<String>,
+    /// URDF tip link (default: the single leaf).
+    #[arg(long, value_name = "LINK")]
+    pub tip: Option<String>,
     /// Deviation table (the authors' CSV `Dx,Dy,Dz,Dox,Doy,Doz`, or TOML), mm and degrees.
     #[arg(long, value_name = "FILE")]
     pub deformation: Option<PathBuf>,

@@ -14,9 +14,12 @@ use thermokin_compensate::{
 };
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Target, Workspace, solve};
-use thermokin_io::{Robot, read_deviation_table_for, read_robot, read_targets, write_atomic, write_atomic_with};
+use thermokin_io::{
+    Robot, RobotOptions, read_deviation_table_for, read_robot_with, read_targets, robot_to_toml, write_atomic,
+    write_atomic_with,
+};
 
-use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, RobotArgs, Semantics, parse_list};
+use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, RobotArgs, Semantics, UrdfCommand, parse_list};
 use crate::{Failure, exit, plots, reproduce};
 
 /// Runs a parsed command line; returns the exit status.
@@ -25,6 +28,7 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
         Command::Fk(a) => fk(a),
         Command::Ik(a) => ik(a),
         Command::Compensate(a) => compensate(a),
+        Command::Urdf(c) => urdf(c),
         Command::ReproducePaper(a) => reproduce::run(a),
     }
 }
@@ -37,7 +41,8 @@ pub struct Loaded {
 }
 
 pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
-    let robot = read_robot(&args.robot).map_err(Failure::input)?;
+    let options = RobotOptions { base: args.base.clone(), tip: args.tip.clone() };
+    let robot = read_robot_with(&args.robot, &options).map_err(Failure::input)?;
     let table = match &args.deformation {
         Some(p) => Some(read_deviation_table_for(p, robot.chain.dof()).map_err(Failure::input)?),
         None => None,
@@ -271,4 +276,22 @@ fn print_summary(run: &RunOutput, as_json: bool) {
         "largest error: compensated {:.3e} mm, {:.3e}°; uncompensated program {:.3} mm",
         s.max_position_error_mm, s.max_orientation_error_deg, s.max_uncompensated_error_mm
     );
+}
+
+fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
+    match c {
+        UrdfCommand::Import { file, base, tip, out } => {
+            let robot = read_robot_with(&file, &RobotOptions { base, tip }).map_err(Failure::input)?;
+            write_atomic(&out, robot_to_toml(&robot).as_bytes()).map_err(Failure::internal)?;
+            println!("{}: {} joints → {}", robot.name, robot.chain.dof(), out.display());
+        }
+        UrdfCommand::Export { robot, out } => {
+            let loaded = load(&robot)?;
+            let chain = working_chain(&robot, &loaded)?;
+            let xml = thermokin_urdf::export_urdf(&chain, &loaded.robot.name);
+            write_atomic(&out, xml.as_bytes()).map_err(Failure::internal)?;
+            println!("{}: {} joints → {}", loaded.robot.name, chain.dof(), out.display());
+        }
+    }
+    Ok(exit::OK)
 }

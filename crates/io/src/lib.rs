@@ -14,7 +14,7 @@ mod write;
 
 pub use deviation::{read_deviation_table, read_deviation_table_for, read_temperature_log};
 pub use paper::{PaperResultRow, read_paper_results};
-pub use robot::{LinkMass, Robot, parse_robot_toml, read_robot};
+pub use robot::{LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml};
 pub use targets::{DEFAULT_ORIENTATION_DEG, Target, read_targets};
 pub use write::{write_atomic, write_atomic_with};
 

@@ -329,3 +329,105 @@ fn row(path: &Path, text: &str, spec: Option<&Spanned<RowSpec>>, which: &str) ->
     }
     Ok(r)
 }
+
+/// Where a robot file's chain starts and ends (URDF only; TOML describes one chain).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RobotOptions {
+    /// URDF base link (default: the root).
+    pub base: Option<String>,
+    /// URDF tip link (default: the single leaf).
+    pub tip: Option<String>,
+}
+
+/// Reads a robot from TOML or, by extension, URDF (`.urdf`, `.xml`), converting metres to millimetres.
+pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoError> {
+    let is_urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xml"));
+    if !is_urdf {
+        if options.base.is_some() || options.tip.is_some() {
+            return Err(IoError::input(path, None, "--base/--tip", "only URDF robots take a base or tip link"));
+        }
+        return read_robot(path);
+    }
+    let text = read_text(path)?;
+    let name = path.display().to_string();
+    let opts = thermokin_urdf::ImportOptions { base: options.base.clone(), tip: options.tip.clone() };
+    let imported = thermokin_urdf::import_urdf(&text, &name, &opts).map_err(|e| {
+        let (field, message) = match &e {
+            thermokin_urdf::UrdfError::Element { element, name, message, .. } => {
+                (format!("<{element} name=\"{name}\">"), message.clone())
+            }
+            thermokin_urdf::UrdfError::Parse { message, .. } => ("xml".to_string(), message.clone()),
+            thermokin_urdf::UrdfError::Structure { message, .. } => ("robot".to_string(), message.clone()),
+            thermokin_urdf::UrdfError::Chain { source, .. } => ("chain".to_string(), source.to_string()),
+        };
+        IoError::input(path, None, field, message)
+    })?;
+    Ok(Robot { name: imported.name, chain: imported.chain, masses: imported.masses })
+}
+
+fn fmt3(v: &Vector3<f64>) -> String {
+    format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
+}
+
+fn axis_toml(a: &Vector3<f64>) -> String {
+    for (k, name) in ["X", "Y", "Z"].iter().enumerate() {
+        let others_zero = (0..3).filter(|&i| i != k).all(|i| a[i] == 0.0);
+        if others_zero && a[k] == 1.0 {
+            return format!("\"{name}\"");
+        }
+        if others_zero && a[k] == -1.0 {
+            return format!("\"-{name}\"");
+        }
+    }
+    fmt3(a)
+}
+
+fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
+    let angles = thermokin_chain::xyz_angles(row.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
+    out.push_str(&format!(
+        "\n[{which}]\ntranslation_mm = {}\nrotation_xyz_deg = {}\n",
+        fmt3(&row.translation),
+        fmt3(&angles)
+    ));
+    if !row.error.is_zero() {
+        out.push_str(&format!("error = {:?}\n", row.error.to_mm_deg()));
+    }
+}
+
+/// The robot as TOML in the extended convention (what `read_robot` reads back), millimetres and
+/// degrees, numbers printed so that they parse back to the same value.
+pub fn robot_to_toml(robot: &Robot) -> String {
+    let mut s = format!(
+        "# Written by thermokin: the same-orientation extended table, mm and degrees.\nname = {:?}\nconvention = \"extended\"\n",
+        robot.name
+    );
+    for (i, j) in robot.chain.joints().iter().enumerate() {
+        let to_file = |v: f64| if j.kind == JointKind::Revolute { v.to_degrees() } else { v };
+        s.push_str(&format!(
+            "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
+            j.name,
+            axis_toml(&j.axis),
+            fmt3(&j.offset)
+        ));
+        if j.kind == JointKind::Prismatic {
+            s.push_str("type = \"prismatic\"\n");
+        }
+        if j.zero != 0.0 {
+            s.push_str(&format!("zero = {:?}\n", to_file(j.zero)));
+        }
+        if let Some(l) = j.limits {
+            s.push_str(&format!("limits = [{:?}, {:?}]\n", to_file(l.lower), to_file(l.upper)));
+        }
+        if !j.error.is_zero() {
+            s.push_str(&format!("error = {:?}\n", j.error.to_mm_deg()));
+        }
+        if let Some(Some(m)) = robot.masses.get(i) {
+            s.push_str(&format!("mass_kg = {:?}\ncom_mm = {}\n", m.mass_kg, fmt3(&m.com_mm)));
+        }
+    }
+    if robot.chain.base() != &FixedRow::identity() {
+        row_toml(&mut s, "base", robot.chain.base());
+    }
+    row_toml(&mut s, "tool", robot.chain.tool());
+    s
+}

@@ -285,3 +285,43 @@ fn help_teaches_units_examples_and_exit_codes() {
     assert!(stdout(&o).contains("--profile"));
     assert!(stdout(&o).contains("linear-grow:T"));
 }
+
+fn fk_position(args: &[&str]) -> Vec<f64> {
+    let o = thermokin(args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    v["position_mm"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+}
+
+fn close(a: &[f64], b: &[f64]) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-9)
+}
+
+#[test]
+fn urdf_robots_everywhere_and_import_export() {
+    let Some(ur5) = thermokin_testdata::shared("urdf/ur5.urdf") else { return };
+    let ur5 = ur5.to_str().unwrap().to_string();
+    let q = "10,-40,30,20,50,-60";
+    let direct = fk_position(&["fk", "--robot", &ur5, "--tip", "tool0", "--joints", q, "--json"]);
+    // Without --tip the ambiguous leaves are listed.
+    let o = thermokin(&["fk", "--robot", &ur5, "--joints", q]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("the tip is ambiguous") && stderr(&o).contains("tool0"), "{}", stderr(&o));
+    // Import to TOML, then FK from the TOML.
+    let toml = tmp("ur5.toml");
+    let o = thermokin(&["urdf", "import", &ur5, "--tip", "tool0", "-o", toml.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let from_toml = fk_position(&["fk", "--robot", toml.to_str().unwrap(), "--joints", q, "--json"]);
+    assert!(close(&direct, &from_toml), "{direct:?} vs {from_toml:?}");
+    // Export the deformed IRB 140 and read it back as a robot: same FK as the deformed model.
+    let urdf = tmp("deformed.urdf");
+    let o = thermokin(&["urdf", "export", "--robot", ROBOT, "--deformation", TABLE, "-o", urdf.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let q = "5,25,-10,40,-30,15";
+    let model = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--joints", q, "--json"]);
+    let back = fk_position(&["fk", "--robot", urdf.to_str().unwrap(), "--joints", q, "--json"]);
+    assert!(close(&model, &back), "{model:?} vs {back:?}");
+    // --tip on a TOML robot is refused.
+    let o = thermokin(&["fk", "--robot", ROBOT, "--tip", "x", "--joints", q]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -52,3 +52,34 @@ fn toml_table_equals_csv_table() {
     assert_eq!(l.series("j1").unwrap(), &[20.0, 25.0]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn robot_toml_round_trip_keeps_fk_names_limits_and_masses() {
+    let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
+    let errs: Vec<_> = (0..6)
+        .map(|i| thermokin_chain::ErrorParams::from_mm_deg([0.1 * i as f64, -0.2, 0.3, 0.01, -0.02, 0.03 * i as f64]))
+        .collect();
+    let chain = robot
+        .chain
+        .with_errors(
+            thermokin_chain::ErrorParams::from_mm_deg([1.0, 0.0, 0.0, 0.0, 0.0, 0.5]),
+            &errs,
+            robot.chain.tool().error,
+        )
+        .unwrap();
+    let deformed = thermokin_io::Robot { chain, ..robot.clone() };
+    let text = thermokin_io::robot_to_toml(&deformed);
+    let back = thermokin_io::parse_robot_toml(std::path::Path::new("round-trip.toml"), &text).unwrap();
+    assert_eq!(back.name, deformed.name);
+    assert_eq!(back.masses, deformed.masses);
+    for (a, b) in back.chain.joints().iter().zip(deformed.chain.joints()) {
+        assert_eq!(a.name, b.name);
+        let (la, lb) = (a.limits.unwrap(), b.limits.unwrap());
+        assert!((la.lower - lb.lower).abs() < 1e-12 && (la.upper - lb.upper).abs() < 1e-12);
+    }
+    for q in [[0.0; 6], [0.3, -0.2, 0.5, 1.0, -0.7, 2.0]] {
+        let a = back.chain.tool_pose(&q).unwrap();
+        let b = deformed.chain.tool_pose(&q).unwrap();
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+    }
+}

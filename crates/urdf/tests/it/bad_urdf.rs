@@ -1,6 +1,6 @@
 //! Malformed URDF, missing links, cycles, unsupported joints: errors naming the element.
 
-use thermokin_urdf::{import_urdf, ImportOptions};
+use thermokin_urdf::{ImportOptions, import_urdf};
 
 fn err(text: &str, opts: &ImportOptions) -> String {
     import_urdf(text, "bad.urdf", opts).map(|_| ()).expect_err(text).to_string()

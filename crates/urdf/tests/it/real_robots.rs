@@ -4,7 +4,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_testdata::shared;
-use thermokin_urdf::{export_urdf, import_urdf, ImportOptions};
+use thermokin_urdf::{ImportOptions, export_urdf, import_urdf};
 
 /// (file, tip link): the tip is the flange where a URDF's tree branches into fingers.
 const ROBOTS: &[(&str, Option<&str>)] = &[
@@ -32,7 +32,8 @@ fn imported_fk_equals_the_k_crate() {
         let text = std::fs::read_to_string(&path).unwrap();
         let robot = import_urdf(&text, file, &options(*tip)).unwrap_or_else(|e| panic!("{e}"));
         let k_chain = k::Chain::<f64>::from_urdf_file(&path).unwrap();
-        let end = k_chain.find_link(&robot.tip_link).unwrap_or_else(|| panic!("{file}: k has no link {}", robot.tip_link));
+        let end =
+            k_chain.find_link(&robot.tip_link).unwrap_or_else(|| panic!("{file}: k has no link {}", robot.tip_link));
         let serial = k::SerialChain::from_end(end);
         assert_eq!(serial.dof(), robot.chain.dof(), "{file}");
         let mut rng = ChaCha8Rng::seed_from_u64(7);
@@ -83,7 +84,10 @@ fn export_then_import_is_exact() {
         let errs: Vec<_> = (0..robot.chain.dof())
             .map(|_| thermokin_chain::ErrorParams::from_mm_deg([0.0; 6].map(|_: f64| rng.random_range(-1.0..1.0))))
             .collect();
-        let deformed = robot.chain.with_errors(thermokin_chain::ErrorParams::ZERO, &errs, thermokin_chain::ErrorParams::ZERO).unwrap();
+        let deformed = robot
+            .chain
+            .with_errors(thermokin_chain::ErrorParams::ZERO, &errs, thermokin_chain::ErrorParams::ZERO)
+            .unwrap();
         let exported = export_urdf(&deformed, &robot.name);
         let back = import_urdf(&exported, "exported", &ImportOptions::default()).unwrap();
         assert_eq!(back.chain.dof(), deformed.dof());
@@ -112,7 +116,8 @@ fn export_then_import_is_exact() {
 #[test]
 fn ros_industrial_irb140_against_the_bundled_table() {
     let Some(path) = shared("urdf/abb_irb140.urdf") else { return };
-    let robot = import_urdf(&std::fs::read_to_string(&path).unwrap(), "abb_irb140.urdf", &options(Some("tool0"))).unwrap();
+    let robot =
+        import_urdf(&std::fs::read_to_string(&path).unwrap(), "abb_irb140.urdf", &options(Some("tool0"))).unwrap();
     let toml_robot = std::fs::read_to_string(thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
     assert!(toml_robot.contains("238.5"));
     // Joint positions at zero, ours (Table 9) vs the URDF: the URDF rounds 238.5 → 239 and 141.5 → 141.
