@@ -1,0 +1,328 @@
+//! Identification: Levenberg–Marquardt on faer with column scaling, the parameters the data cannot
+//! identify detected (ordered Gram–Schmidt on the scaled Jacobian) and fixed, observability indices from
+//! the singular values, and parameter uncertainties.
+
+use faer::linalg::matmul::matmul;
+use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::{Accum, Mat, Par};
+use nalgebra::{Isometry3, Matrix3, Matrix3xX, Vector3};
+use serde::Serialize;
+
+use crate::model::{Base, EffectKind, Model};
+use crate::{Dataset, DiagnoseError};
+
+/// A parameter the data cannot identify, fixed at its starting value.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FixedParameter {
+    /// Parameter name.
+    pub parameter: String,
+    /// Why: the block it duplicates, or that it has no effect on the measured positions.
+    pub reason: String,
+}
+
+/// Observability of the identified parameters (singular values σ of the column-scaled Jacobian, m rows).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Observability {
+    /// Free parameters.
+    pub parameters: usize,
+    /// Residual rows.
+    pub rows: usize,
+    /// σ_max / σ_min.
+    pub condition_number: f64,
+    /// O1 = (σ1 ⋯ σp)^(1/p) / √m (Borm & Menq).
+    pub o1: f64,
+    /// O2 = σ_min / σ_max.
+    pub o2: f64,
+    /// O3 = σ_min.
+    pub o3: f64,
+    /// O4 = σ_min² / σ_max (noise amplification index).
+    pub o4: f64,
+    /// O5 = 1 / Σ 1/σ_i.
+    pub o5: f64,
+}
+
+/// The outcome of one identification.
+#[derive(Clone, Debug)]
+pub struct Fit {
+    /// All parameters (fixed ones at their starting value).
+    pub theta: Vec<f64>,
+    /// Standard deviation of each free parameter (NaN for fixed ones).
+    pub std: Vec<f64>,
+    /// Parameters fixed as unidentifiable.
+    pub fixed: Vec<FixedParameter>,
+    /// Free-parameter mask.
+    pub free: Vec<bool>,
+    /// RMS of the 3-D position residual on the training rows, mm.
+    pub rms_mm: f64,
+    /// Sum of squared residuals, mm².
+    pub ssr: f64,
+    /// LM iterations.
+    pub iterations: usize,
+}
+
+/// Residual rows `measured − predicted` (3 per measurement) and the Jacobian of `predicted`.
+pub(crate) fn residuals(
+    base: &Base,
+    model: &Model,
+    theta: &[f64],
+    data: &Dataset,
+    rows: &[usize],
+    pre: &(Vec<Vec<f64>>, Vec<f64>),
+    with_jacobian: bool,
+) -> Result<(Vec<f64>, Mat<f64>), DiagnoseError> {
+    let mut r = Vec::with_capacity(rows.len() * 3);
+    let mut jac = if with_jacobian { Mat::zeros(rows.len() * 3, model.len) } else { Mat::zeros(0, 0) };
+    let mut block = Matrix3xX::zeros(model.len);
+    for (k, &i) in rows.iter().enumerate() {
+        let m = &data.measurements[i];
+        let p = model.predict(base, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block))?;
+        let d = m.position_mm - p;
+        r.extend_from_slice(&[d.x, d.y, d.z]);
+        if with_jacobian {
+            for c in 0..model.len {
+                for a in 0..3 {
+                    jac[(3 * k + a, c)] = block[(a, c)];
+                }
+            }
+        }
+    }
+    Ok((r, jac))
+}
+
+/// Relative residual below which a scaled column counts as a combination of earlier ones: well above the
+/// ~1e-13 of rounding in a 720-row Gram–Schmidt, well below the ~1e-3 of a weakly but truly identifiable
+/// parameter of a 30-pose data set.
+const DEPENDENT: f64 = 1e-6;
+
+/// Ordered Gram–Schmidt on the column-scaled Jacobian: earlier (conventional, smaller) blocks win, a later
+/// column that is (nearly) a combination of accepted ones is fixed, and the reason names the accepted
+/// column it is most aligned with.
+pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> (Vec<bool>, Vec<FixedParameter>) {
+    let (m, p) = (jac.nrows(), jac.ncols());
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut accepted: Vec<usize> = Vec::new();
+    let mut free = vec![false; p];
+    let mut fixed = Vec::new();
+    let unit = |c: usize| -> Option<Vec<f64>> {
+        let v: Vec<f64> = (0..m).map(|r| jac[(r, c)]).collect();
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        (n > 1e-12).then(|| v.iter().map(|x| x / n).collect())
+    };
+    for c in 0..p {
+        if !prior.get(c).copied().unwrap_or(true) {
+            continue;
+        }
+        let Some(v0) = unit(c) else {
+            fixed.push(FixedParameter { parameter: names[c].clone(), reason: "no effect on the measured positions".into() });
+            continue;
+        };
+        let mut v = v0.clone();
+        for _ in 0..2 {
+            for b in &basis {
+                let d: f64 = v.iter().zip(b).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(b).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n < DEPENDENT {
+            // Most aligned accepted column.
+            let best = accepted
+                .iter()
+                .map(|&a| {
+                    let u = unit(a).unwrap_or_default();
+                    (a, u.iter().zip(&v0).map(|(x, y)| x * y).sum::<f64>().abs())
+                })
+                .max_by(|x, y| x.1.total_cmp(&y.1));
+            let reason = match best {
+                Some((a, cos)) if cos > 0.5 => format!("equivalent to {} (|cos| = {cos:.3})", names[a]),
+                _ => "a combination of the parameters already identified".into(),
+            };
+            fixed.push(FixedParameter { parameter: names[c].clone(), reason });
+        } else {
+            basis.push(v.iter().map(|x| x / n).collect());
+            accepted.push(c);
+            free[c] = true;
+        }
+    }
+    (free, fixed)
+}
+
+/// Observability indices of the free columns (column-scaled), by faer's thin SVD.
+pub(crate) fn observability(jac: &Mat<f64>, free: &[bool]) -> Option<Observability> {
+    let cols: Vec<usize> = (0..jac.ncols()).filter(|&c| free[c]).collect();
+    if cols.is_empty() || jac.nrows() == 0 {
+        return None;
+    }
+    let m = jac.nrows();
+    let mut a = Mat::zeros(m, cols.len());
+    for (k, &c) in cols.iter().enumerate() {
+        let n = (0..m).map(|r| jac[(r, c)] * jac[(r, c)]).sum::<f64>().sqrt().max(1e-300);
+        for r in 0..m {
+            a[(r, k)] = jac[(r, c)] / n;
+        }
+    }
+    let sv = a.singular_values().ok()?;
+    let max = sv.iter().copied().fold(0.0, f64::max);
+    let min = sv.iter().copied().fold(f64::INFINITY, f64::min);
+    let p = sv.len() as f64;
+    let geo = (sv.iter().map(|s| s.max(1e-300).ln()).sum::<f64>() / p).exp();
+    Some(Observability {
+        parameters: cols.len(),
+        rows: m,
+        condition_number: max / min,
+        o1: geo / (m as f64).sqrt(),
+        o2: min / max,
+        o3: min,
+        o4: min * min / max,
+        o5: 1.0 / sv.iter().map(|s| 1.0 / s.max(1e-300)).sum::<f64>(),
+    })
+}
+
+/// Levenberg–Marquardt identification of `model` on the given rows.
+pub(crate) fn fit(
+    base: &Base,
+    model: &Model,
+    data: &Dataset,
+    rows: &[usize],
+    pre: &(Vec<Vec<f64>>, Vec<f64>),
+) -> Result<Fit, DiagnoseError> {
+    let names = model.parameter_names();
+    let mut theta = model.initial();
+    let (mut r, mut jac) = residuals(base, model, &theta, data, rows, pre, true)?;
+    let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
+    let mut cost = ssr(&r);
+    let mut iterations = 0;
+    let mut free = vec![false; model.len];
+    let mut fixed = Vec::new();
+    let mut cols: Vec<usize> = Vec::new();
+    let mut scale: Vec<f64> = Vec::new();
+    let mut last_a = Mat::<f64>::zeros(0, 0);
+    // Two passes: a parameter that acts only through another (an exponential drift's τ through its
+    // amplitude, zero at the start) becomes identifiable once the first pass has moved the other.
+    for _pass in 0..2 {
+        let (f, fx) = identifiable(&jac, &names, &vec![true; model.len]);
+        if f == free {
+            break;
+        }
+        free = f;
+        fixed = fx;
+        cols = (0..model.len).filter(|&c| free[c]).collect();
+        let p = cols.len();
+        scale = vec![1.0; p];
+        let mut lambda = 1e-3;
+        let mut a = Mat::<f64>::zeros(rows.len() * 3, p);
+        for _ in 0..100 {
+            iterations += 1;
+            if p == 0 {
+                break;
+            }
+            // Column scaling: unit columns, so that mm, radians and minutes weigh alike.
+            for (k, &c) in cols.iter().enumerate() {
+                let n = (0..jac.nrows()).map(|i| jac[(i, c)] * jac[(i, c)]).sum::<f64>().sqrt().max(1e-300);
+                scale[k] = n;
+                for i in 0..jac.nrows() {
+                    a[(i, k)] = jac[(i, c)] / n;
+                }
+            }
+            let mut ata = Mat::<f64>::zeros(p, p);
+            matmul(ata.as_mut(), Accum::Replace, a.as_ref().transpose(), a.as_ref(), 1.0, Par::Seq);
+            let rv = faer::ColRef::from_slice(&r);
+            let mut g = Mat::<f64>::zeros(p, 1);
+            matmul(g.as_mut(), Accum::Replace, a.as_ref().transpose(), rv.as_mat(), 1.0, Par::Seq);
+            last_a = ata.clone();
+            let mut improved = false;
+            while lambda < 1e12 {
+                let mut damped = ata.clone();
+                for i in 0..p {
+                    damped[(i, i)] += lambda * (ata[(i, i)] + 1e-12);
+                }
+                let Ok(llt) = damped.llt(faer::Side::Lower) else {
+                    lambda *= 10.0;
+                    continue;
+                };
+                let step = llt.solve(&g);
+                let mut trial = theta.clone();
+                for (k, &c) in cols.iter().enumerate() {
+                    trial[c] += step[(k, 0)] / scale[k];
+                }
+                let (rt, jt) = residuals(base, model, &trial, data, rows, pre, true)?;
+                let ct = ssr(&rt);
+                if ct < cost {
+                    let rel = (cost - ct) / cost.max(1e-300);
+                    theta = trial;
+                    r = rt;
+                    jac = jt;
+                    cost = ct;
+                    lambda = (lambda * 0.1).max(1e-12);
+                    improved = rel > 1e-12;
+                    break;
+                }
+                lambda *= 10.0;
+            }
+            if !improved {
+                break;
+            }
+        }
+    }
+    let p = cols.len();
+    // Uncertainty: σ̂² (AᵀA)⁻¹ on the scaled columns, unscaled.
+    let m = (rows.len() * 3) as f64;
+    let dof = (m - p as f64).max(1.0);
+    let sigma2 = cost / dof;
+    let mut std = vec![f64::NAN; model.len];
+    if p > 0 {
+        if let Ok(llt) = last_a.llt(faer::Side::Lower) {
+            let inv = llt.inverse();
+            for (k, &c) in cols.iter().enumerate() {
+                std[c] = (sigma2 * inv[(k, k)]).max(0.0).sqrt() / scale[k];
+            }
+        }
+    }
+    Ok(Fit { theta, std, fixed, free, rms_mm: (cost / rows.len().max(1) as f64).sqrt(), ssr: cost, iterations })
+}
+
+/// Closed-form rigid registration (Kabsch): the `T` minimising Σ |b_i − T a_i|².
+pub(crate) fn kabsch(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Isometry3<f64> {
+    if a.len() < 3 {
+        return Isometry3::identity();
+    }
+    let n = a.len() as f64;
+    let ca = a.iter().sum::<Vector3<f64>>() / n;
+    let cb = b.iter().sum::<Vector3<f64>>() / n;
+    let mut h = Matrix3::zeros();
+    for (x, y) in a.iter().zip(b) {
+        h += (x - ca) * (y - cb).transpose();
+    }
+    let svd = h.svd(true, true);
+    let (Some(u), Some(vt)) = (svd.u, svd.v_t) else { return Isometry3::identity() };
+    let mut d = Matrix3::identity();
+    if (vt.transpose() * u.transpose()).determinant() < 0.0 {
+        d[(2, 2)] = -1.0;
+    }
+    let r = vt.transpose() * d * u.transpose();
+    let rot = nalgebra::UnitQuaternion::from_matrix(&r);
+    let t = cb - rot * ca;
+    Isometry3::from_parts(t.into(), rot)
+}
+
+/// The starting registration of a tracker-frame model: Kabsch between the nominal predictions and the
+/// measurements.
+pub(crate) fn initial_registration(base: &Base, data: &Dataset, rows: &[usize]) -> Isometry3<f64> {
+    let model = Model::new(vec![], Isometry3::identity());
+    let pre = (vec![vec![0.0; base.chain.dof()]; data.measurements.len()], vec![0.0; data.measurements.len()]);
+    let mut a = Vec::new();
+    let mut b = Vec::new();
+    for &i in rows {
+        let m = &data.measurements[i];
+        if let Ok(p) = model.predict(base, &[], m, pre.1[i], &pre.0[i], None) {
+            a.push(p);
+            b.push(m.position_mm);
+        }
+    }
+    kabsch(&a, &b)
+}
+
+/// `true` when the model has a registration block.
+pub(crate) fn has_registration(model: &Model) -> bool {
+    model.effects.iter().any(|e| e.kind == EffectKind::Registration)
+}

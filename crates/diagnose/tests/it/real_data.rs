@@ -1,0 +1,1 @@
+//! Placeholder for the real-data diagnosis (filled below).
