@@ -57,7 +57,7 @@ impl Default for Config {
             folds: 5,
             frame: FrameMode::Base,
             tool: ToolMode::Known,
-            min_improvement: 0.05,
+            min_improvement: 0.02,
             parsimony: 0.9,
             max_effects: 8,
             seed: 0xd1a6,
