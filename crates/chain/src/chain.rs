@@ -133,6 +133,8 @@ impl FixedRow {
 struct Link {
     /// `Trans(offset + Δp) · R(Δθ)`.
     fixed: Frame,
+    /// `Rx(Δθx)` and `Rx(Δθx) · Ry(Δθy)`: the partial error rotations the parameter Jacobian needs.
+    partial: [Matrix3<f64>; 2],
     axis: AxisKind,
     axis_vec: Vector3<f64>,
     kind: JointKind,
@@ -166,6 +168,8 @@ pub struct Chain {
     tool: FixedRow,
     base_frame: Frame,
     tool_frame: Frame,
+    /// Partial error rotations of the base and tool rows (see [`Link::partial`]).
+    row_partials: [[Matrix3<f64>; 2]; 2],
     links: Vec<Link>,
 }
 
@@ -197,13 +201,22 @@ impl Chain {
             }
             links.push(Link {
                 fixed: Frame::new(joint.error.rotation_matrix(), joint.offset + joint.error.translation),
+                partial: partial_rotations(&joint.error.rotation),
                 axis: AxisKind::classify(&joint.axis),
                 axis_vec: joint.axis.into_inner(),
                 kind: joint.kind,
                 zero: joint.zero,
             });
         }
-        Ok(Self { base_frame: base.frame(), tool_frame: tool.frame(), base, joints, tool, links })
+        Ok(Self {
+            base_frame: base.frame(),
+            tool_frame: tool.frame(),
+            row_partials: [partial_rotations(&base.error.rotation), partial_rotations(&tool.error.rotation)],
+            base,
+            joints,
+            tool,
+            links,
+        })
     }
 
     /// Number of joints.
@@ -241,6 +254,31 @@ impl Chain {
         let mut tool_row = self.tool.clone();
         tool_row.error = tool;
         let js = self.joints.iter().zip(joints).map(|(j, e)| Joint { error: *e, ..j.clone() }).collect();
+        Chain::new(base_row, js, tool_row)
+    }
+
+    /// A copy with the error parameters and the joint zero offsets replaced at once (one construction).
+    pub fn with_errors_and_zeros(
+        &self,
+        base: ErrorParams,
+        joints: &[ErrorParams],
+        tool: ErrorParams,
+        zeros: &[f64],
+    ) -> Result<Chain, ChainError> {
+        if joints.len() != self.dof() || zeros.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: joints.len().min(zeros.len()) });
+        }
+        let mut base_row = self.base.clone();
+        base_row.error = base;
+        let mut tool_row = self.tool.clone();
+        tool_row.error = tool;
+        let js = self
+            .joints
+            .iter()
+            .zip(joints)
+            .zip(zeros)
+            .map(|((j, e), z)| Joint { error: *e, zero: *z, ..j.clone() })
+            .collect();
         Chain::new(base_row, js, tool_row)
     }
 
@@ -386,6 +424,13 @@ impl Chain {
     }
 }
 
+/// `[Rx(a), Rx(a) · Ry(b)]` for error angles `(a, b, c)`.
+fn partial_rotations(angles: &Vector3<f64>) -> [Matrix3<f64>; 2] {
+    let rx = Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), angles.x));
+    let ry = Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), angles.y));
+    [rx, rx * ry]
+}
+
 fn check_row(which: &'static str, row: &FixedRow) -> Result<(), ChainError> {
     let ok = row.translation.iter().all(|v| v.is_finite())
         && row.rotation.coords.iter().all(|v| v.is_finite())
@@ -447,34 +492,32 @@ impl Chain {
         let layout = self.parameter_layout();
         // Collect (column, direction, origin, is_rotation) first; the lever arms need the TCP.
         let mut entries: Vec<(usize, Vector3<f64>, Vector3<f64>, bool)> = Vec::with_capacity(layout.len());
-        let mut push_row = |first: usize, parent: &Frame, row_origin: Vector3<f64>, angles: &Vector3<f64>| {
+        let mut push_row = |first: usize, parent: &Frame, row_origin: Vector3<f64>, partial: &[Matrix3<f64>; 2]| {
             for k in 0..3 {
                 entries.push((first + k, parent.rot.column(k).into_owned(), row_origin, false));
             }
             let ux = parent.rot.column(0).into_owned();
-            let r_a = parent.rot * Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), angles.x));
-            let uy = r_a.column(1).into_owned();
-            let r_ab = r_a * Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), angles.y));
-            let uz = r_ab.column(2).into_owned();
+            let uy = (parent.rot * partial[0]).column(1).into_owned();
+            let uz = (parent.rot * partial[1]).column(2).into_owned();
             entries.push((first + 3, ux, row_origin, true));
             entries.push((first + 4, uy, row_origin, true));
             entries.push((first + 5, uz, row_origin, true));
         };
         let world = Frame::new(Matrix3::identity(), Vector3::zeros());
         let base_origin = self.base.translation + self.base.error.translation;
-        push_row(layout.base(), &world, base_origin, &self.base.error.rotation);
+        push_row(layout.base(), &world, base_origin, &self.row_partials[0]);
         let mut frame = self.base_frame;
         let mut zero_entries = Vec::with_capacity(self.dof());
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
             let origin = frame.rot * link.fixed.trans + frame.trans;
-            push_row(layout.joint(i), &frame, origin, &self.joints[i].error.rotation);
+            push_row(layout.joint(i), &frame, origin, &link.partial);
             frame = frame.mul(&link.fixed);
             let z = frame.rot * link.axis_vec;
             zero_entries.push((layout.zero(i), z, frame.trans, link.kind == JointKind::Revolute));
             Self::apply_joint(link, &mut frame, qi);
         }
         let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
-        push_row(layout.tool(), &frame, tool_origin, &self.tool.error.rotation);
+        push_row(layout.tool(), &frame, tool_origin, &self.row_partials[1]);
         let p = frame.mul(&self.tool_frame).trans;
         let mut jac = Matrix6xX::zeros(layout.len());
         for (col, u, o, rotation) in entries.into_iter().chain(zero_entries) {

@@ -53,6 +53,12 @@ pub enum Command {
     /// URDF: import a serial chain into the extended table (TOML), or export a (deformed) robot as URDF.
     #[command(subcommand)]
     Urdf(UrdfCommand),
+    /// Diagnose the sim-to-real gap: which unmodelled effect explains measured poses, judged on held-out data.
+    #[command(after_help = "Examples:\n  thermokin diagnose --robot configs/irb140.toml --measurements M.csv --json report.json --plot plots/\n  thermokin diagnose --robot robot.toml --measurements tracker.csv --frame tracker --tool unknown\n\nMeasurements CSV: time_min (optional), q1..qn (degrees), x,y,z (mm), optional rx,ry,rz (degrees),\noptional temp_<name> (°C). The authors' results files are accepted too.")]
+    Diagnose(DiagnoseArgs),
+    /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
+    #[command(after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, thermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees,\nminutes and degrees per N·m (default: a seeded random effect of typical size).")]
+    Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
     /// authors' full files when ../shared is present.
     ReproducePaper(ReproduceArgs),
@@ -193,6 +199,78 @@ pub struct CompensateArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+}
+
+/// `diagnose` arguments.
+#[derive(Args, Debug)]
+pub struct DiagnoseArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// Measurement set (CSV).
+    #[arg(long, value_name = "FILE")]
+    pub measurements: PathBuf,
+    /// An explicit test set; replaces cross-validation.
+    #[arg(long, value_name = "FILE")]
+    pub holdout: Option<PathBuf>,
+    /// Frame of the measurements: base (a base misalignment is a candidate) or tracker (an unknown
+    /// registration, always estimated).
+    #[arg(long, value_enum, default_value_t = FrameArg::Base)]
+    pub frame: FrameArg,
+    /// Tool point: known (a tool error is a candidate) or unknown (always estimated).
+    #[arg(long, value_enum, default_value_t = ToolArg::Known)]
+    pub tool: ToolArg,
+    /// Cross-validation folds.
+    #[arg(long, default_value_t = 5)]
+    pub folds: usize,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+    /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
+}
+
+/// `--frame`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FrameArg {
+    /// Robot base frame.
+    Base,
+    /// Laser-tracker frame.
+    Tracker,
+}
+
+/// `--tool`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ToolArg {
+    /// The robot description's tool.
+    Known,
+    /// Estimated.
+    Unknown,
+}
+
+/// `simulate` arguments.
+#[derive(Args, Debug)]
+pub struct SimulateArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// A hidden effect (repeat for several): KIND[:JOINT][=VALUES].
+    #[arg(long = "effect", value_name = "SPEC", required = true)]
+    pub effects: Vec<String>,
+    /// Measurement noise per axis, mm (standard deviation).
+    #[arg(long, default_value_t = 0.005)]
+    pub noise: f64,
+    /// Number of poses.
+    #[arg(long, default_value_t = 240)]
+    pub poses: usize,
+    /// Time span of the measurements, minutes.
+    #[arg(long, default_value_t = 240.0)]
+    pub minutes: f64,
+    /// Seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output measurement CSV (written atomically).
+    #[arg(short, long, value_name = "FILE")]
+    pub out: PathBuf,
 }
 
 /// `reproduce-paper` arguments.

@@ -29,6 +29,8 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
         Command::Ik(a) => ik(a),
         Command::Compensate(a) => compensate(a),
         Command::Urdf(c) => urdf(c),
+        Command::Diagnose(a) => crate::diagnosis::diagnose(a),
+        Command::Simulate(a) => crate::diagnosis::simulate(a),
         Command::ReproducePaper(a) => reproduce::run(a),
     }
 }
@@ -65,7 +67,7 @@ pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
 }
 
 /// The chain fk/ik work on: nominal, or deformed by the table at `--time` under `--profile`.
-fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
+pub fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
     let Some(table) = &loaded.table else { return Ok(loaded.robot.chain.clone()) };
     let table = match (&args.profile, args.time) {
         (Some(p), Some(t)) => p.table_at(table, t).map_err(Failure::input)?,

@@ -152,6 +152,8 @@ pub struct Breakdown {
     pub by_joint_space_region: [f64; 4],
     /// Time quartiles (empty without a time column).
     pub by_time: Vec<f64>,
+    /// |residual| of every measurement, in file order (model fitted on all data), mm.
+    pub per_measurement_mm: Vec<f64>,
 }
 
 /// The diagnosis.
@@ -356,7 +358,8 @@ fn breakdown(base: &Base, data: &Dataset, model: &Model, theta: &[f64], pre: &Pr
         usize::from(elbow[i] > me) * 2 + usize::from(data.measurements[i].q.get(4).copied().unwrap_or(0.0) > 0.0)
     });
     let by_time = if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
-    Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time })
+    let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();
+    Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time, per_measurement_mm })
 }
 
 /// Runs the diagnosis of `data` against `base`. `holdout`, when given, replaces cross-validation.
@@ -476,6 +479,22 @@ pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: 
         current = stats;
         additive.push(TableRow { model: format!("+ {}", effect.label()), stats });
         bic.push(b);
+    }
+    // An exponential drift whose linear twin does as well on held-out data (within the improvement gate)
+    // is reported as the linear one: the smaller model.
+    for k in always..effects.len() {
+        if let (EffectKind::ThermalDrift(DriftShape::Exponential), Some(j)) = (effects[k].kind, effects[k].joint) {
+            let mut swapped = effects.clone();
+            swapped[k] = Effect::at(EffectKind::ThermalDrift(DriftShape::Linear), j);
+            let s = ctx.heldout(&swapped, &ctx.folds)?;
+            if s.heldout_rms_mm <= current.heldout_rms_mm * (1.0 + config.min_improvement) {
+                effects = swapped;
+                current = s;
+                if let Some(row) = additive.get_mut(k - always + 1) {
+                    row.model = format!("+ {} (replaces the exponential)", effects[k].label());
+                }
+            }
+        }
     }
     // Final model on all data.
     let (model, final_fit) = ctx.full_fit(&effects)?;

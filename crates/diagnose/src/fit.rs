@@ -52,12 +52,8 @@ pub struct Fit {
     pub fixed: Vec<FixedParameter>,
     /// Free-parameter mask.
     pub free: Vec<bool>,
-    /// RMS of the 3-D position residual on the training rows, mm.
-    pub rms_mm: f64,
     /// Sum of squared residuals, mm².
     pub ssr: f64,
-    /// LM iterations.
-    pub iterations: usize,
 }
 
 /// Residual rows `measured − predicted` (3 per measurement) and the Jacobian of `predicted`.
@@ -73,9 +69,10 @@ pub(crate) fn residuals(
     let mut r = Vec::with_capacity(rows.len() * 3);
     let mut jac = if with_jacobian { Mat::zeros(rows.len() * 3, model.len) } else { Mat::zeros(0, 0) };
     let mut block = Matrix3xX::zeros(model.len);
+    let mut cache = None;
     for (k, &i) in rows.iter().enumerate() {
         let m = &data.measurements[i];
-        let p = model.predict(base, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block))?;
+        let p = model.predict(base, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;
         r.extend_from_slice(&[d.x, d.y, d.z]);
         if with_jacobian {
@@ -245,16 +242,21 @@ pub(crate) fn fit(
                 for (k, &c) in cols.iter().enumerate() {
                     trial[c] += step[(k, 0)] / scale[k];
                 }
-                let (rt, jt) = residuals(base, model, &trial, data, rows, pre, true)?;
+                // Residuals first; the Jacobian only for an accepted step.
+                let (rt, _) = residuals(base, model, &trial, data, rows, pre, false)?;
                 let ct = ssr(&rt);
                 if ct < cost {
                     let rel = (cost - ct) / cost.max(1e-300);
                     theta = trial;
                     r = rt;
-                    jac = jt;
                     cost = ct;
                     lambda = (lambda * 0.1).max(1e-12);
-                    improved = rel > 1e-12;
+                    // Converged when a step gains less than 1e-9 of the cost: the parameters then move
+                    // by ~1e-5 of their uncertainty.
+                    improved = rel > 1e-9;
+                    if improved {
+                        jac = residuals(base, model, &theta, data, rows, pre, true)?.1;
+                    }
                     break;
                 }
                 lambda *= 10.0;
@@ -278,7 +280,8 @@ pub(crate) fn fit(
             }
         }
     }
-    Ok(Fit { theta, std, fixed, free, rms_mm: (cost / rows.len().max(1) as f64).sqrt(), ssr: cost, iterations })
+    let _ = iterations;
+    Ok(Fit { theta, std, fixed, free, ssr: cost })
 }
 
 /// Closed-form rigid registration (Kabsch): the `T` minimising Σ |b_i − T a_i|².
@@ -314,7 +317,7 @@ pub(crate) fn initial_registration(base: &Base, data: &Dataset, rows: &[usize]) 
     let mut b = Vec::new();
     for &i in rows {
         let m = &data.measurements[i];
-        if let Ok(p) = model.predict(base, &[], m, pre.1[i], &pre.0[i], None) {
+        if let Ok(p) = model.predict(base, &[], m, pre.1[i], &pre.0[i], None, &mut None) {
             a.push(p);
             b.push(m.position_mm);
         }

@@ -12,7 +12,7 @@ use crate::{Dataset, DiagnoseError, Measurement};
 pub enum DriftShape {
     /// `δ · t / 180 min`.
     Linear,
-    /// `δ · (1 − e^(−t/τ))` with τ fitted.
+    /// `δ · (1 − e^(−t/τ)) / (1 − e^(−180/τ))` with τ fitted: δ is the deviation at 180 minutes.
     Exponential,
     /// `δ · (T(t) − T(0))` per kelvin of the mean logged temperature rise.
     Temperature,
@@ -144,6 +144,9 @@ impl Effect {
 
 /// Reference time of the linear drift: the parameters are the deviation at 180 minutes (section 4).
 pub const LINEAR_DRIFT_REFERENCE_MIN: f64 = 180.0;
+/// Largest time constant considered, minutes: beyond it the exponential is indistinguishable from the
+/// linear drift over any warm-up a user measures.
+const MAX_TAU_MIN: f64 = 1e4;
 /// Initial time constant of an exponential drift, minutes.
 const INITIAL_TAU_MIN: f64 = 60.0;
 
@@ -201,10 +204,16 @@ impl Model {
         match shape {
             DriftShape::Linear => (m.time_min / LINEAR_DRIFT_REFERENCE_MIN, 0.0),
             DriftShape::Exponential => {
-                let tau = tau.max(1e-3);
-                let e = (-m.time_min / tau).exp();
-                // d/dτ (1 − e^(−t/τ)) = −e^(−t/τ) · t / τ²
-                (1.0 - e, -e * m.time_min / (tau * tau))
+                // Normalised at the reference time: s(t) = A(t) / A(180) with A(x) = 1 − e^(−x/τ), so that
+                // the six amplitudes are the deviation reached at 180 minutes (as for the linear drift) and
+                // a very slow exponential tends to the linear drift instead of trading a huge amplitude
+                // against a huge τ.
+                let tau = tau.clamp(1e-3, MAX_TAU_MIN);
+                let a = |x: f64| -(-x / tau).exp_m1();
+                let da = |x: f64| -(-x / tau).exp() * x / (tau * tau);
+                let (at, ar) = (a(m.time_min), a(LINEAR_DRIFT_REFERENCE_MIN));
+                let ds = (da(m.time_min) * ar - at * da(LINEAR_DRIFT_REFERENCE_MIN)) / (ar * ar);
+                (at / ar, ds)
             }
             DriftShape::Temperature => (temp_rise, 0.0),
         }
@@ -219,9 +228,9 @@ impl Model {
         temp_rise: f64,
         torques: &[f64],
         jacobian: Option<&mut Matrix3xX<f64>>,
+        cache: &mut Option<Chain>,
     ) -> Result<Vector3<f64>, DiagnoseError> {
         let chain = &base.chain;
-        let n = chain.dof();
         let mut base_err = chain.base().error;
         let mut tool_err = chain.tool().error;
         let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
@@ -253,16 +262,31 @@ impl Model {
                 }
             }
         }
-        let mut registered = chain.with_errors(base_err, &joint_err, tool_err)?.with_zeros(&zeros)?;
-        if self.registration != Isometry3::identity() {
-            // The registration's large rotation sits in the base row's nominal pose; its parameters are
-            // small corrections on top.
-            let mut row = registered.base().clone();
-            let nominal = self.registration * row.nominal();
-            row.translation = nominal.translation.vector;
-            row.rotation = nominal.rotation;
-            registered = registered.with_base(row)?;
-        }
+        // Without a drift the deformed chain is the same for every measurement: build it once per
+        // parameter vector (the caller keeps the cache for one evaluation).
+        let per_measurement = !drift_scale.is_empty();
+        let built;
+        let registered: &Chain = match cache {
+            Some(c) if !per_measurement => c,
+            _ => {
+                let mut c = chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?;
+                if self.registration != Isometry3::identity() {
+                    // The registration's large rotation sits in the base row's nominal pose; its
+                    // parameters are small corrections on top.
+                    let mut row = c.base().clone();
+                    let nominal = self.registration * row.nominal();
+                    row.translation = nominal.translation.vector;
+                    row.rotation = nominal.rotation;
+                    c = c.with_base(row)?;
+                }
+                if per_measurement {
+                    built = c;
+                    &built
+                } else {
+                    cache.insert(c)
+                }
+            }
+        };
         let p = registered.tool_position_rotation(&q)?.0;
         if let Some(jac) = jacobian {
             let pj = registered.parameter_jacobian(&q)?;

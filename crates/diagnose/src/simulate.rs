@@ -69,7 +69,7 @@ pub fn simulate(base: &Base, hidden: &[HiddenEffect], config: &SimulationConfig)
     }
     let pre = prepare(base, &data);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let p = model.predict(base, &theta, m, pre.1[i], &pre.0[i], None)?;
+        let p = model.predict(base, &theta, m, pre.1[i], &pre.0[i], None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
     }

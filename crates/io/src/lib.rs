@@ -7,12 +7,14 @@
 
 mod csvtext;
 mod deviation;
+mod measurements;
 mod paper;
 mod robot;
 mod targets;
 mod write;
 
 pub use deviation::{read_deviation_table, read_deviation_table_for, read_temperature_log};
+pub use measurements::{read_measurements, write_measurements};
 pub use paper::{PaperResultRow, read_paper_results};
 pub use robot::{LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml};
 pub use targets::{DEFAULT_ORIENTATION_DEG, Target, read_targets};

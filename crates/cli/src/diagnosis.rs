@@ -1,0 +1,228 @@
+//! `thermokin diagnose` and `thermokin simulate`: the sim-to-real diagnosis on a measurement set, and
+//! measurement sets generated from hidden effects.
+
+use std::path::Path;
+
+use anyhow::anyhow;
+use plotters::prelude::*;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use thermokin_diagnose::{
+    Base, Config, DriftShape, Effect, EffectKind, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode,
+};
+use thermokin_io::{read_measurements, write_atomic, write_atomic_with, write_measurements};
+
+use crate::args::{DiagnoseArgs, FrameArg, SimulateArgs, ToolArg};
+use crate::commands::{load, working_chain};
+use crate::{Failure, exit};
+
+pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
+    if a.robot.profile.is_some() || a.robot.time.is_some() {
+        return Err(Failure::input(anyhow!("diagnose takes a static robot: drop --profile/--time (thermal drift is a candidate effect)")));
+    }
+    if a.folds < 2 {
+        return Err(Failure::input(anyhow!("--folds must be at least 2")));
+    }
+    let loaded = load(&a.robot)?;
+    let chain = working_chain(&a.robot, &loaded)?;
+    let data = read_measurements(&a.measurements, chain.dof()).map_err(Failure::input)?;
+    let holdout = match &a.holdout {
+        Some(p) => Some(read_measurements(p, chain.dof()).map_err(Failure::input)?),
+        None => None,
+    };
+    let config = Config {
+        folds: a.folds,
+        frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },
+        tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
+        ..Config::default()
+    };
+    let base = Base { chain, masses: loaded.robot.masses.clone() };
+    let report = thermokin_diagnose::diagnose(&base, &data, holdout.as_ref(), &config).map_err(Failure::input)?;
+    print_report(&report);
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
+        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+    }
+    if let Some(dir) = &a.plot {
+        std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
+        plot_residuals(&dir.join("residuals.svg"), &report).map_err(Failure::internal)?;
+        plot_additive(&dir.join("heldout-per-effect.svg"), &report).map_err(Failure::internal)?;
+    }
+    Ok(exit::OK)
+}
+
+fn print_report(r: &Report) {
+    println!("validation: {}", r.validation);
+    println!("\nheld-out error as effects are added (mm):");
+    println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
+    for row in &r.additive {
+        println!("  {:<44} {:>9.4} {:>9.4} {:>9.4}", row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm);
+    }
+    if !r.leave_one_out.is_empty() {
+        println!("\nleave one out (mm):");
+        for row in &r.leave_one_out {
+            println!("  {:<44} {:>9.4} {:>9.4} {:>9.4}", row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm);
+        }
+    }
+    println!("\neffects, main cause first:");
+    if r.effects.is_empty() {
+        println!("  none: no candidate lowers the held-out error by 2 % or more");
+    }
+    for e in &r.effects {
+        println!(
+            "  {:<30} held-out RMS {:.4} → {:.4} mm (without it: {:.4}){}",
+            e.label,
+            e.heldout_rms_before_mm,
+            e.heldout_rms_after_mm,
+            e.heldout_rms_without_mm,
+            if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
+        );
+        for (name, v) in &e.parameters {
+            println!("      {name:<44} {:>12.6} ± {:.6}", v.value, v.std);
+        }
+    }
+    if let Some(o) = &r.identifiability.observability {
+        println!(
+            "\nidentifiability: {} parameters from {} residuals; condition number {:.3e}; O1 {:.3e} O2 {:.3e} O3 {:.3e} O4 {:.3e} O5 {:.3e}",
+            o.parameters, o.rows, o.condition_number, o.o1, o.o2, o.o3, o.o4, o.o5
+        );
+    }
+    for f in &r.identifiability.fixed {
+        println!("  fixed {}: {}", f.parameter, f.reason);
+    }
+}
+
+fn plot_residuals(path: &Path, r: &Report) -> anyhow::Result<()> {
+    let before = &r.residuals_before.per_measurement_mm;
+    let after = &r.residuals_after.per_measurement_mm;
+    let y_max = before.iter().chain(after).copied().fold(1e-6, f64::max) * 1.1;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 500)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Position residual per measurement, before and after", ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0usize..before.len().max(1), 0.0..y_max)?;
+        chart.configure_mesh().x_desc("measurement").y_desc("|residual| [mm]").draw()?;
+        chart
+            .draw_series(before.iter().enumerate().map(|(i, v)| Circle::new((i, *v), 3, RED.filled())))?
+            .label("nominal model")
+            .legend(|(x, y)| Circle::new((x + 10, y), 3, RED.filled()));
+        chart
+            .draw_series(after.iter().enumerate().map(|(i, v)| Circle::new((i, *v), 3, BLUE.filled())))?
+            .label("with the effects found")
+            .legend(|(x, y)| Circle::new((x + 10, y), 3, BLUE.filled()));
+        chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
+        root.present()?;
+    }
+    write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
+}
+
+fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
+    let rows = &r.additive;
+    let y_max = rows.iter().map(|x| x.stats.heldout_rms_mm).fold(1e-6, f64::max) * 1.1;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 500)).into_drawing_area();
+        root.fill(&WHITE)?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption("Held-out RMS as effects are added", ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(60)
+            .y_label_area_size(60)
+            .build_cartesian_2d((0..rows.len()).into_segmented(), 0.0..y_max)?;
+        chart
+            .configure_mesh()
+            .y_desc("held-out RMS [mm]")
+            .x_label_formatter(&|v| match v {
+                SegmentValue::CenterOf(i) => rows.get(*i).map_or(String::new(), |r| r.model.clone()),
+                _ => String::new(),
+            })
+            .draw()?;
+        chart.draw_series(
+            Histogram::vertical(&chart).style(BLUE.mix(0.6).filled()).data(rows.iter().enumerate().map(|(i, r)| (i, r.stats.heldout_rms_mm))),
+        )?;
+        root.present()?;
+    }
+    write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
+}
+
+/// Parses `KIND[:JOINT][=VALUES]` into a hidden effect (report units → internal), with a seeded random
+/// effect of typical size when no values are given.
+fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<HiddenEffect> {
+    let (head, values) = match spec.split_once('=') {
+        Some((h, v)) => (h, Some(crate::args::parse_list("effect", v)?)),
+        None => (spec, None),
+    };
+    let (kind, joint) = match head.split_once(':') {
+        Some((k, j)) => {
+            let j: usize = j.parse().map_err(|_| anyhow!("--effect {spec}: joint `{j}` is not a number"))?;
+            anyhow::ensure!((1..=dof).contains(&j), "--effect {spec}: joint {j} is not in 1..={dof}");
+            (k, Some(j - 1))
+        }
+        None => (head, None),
+    };
+    let kind = match kind {
+        "base_frame" => EffectKind::BaseFrame,
+        "tool_frame" => EffectKind::ToolFrame,
+        "joint_offset" => EffectKind::JointOffset,
+        "link_deviation" => EffectKind::LinkDeviation,
+        "joint_compliance" => EffectKind::JointCompliance,
+        "thermal_drift" => EffectKind::ThermalDrift(DriftShape::Linear),
+        "thermal_drift_exp" => EffectKind::ThermalDrift(DriftShape::Exponential),
+        other => anyhow::bail!("--effect {spec}: unknown effect `{other}`"),
+    };
+    let global = matches!(kind, EffectKind::BaseFrame | EffectKind::ToolFrame);
+    anyhow::ensure!(global == joint.is_none(), "--effect {spec}: {} a joint", if global { "takes no" } else { "needs" });
+    let effect = Effect { kind, joint };
+    let report_units: Vec<f64> = match values {
+        Some(v) => {
+            anyhow::ensure!(v.len() == effect.len(), "--effect {spec}: {} values for {} parameters", v.len(), effect.len());
+            v
+        }
+        None => (0..effect.len())
+            .map(|k| match (kind, k) {
+                (EffectKind::JointOffset, _) => rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 },
+                (EffectKind::JointCompliance, _) => rng.random_range(5e-4..1.5e-3),
+                (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
+                (EffectKind::ToolFrame, _) | (_, 0..=2) => rng.random_range(-0.4..0.4),
+                _ => rng.random_range(-0.02..0.02),
+            })
+            .collect(),
+    };
+    // Report units → internal: degrees → radians for angles, compliance degrees per N·m → rad per N·m.
+    let values = report_units
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| match (kind, k) {
+            (EffectKind::JointOffset | EffectKind::JointCompliance, _) => v.to_radians(),
+            (EffectKind::ToolFrame, _) => v,
+            (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => v,
+            (_, 3..=5) => v.to_radians(),
+            _ => v,
+        })
+        .collect();
+    Ok(HiddenEffect { effect, values })
+}
+
+pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
+    if !(a.noise.is_finite() && a.noise >= 0.0) || !(a.minutes.is_finite() && a.minutes >= 0.0) || a.poses == 0 {
+        return Err(Failure::input(anyhow!("--noise and --minutes must be ≥ 0 and --poses positive")));
+    }
+    let loaded = load(&a.robot)?;
+    let chain = working_chain(&a.robot, &loaded)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
+    let hidden = a.effects.iter().map(|s| parse_effect(s, chain.dof(), &mut rng)).collect::<anyhow::Result<Vec<_>>>().map_err(Failure::input)?;
+    let base = Base { chain, masses: loaded.robot.masses.clone() };
+    let config = SimulationConfig { poses: a.poses, minutes: a.minutes, noise_mm: a.noise, seed: a.seed, ..SimulationConfig::default() };
+    let data = thermokin_diagnose::simulate(&base, &hidden, &config).map_err(Failure::input)?;
+    write_atomic_with(&a.out, |w| write_measurements(w, &data)).map_err(Failure::internal)?;
+    for h in &hidden {
+        println!("hidden {}: {:?}", h.effect.label(), h.values);
+    }
+    println!("{} poses over {} min, noise {} mm → {}", a.poses, a.minutes, a.noise, a.out.display());
+    Ok(exit::OK)
+}

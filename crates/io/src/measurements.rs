@@ -1,0 +1,101 @@
+//! Measurement sets for identification and diagnosis: `time_min` (optional), `q1..qn` (degrees), `x,y,z`
+//! (mm), optional `rx,ry,rz` (degrees, read and checked, not used: positions drive the diagnosis), optional
+//! `temp_<name>` (°C). The authors' results files are accepted too (their joints and reached coordinates).
+
+use std::path::Path;
+
+use nalgebra::Vector3;
+use thermokin_diagnose::{Dataset, Measurement};
+
+use crate::csvtext::{column, number, records};
+use crate::{read_paper_results, read_text, IoError};
+
+/// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
+pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
+    let text = read_text(path)?;
+    if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
+        let rows = read_paper_results(path)?;
+        let measurements = rows
+            .into_iter()
+            .map(|r| Measurement {
+                time_min: r.time_min,
+                q: r.joints_deg.iter().map(|d| d.to_radians()).collect(),
+                position_mm: r.reached_mm,
+                temps: Vec::new(),
+            })
+            .collect();
+        return Ok(Dataset { measurements, temperature_names: Vec::new() });
+    }
+    let recs = records(path, &text)?;
+    let Some((header, rows)) = recs.split_first() else {
+        return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
+    };
+    let need = |name: &str| column(header, name).ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")));
+    let q_cols: Vec<usize> = (1..=dof).map(|i| need(&format!("q{i}"))).collect::<Result<_, _>>()?;
+    if column(header, &format!("q{}", dof + 1)).is_some() {
+        return Err(IoError::input(path, Some(header.line), format!("q{}", dof + 1), format!("more joint columns than the robot's {dof} joints")));
+    }
+    let p_cols: Vec<usize> = ["x", "y", "z"].iter().map(|n| need(n)).collect::<Result<_, _>>()?;
+    let t_col = column(header, "time_min");
+    let temp_cols: Vec<(usize, String)> = header
+        .cells
+        .iter()
+        .enumerate()
+        .filter_map(|(i, c)| c.strip_prefix("temp_").map(|n| (i, n.to_string())))
+        .collect();
+    let r_cols: Vec<Option<usize>> = ["rx", "ry", "rz"].iter().map(|n| column(header, n)).collect();
+    let mut measurements = Vec::with_capacity(rows.len());
+    for r in rows {
+        if r.cells.len() != header.cells.len() {
+            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {}", r.cells.len(), header.cells.len())));
+        }
+        let q = q_cols
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(f64::to_radians))
+            .collect::<Result<Vec<_>, _>>()?;
+        let p = Vector3::new(
+            number(path, r.line, "x", &r.cells[p_cols[0]])?,
+            number(path, r.line, "y", &r.cells[p_cols[1]])?,
+            number(path, r.line, "z", &r.cells[p_cols[2]])?,
+        );
+        for (name, c) in ["rx", "ry", "rz"].iter().zip(&r_cols) {
+            if let Some(c) = c {
+                number(path, r.line, name, &r.cells[*c])?;
+            }
+        }
+        let time_min = match t_col {
+            Some(c) => {
+                let t = number(path, r.line, "time_min", &r.cells[c])?;
+                if t < 0.0 {
+                    return Err(IoError::input(path, Some(r.line), "time_min", format!("{t} is negative")));
+                }
+                t
+            }
+            None => 0.0,
+        };
+        let temps = temp_cols
+            .iter()
+            .map(|(c, n)| number(path, r.line, &format!("temp_{n}"), &r.cells[*c]))
+            .collect::<Result<Vec<_>, _>>()?;
+        measurements.push(Measurement { time_min, q, position_mm: p, temps });
+    }
+    if measurements.is_empty() {
+        return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
+    }
+    Ok(Dataset { measurements, temperature_names: temp_cols.into_iter().map(|(_, n)| n).collect() })
+}
+
+/// Writes a measurement set in the format [`read_measurements`] reads (degrees, mm).
+pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset) -> std::io::Result<()> {
+    let n = data.measurements.first().map_or(0, |m| m.q.len());
+    let qs: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
+    let temps: Vec<String> = data.temperature_names.iter().map(|t| format!(",temp_{t}")).collect();
+    writeln!(out, "time_min,{},x,y,z{}", qs.join(","), temps.concat())?;
+    for m in &data.measurements {
+        let q: Vec<String> = m.q.iter().map(|v| format!("{:?}", v.to_degrees())).collect();
+        let t: Vec<String> = m.temps.iter().map(|v| format!(",{v:?}")).collect();
+        writeln!(out, "{:?},{},{:?},{:?},{:?}{}", m.time_min, q.join(","), m.position_mm.x, m.position_mm.y, m.position_mm.z, t.concat())?;
+    }
+    Ok(())
+}
