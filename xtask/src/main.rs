@@ -179,6 +179,19 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
             "clap",
         ],
     ),
+    (
+        "thermokin-diagnose",
+        &[
+            "thermokin-io",
+            "thermokin-deform",
+            "thermokin-ik",
+            "thermokin-compensate",
+            "thermokin",
+            "toml",
+            "csv",
+            "clap",
+        ],
+    ),
     ("thermokin-compensate", &["thermokin-io", "thermokin", "toml", "csv", "clap"]),
 ];
 

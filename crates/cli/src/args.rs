@@ -54,10 +54,14 @@ pub enum Command {
     #[command(subcommand)]
     Urdf(UrdfCommand),
     /// Diagnose the sim-to-real gap: which unmodelled effect explains measured poses, judged on held-out data.
-    #[command(after_help = "Examples:\n  thermokin diagnose --robot configs/irb140.toml --measurements M.csv --json report.json --plot plots/\n  thermokin diagnose --robot robot.toml --measurements tracker.csv --frame tracker --tool unknown\n\nMeasurements CSV: time_min (optional), q1..qn (degrees), x,y,z (mm), optional rx,ry,rz (degrees),\noptional temp_<name> (°C). The authors' results files are accepted too.")]
+    #[command(
+        after_help = "Examples:\n  thermokin diagnose --robot configs/irb140.toml --measurements M.csv --json report.json --plot plots/\n  thermokin diagnose --robot robot.toml --measurements tracker.csv --frame tracker --tool unknown\n\nMeasurements CSV: time_min (optional), q1..qn (degrees), x,y,z (mm), optional rx,ry,rz (degrees),\noptional temp_<name> (°C). The authors' results files are accepted too."
+    )]
     Diagnose(DiagnoseArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
-    #[command(after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, thermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees,\nminutes and degrees per N·m (default: a seeded random effect of typical size).")]
+    #[command(
+        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, thermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees,\nminutes and degrees per N·m (default: a seeded random effect of typical size)."
+    )]
     Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
     /// authors' full files when ../shared is present.
@@ -253,7 +257,7 @@ pub enum ToolArg {
 pub struct SimulateArgs {
     #[command(flatten)]
     pub robot: RobotArgs,
-    /// A hidden effect (repeat for several): KIND[:JOINT][=VALUES].
+    /// A hidden effect (repeat for several): `KIND[:JOINT][=VALUES]`.
     #[arg(long = "effect", value_name = "SPEC", required = true)]
     pub effects: Vec<String>,
     /// Measurement noise per axis, mm (standard deviation).

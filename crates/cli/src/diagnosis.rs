@@ -18,7 +18,9 @@ use crate::{Failure, exit};
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() {
-        return Err(Failure::input(anyhow!("diagnose takes a static robot: drop --profile/--time (thermal drift is a candidate effect)")));
+        return Err(Failure::input(anyhow!(
+            "diagnose takes a static robot: drop --profile/--time (thermal drift is a candidate effect)"
+        )));
     }
     if a.folds < 2 {
         return Err(Failure::input(anyhow!("--folds must be at least 2")));
@@ -56,12 +58,18 @@ fn print_report(r: &Report) {
     println!("\nheld-out error as effects are added (mm):");
     println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
     for row in &r.additive {
-        println!("  {:<44} {:>9.4} {:>9.4} {:>9.4}", row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm);
+        println!(
+            "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
+            row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+        );
     }
     if !r.leave_one_out.is_empty() {
         println!("\nleave one out (mm):");
         for row in &r.leave_one_out {
-            println!("  {:<44} {:>9.4} {:>9.4} {:>9.4}", row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm);
+            println!(
+                "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
+                row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+            );
         }
     }
     println!("\neffects, main cause first:");
@@ -143,7 +151,9 @@ fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
             })
             .draw()?;
         chart.draw_series(
-            Histogram::vertical(&chart).style(BLUE.mix(0.6).filled()).data(rows.iter().enumerate().map(|(i, r)| (i, r.stats.heldout_rms_mm))),
+            Histogram::vertical(&chart)
+                .style(BLUE.mix(0.6).filled())
+                .data(rows.iter().enumerate().map(|(i, r)| (i, r.stats.heldout_rms_mm))),
         )?;
         root.present()?;
     }
@@ -176,16 +186,27 @@ fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<
         other => anyhow::bail!("--effect {spec}: unknown effect `{other}`"),
     };
     let global = matches!(kind, EffectKind::BaseFrame | EffectKind::ToolFrame);
-    anyhow::ensure!(global == joint.is_none(), "--effect {spec}: {} a joint", if global { "takes no" } else { "needs" });
+    anyhow::ensure!(
+        global == joint.is_none(),
+        "--effect {spec}: {}",
+        if global { "takes no joint" } else { "needs a joint" }
+    );
     let effect = Effect { kind, joint };
     let report_units: Vec<f64> = match values {
         Some(v) => {
-            anyhow::ensure!(v.len() == effect.len(), "--effect {spec}: {} values for {} parameters", v.len(), effect.len());
+            anyhow::ensure!(
+                v.len() == effect.len(),
+                "--effect {spec}: {} values for {} parameters",
+                v.len(),
+                effect.len()
+            );
             v
         }
         None => (0..effect.len())
             .map(|k| match (kind, k) {
-                (EffectKind::JointOffset, _) => rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 },
+                (EffectKind::JointOffset, _) => {
+                    rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
+                }
                 (EffectKind::JointCompliance, _) => rng.random_range(5e-4..1.5e-3),
                 (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
                 (EffectKind::ToolFrame, _) | (_, 0..=2) => rng.random_range(-0.4..0.4),
@@ -209,15 +230,27 @@ fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<
 }
 
 pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
-    if !(a.noise.is_finite() && a.noise >= 0.0) || !(a.minutes.is_finite() && a.minutes >= 0.0) || a.poses == 0 {
+    let ok = a.noise.is_finite() && a.noise >= 0.0 && a.minutes.is_finite() && a.minutes >= 0.0 && a.poses > 0;
+    if !ok {
         return Err(Failure::input(anyhow!("--noise and --minutes must be ≥ 0 and --poses positive")));
     }
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
-    let hidden = a.effects.iter().map(|s| parse_effect(s, chain.dof(), &mut rng)).collect::<anyhow::Result<Vec<_>>>().map_err(Failure::input)?;
+    let hidden = a
+        .effects
+        .iter()
+        .map(|s| parse_effect(s, chain.dof(), &mut rng))
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(Failure::input)?;
     let base = Base { chain, masses: loaded.robot.masses.clone() };
-    let config = SimulationConfig { poses: a.poses, minutes: a.minutes, noise_mm: a.noise, seed: a.seed, ..SimulationConfig::default() };
+    let config = SimulationConfig {
+        poses: a.poses,
+        minutes: a.minutes,
+        noise_mm: a.noise,
+        seed: a.seed,
+        ..SimulationConfig::default()
+    };
     let data = thermokin_diagnose::simulate(&base, &hidden, &config).map_err(Failure::input)?;
     write_atomic_with(&a.out, |w| write_measurements(w, &data)).map_err(Failure::internal)?;
     for h in &hidden {

@@ -4,14 +4,16 @@
 use std::collections::BTreeMap;
 
 use nalgebra::Isometry3;
-use rand::seq::SliceRandom;
 use rand::SeedableRng;
+use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::fit::{fit, has_registration, identifiable, initial_registration, observability, residuals, FixedParameter, Observability};
-use crate::model::{prepare, Base, DriftShape, Effect, EffectKind, Model};
+use crate::fit::{
+    FixedParameter, Observability, fit, has_registration, identifiable, initial_registration, observability, residuals,
+};
+use crate::model::{Base, DriftShape, Effect, EffectKind, Model, prepare};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -180,6 +182,8 @@ pub struct Report {
 }
 
 type Pre = (Vec<Vec<f64>>, Vec<f64>);
+/// A scored candidate: the effect, its newly identifiable parameters, its held-out statistics.
+type Scored = Result<Option<(Effect, usize, Stats)>, DiagnoseError>;
 type Folds = Vec<(Vec<usize>, Vec<usize>)>;
 
 /// Folds grouped in time when the data span time — the time-ordered measurements cut into chunks, fold
@@ -357,20 +361,34 @@ fn breakdown(base: &Base, data: &Dataset, model: &Model, theta: &[f64], pre: &Pr
     let by_joint_space_region = region(&|i| {
         usize::from(elbow[i] > me) * 2 + usize::from(data.measurements[i].q.get(4).copied().unwrap_or(0.0) > 0.0)
     });
-    let by_time = if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
+    let by_time =
+        if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
     let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();
     Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time, per_measurement_mm })
 }
 
 /// Runs the diagnosis of `data` against `base`. `holdout`, when given, replaces cross-validation.
-pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: &Config) -> Result<Report, DiagnoseError> {
+pub fn diagnose(
+    base: &Base,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+) -> Result<Report, DiagnoseError> {
     let n = base.chain.dof();
     if data.len() < 2 * config.folds.max(2) {
-        return Err(DiagnoseError::Input(format!("{} measurements are too few for {}-fold cross-validation", data.len(), config.folds)));
+        return Err(DiagnoseError::Input(format!(
+            "{} measurements are too few for {}-fold cross-validation",
+            data.len(),
+            config.folds
+        )));
     }
     for (i, m) in data.measurements.iter().chain(holdout.iter().flat_map(|h| h.measurements.iter())).enumerate() {
         if m.q.len() != n {
-            return Err(DiagnoseError::Input(format!("measurement {}: {} joint values for {n} joints", i + 1, m.q.len())));
+            return Err(DiagnoseError::Input(format!(
+                "measurement {}: {} joint values for {n} joints",
+                i + 1,
+                m.q.len()
+            )));
         }
     }
     let ctx = Ctx {
@@ -384,7 +402,10 @@ pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: 
     let validation = if holdout.is_some() {
         "explicit hold-out set (model fitted on all measurements)".to_string()
     } else if data.time_span() > 0.0 {
-        format!("{}-fold cross-validation, folds grouped in time; time-dependent effects also forward-chained", config.folds)
+        format!(
+            "{}-fold cross-validation, folds grouped in time; time-dependent effects also forward-chained",
+            config.folds
+        )
     } else {
         format!("{}-fold cross-validation (seeded shuffle)", config.folds)
     };
@@ -404,27 +425,51 @@ pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: 
     let mut skipped: Vec<(String, String)> = Vec::new();
     let mut pool = candidates(base, data, config);
     while effects.len() - always < config.max_effects && !pool.is_empty() {
-        // Identifiability gate, then held-out error of each remaining candidate (in parallel).
-        let scored: Vec<Result<Option<(Effect, usize, Stats)>, DiagnoseError>> = pool
-            .par_iter()
-            .map(|&c| {
-                let (new, fixed) = ctx.new_free(&effects, c)?;
-                if new == 0 {
-                    return Ok(None);
-                }
-                let _ = fixed;
-                let mut with = effects.clone();
-                with.push(c);
-                Ok(Some((c, new, ctx.heldout(&with, &ctx.folds)?)))
+        // Identifiability gate, then held-out error of each remaining candidate (in parallel). An
+        // exponential drift refines the linear one of its joint: it is scored only where the linear drift
+        // already earns half the best gain (it costs a model per measurement and a nonlinear τ).
+        let score = |c: &Effect| -> Scored {
+            let (new, _) = ctx.new_free(&effects, *c)?;
+            if new == 0 {
+                return Ok(None);
+            }
+            let mut with = effects.clone();
+            with.push(*c);
+            Ok(Some((*c, new, ctx.heldout(&with, &ctx.folds)?)))
+        };
+        let is_exp = |c: &Effect| c.kind == EffectKind::ThermalDrift(DriftShape::Exponential);
+        let first: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
+        let mut scored: Vec<(Effect, Scored)> = first.par_iter().map(|c| (*c, score(c))).collect();
+        let best_gain = scored
+            .iter()
+            .filter_map(|(_, r)| {
+                r.as_ref().ok().and_then(|o| o.as_ref()).map(|s| current.heldout_rms_mm - s.2.heldout_rms_mm)
             })
+            .fold(0.0, f64::max);
+        let linear_gain = |j: Option<usize>| {
+            scored
+                .iter()
+                .filter(|(c, _)| c.kind == EffectKind::ThermalDrift(DriftShape::Linear) && c.joint == j)
+                .filter_map(|(_, r)| {
+                    r.as_ref().ok().and_then(|o| o.as_ref()).map(|s| current.heldout_rms_mm - s.2.heldout_rms_mm)
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        let second: Vec<Effect> = pool
+            .iter()
+            .copied()
+            .filter(|c| is_exp(c) && linear_gain(c.joint) >= 0.5 * best_gain && best_gain > 0.0)
             .collect();
+        scored.extend(second.par_iter().map(|c| (*c, score(c))).collect::<Vec<_>>());
+        let deferred: Vec<Effect> = pool.iter().copied().filter(|c| is_exp(c) && !second.contains(c)).collect();
         let mut results = Vec::new();
-        let mut still = Vec::new();
-        for (c, r) in pool.iter().zip(scored) {
-            match r? {
+        let mut still = deferred;
+        for (c, r) in &scored {
+            match r.clone()? {
                 None => {
                     let (_, fixed) = ctx.new_free(&effects, *c)?;
-                    let reason = fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone());
+                    let reason =
+                        fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone());
                     if c.is_reported() {
                         skipped.push((c.label(), reason));
                     }
@@ -442,13 +487,12 @@ pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: 
             break;
         }
         // Parsimony: the smallest block within `parsimony` of the best gain; then the lowest error.
-        let mut eligible: Vec<&(Effect, usize, Stats)> = results
-            .iter()
-            .filter(|r| current.heldout_rms_mm - r.2.heldout_rms_mm >= config.parsimony * gain)
-            .collect();
+        let mut eligible: Vec<&(Effect, usize, Stats)> =
+            results.iter().filter(|r| current.heldout_rms_mm - r.2.heldout_rms_mm >= config.parsimony * gain).collect();
         // Ties between blocks of one size go to the conventional one (base_frame, tool_frame,
         // joint_offset), which the report names; its equivalents are listed beside it.
-        let conventional = |e: &Effect| matches!(e.kind, EffectKind::BaseFrame | EffectKind::ToolFrame | EffectKind::JointOffset);
+        let conventional =
+            |e: &Effect| matches!(e.kind, EffectKind::BaseFrame | EffectKind::ToolFrame | EffectKind::JointOffset);
         eligible.sort_by(|a, b| {
             a.1.cmp(&b.1)
                 .then(conventional(&b.0).cmp(&conventional(&a.0)))
@@ -521,7 +565,10 @@ pub fn diagnose(base: &Base, data: &Dataset, holdout: Option<&Dataset>, config: 
                 .map(|p| {
                     let v = final_fit.theta[o + p];
                     let s = final_fit.std[o + p];
-                    (names[o + p].clone(), ParameterValue { value: e.to_report_units(p, v), std: e.to_report_units(p, s).abs() })
+                    (
+                        names[o + p].clone(),
+                        ParameterValue { value: e.to_report_units(p, v), std: e.to_report_units(p, s).abs() },
+                    )
                 })
                 .collect();
             let mut equivalent = static_equivalents(&e, n);

@@ -110,7 +110,10 @@ pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> 
             continue;
         }
         let Some(v0) = unit(c) else {
-            fixed.push(FixedParameter { parameter: names[c].clone(), reason: "no effect on the measured positions".into() });
+            fixed.push(FixedParameter {
+                parameter: names[c].clone(),
+                reason: "no effect on the measured positions".into(),
+            });
             continue;
         };
         let mut v = v0.clone();
@@ -272,12 +275,12 @@ pub(crate) fn fit(
     let dof = (m - p as f64).max(1.0);
     let sigma2 = cost / dof;
     let mut std = vec![f64::NAN; model.len];
-    if p > 0 {
-        if let Ok(llt) = last_a.llt(faer::Side::Lower) {
-            let inv = llt.inverse();
-            for (k, &c) in cols.iter().enumerate() {
-                std[c] = (sigma2 * inv[(k, k)]).max(0.0).sqrt() / scale[k];
-            }
+    if p > 0
+        && let Ok(llt) = last_a.llt(faer::Side::Lower)
+    {
+        let inv = llt.inverse();
+        for (k, &c) in cols.iter().enumerate() {
+            std[c] = (sigma2 * inv[(k, k)]).max(0.0).sqrt() / scale[k];
         }
     }
     let _ = iterations;

@@ -13,10 +13,13 @@ mod fit;
 mod model;
 mod simulate;
 
-pub use diagnose::{diagnose, Breakdown, Config, EffectReport, FrameMode, Identifiability, ParameterValue, Report, Stats, TableRow, ToolMode};
+pub use diagnose::{
+    Breakdown, Config, EffectReport, FrameMode, Identifiability, ParameterValue, Report, Stats, TableRow, ToolMode,
+    diagnose,
+};
 pub use fit::{FixedParameter, Observability};
-pub use model::{gravity_torques, Base, DriftShape, Effect, EffectKind, Model};
-pub use simulate::{simulate, HiddenEffect, SimulationConfig};
+pub use model::{Base, DriftShape, Effect, EffectKind, Model, gravity_torques};
+pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 
 use nalgebra::Vector3;
 use thermokin_chain::ChainError;
@@ -54,7 +57,10 @@ impl Dataset {
     }
     /// The time span covered, minutes.
     pub fn time_span(&self) -> f64 {
-        let (lo, hi) = self.measurements.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.time_min), h.max(m.time_min)));
+        let (lo, hi) = self
+            .measurements
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.time_min), h.max(m.time_min)));
         if lo.is_finite() { hi - lo } else { 0.0 }
     }
 }

@@ -237,7 +237,9 @@ impl Model {
         let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
         let mut q = m.q.clone();
         let mut drift_scale: Vec<(usize, f64, f64)> = Vec::new(); // (effect index, s, ds/dτ)
-        let six = |o: usize| ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]]);
+        let six = |o: usize| {
+            ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
+        };
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
             match e.kind {
                 EffectKind::Registration | EffectKind::BaseFrame => base_err = base_err.add(&six(o)),
@@ -300,10 +302,16 @@ impl Model {
                     }
                 };
                 match e.kind {
-                    EffectKind::Registration | EffectKind::BaseFrame => (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0)),
-                    EffectKind::ToolPoint | EffectKind::ToolFrame => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                    EffectKind::Registration | EffectKind::BaseFrame => {
+                        (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0))
+                    }
+                    EffectKind::ToolPoint | EffectKind::ToolFrame => {
+                        (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0))
+                    }
                     EffectKind::JointOffset => copy(o, layout.zero(e.joint.unwrap_or(0)), 1.0),
-                    EffectKind::LinkDeviation => (0..6).for_each(|c| copy(o + c, layout.joint(e.joint.unwrap_or(0)) + c, 1.0)),
+                    EffectKind::LinkDeviation => {
+                        (0..6).for_each(|c| copy(o + c, layout.joint(e.joint.unwrap_or(0)) + c, 1.0))
+                    }
                     EffectKind::JointCompliance => {
                         let j = e.joint.unwrap_or(0);
                         let scale = if chain.joints()[j].kind == JointKind::Revolute { torques[j] } else { 0.0 };
@@ -337,7 +345,9 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
     let Ok(frames) = chain.joint_frames(q) else { return vec![0.0; n] };
     let g = Vector3::new(0.0, 0.0, -9.81);
     let coms: Vec<Option<(f64, Vector3<f64>)>> = (0..n)
-        .map(|l| masses.get(l).copied().flatten().map(|m| (m.mass_kg, (frames[l] * nalgebra::Point3::from(m.com_mm)).coords)))
+        .map(|l| {
+            masses.get(l).copied().flatten().map(|m| (m.mass_kg, (frames[l] * nalgebra::Point3::from(m.com_mm)).coords))
+        })
         .collect();
     (0..n)
         .map(|j| {
@@ -355,7 +365,8 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
 /// Per-measurement quantities that do not depend on the parameters: gravity torques and temperature rise.
 pub(crate) fn prepare(base: &Base, data: &Dataset) -> (Vec<Vec<f64>>, Vec<f64>) {
     let torques = data.measurements.iter().map(|m| gravity_torques(&base.chain, &base.masses, &m.q)).collect();
-    let first: Option<Vec<f64>> = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
+    let first: Option<Vec<f64>> =
+        data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
     let rise = data
         .measurements
         .iter()

@@ -1,11 +1,11 @@
 //! Measurement sets generated from hidden effects, to check that the diagnosis finds what it is not told.
 
+use self::rand_distr_free::normal;
 use nalgebra::{Isometry3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use self::rand_distr_free::normal;
 
-use crate::model::{prepare, Base, Effect, Model};
+use crate::model::{Base, Effect, Model, prepare};
 use crate::{Dataset, DiagnoseError, Measurement};
 
 /// A hidden effect with its parameter values (internal units: mm, radians, minutes, rad per N·m).
@@ -63,7 +63,12 @@ pub fn simulate(base: &Base, hidden: &[HiddenEffect], config: &SimulationConfig)
     let mut theta = model.initial();
     for (h, &o) in hidden.iter().zip(&model.offsets) {
         if h.values.len() != h.effect.len() {
-            return Err(DiagnoseError::Input(format!("{}: {} values for {} parameters", h.effect.label(), h.values.len(), h.effect.len())));
+            return Err(DiagnoseError::Input(format!(
+                "{}: {} values for {} parameters",
+                h.effect.label(),
+                h.values.len(),
+                h.effect.len()
+            )));
         }
         theta[o..o + h.values.len()].copy_from_slice(&h.values);
     }

@@ -8,7 +8,7 @@ use nalgebra::Vector3;
 use thermokin_diagnose::{Dataset, Measurement};
 
 use crate::csvtext::{column, number, records};
-use crate::{read_paper_results, read_text, IoError};
+use crate::{IoError, read_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
 pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
@@ -30,10 +30,18 @@ pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
     };
-    let need = |name: &str| column(header, name).ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")));
+    let need = |name: &str| {
+        column(header, name)
+            .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
+    };
     let q_cols: Vec<usize> = (1..=dof).map(|i| need(&format!("q{i}"))).collect::<Result<_, _>>()?;
     if column(header, &format!("q{}", dof + 1)).is_some() {
-        return Err(IoError::input(path, Some(header.line), format!("q{}", dof + 1), format!("more joint columns than the robot's {dof} joints")));
+        return Err(IoError::input(
+            path,
+            Some(header.line),
+            format!("q{}", dof + 1),
+            format!("more joint columns than the robot's {dof} joints"),
+        ));
     }
     let p_cols: Vec<usize> = ["x", "y", "z"].iter().map(|n| need(n)).collect::<Result<_, _>>()?;
     let t_col = column(header, "time_min");
@@ -47,7 +55,12 @@ pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
     let mut measurements = Vec::with_capacity(rows.len());
     for r in rows {
         if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {}", r.cells.len(), header.cells.len())));
+            return Err(IoError::input(
+                path,
+                Some(r.line),
+                "row",
+                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
+            ));
         }
         let q = q_cols
             .iter()
@@ -95,7 +108,16 @@ pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset) -> std:
     for m in &data.measurements {
         let q: Vec<String> = m.q.iter().map(|v| format!("{:?}", v.to_degrees())).collect();
         let t: Vec<String> = m.temps.iter().map(|v| format!(",{v:?}")).collect();
-        writeln!(out, "{:?},{},{:?},{:?},{:?}{}", m.time_min, q.join(","), m.position_mm.x, m.position_mm.y, m.position_mm.z, t.concat())?;
+        writeln!(
+            out,
+            "{:?},{},{:?},{:?},{:?}{}",
+            m.time_min,
+            q.join(","),
+            m.position_mm.x,
+            m.position_mm.y,
+            m.position_mm.z,
+            t.concat()
+        )?;
     }
     Ok(())
 }

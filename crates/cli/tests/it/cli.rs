@@ -325,3 +325,65 @@ fn urdf_robots_everywhere_and_import_export() {
     let o = thermokin(&["fk", "--robot", ROBOT, "--tip", "x", "--joints", q]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn simulate_then_diagnose() {
+    let m = tmp("sim.csv");
+    let o = thermokin(&[
+        "simulate",
+        "--robot",
+        ROBOT,
+        "--effect",
+        "joint_offset:2=0.05",
+        "--poses",
+        "120",
+        "--minutes",
+        "0",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let report = tmp("report.json");
+    let plots = tmp("dplots");
+    let o = thermokin(&[
+        "diagnose",
+        "--robot",
+        ROBOT,
+        "--measurements",
+        m.to_str().unwrap(),
+        "--json",
+        report.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("effects, main cause first:"));
+    let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert!(v["nominal"]["heldout_rms_mm"].as_f64().unwrap() > 0.1);
+    assert_eq!(v["effects"][0]["effect"], "joint_offset");
+    assert_eq!(v["effects"][0]["joints"], serde_json::json!([2]));
+    assert!(v["effects"][0]["heldout_rms_after_mm"].as_f64().unwrap() < 0.02);
+    assert!(v["effects"][0]["parameters"]["joint_offset[2].offset_deg"]["value"].as_f64().unwrap() > 0.049);
+    assert!(v["identifiability"]["observability"]["condition_number"].as_f64().unwrap() >= 1.0);
+    assert!(plots.join("residuals.svg").exists() && plots.join("heldout-per-effect.svg").exists());
+    // Bad effect specs and flags.
+    for (args, needle) in [
+        (
+            vec!["simulate", "--robot", ROBOT, "--effect", "joint_offset:9", "-o", "/tmp/x.csv"],
+            "joint 9 is not in 1..=6",
+        ),
+        (
+            vec!["simulate", "--robot", ROBOT, "--effect", "warp_drive", "-o", "/tmp/x.csv"],
+            "unknown effect `warp_drive`",
+        ),
+        (vec!["simulate", "--robot", ROBOT, "--effect", "base_frame:2", "-o", "/tmp/x.csv"], "takes no joint"),
+        (
+            vec!["diagnose", "--robot", ROBOT, "--measurements", m.to_str().unwrap(), "--folds", "1"],
+            "--folds must be at least 2",
+        ),
+    ] {
+        let o = thermokin(&args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+}

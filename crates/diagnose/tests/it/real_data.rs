@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use thermokin_chain::{DhConvention, DhRow, DhTable};
-use thermokin_diagnose::{diagnose, Base, Config, Dataset, FrameMode, Measurement, ToolMode};
+use thermokin_diagnose::{Base, Config, Dataset, FrameMode, Measurement, ToolMode, diagnose};
 use thermokin_testdata::shared;
 
 /// Rows of numbers of a small comma-separated file with one header line.
@@ -26,7 +26,12 @@ pub fn rokae() -> Option<(Base, Dataset)> {
         .enumerate()
         .map(|(i, r)| DhRow::revolute(format!("J{}", i + 1), r[1], r[0].to_radians(), r[2], r[3].to_radians()))
         .collect();
-    let table = DhTable { convention: DhConvention::Modified, rows, base: nalgebra::Isometry3::identity(), tool: nalgebra::Isometry3::identity() };
+    let table = DhTable {
+        convention: DhConvention::Modified,
+        rows,
+        base: nalgebra::Isometry3::identity(),
+        tool: nalgebra::Isometry3::identity(),
+    };
     let chain = table.to_extended().unwrap();
     let q = numbers(&joints);
     let p = numbers(&poses);
@@ -52,7 +57,10 @@ fn rokae_robot_b_additive_table() {
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     let report = diagnose(&base, &data, None, &config).unwrap();
     for row in &report.additive {
-        eprintln!("{:<40} mean {:.4}  rms {:.4}  max {:.4}", row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm);
+        eprintln!(
+            "{:<40} mean {:.4}  rms {:.4}  max {:.4}",
+            row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+        );
     }
     for row in &report.leave_one_out {
         eprintln!("{:<40} rms {:.4}", row.model, row.stats.heldout_rms_mm);
@@ -67,5 +75,40 @@ fn rokae_robot_b_additive_table() {
     assert!(last <= 0.125, "final held-out mean {last:.4} mm");
     // A 5× reduction at least, with geometry (offsets or link deviations) as the cause.
     assert!(nominal / last > 5.0);
-    assert!(report.effects.iter().all(|e| e.effect == "joint_offset" || e.effect == "link_deviation"), "{:?}", report.effects.iter().map(|e| &e.label).collect::<Vec<_>>());
+    assert!(
+        report.effects.iter().all(|e| e.effect == "joint_offset" || e.effect == "link_deviation"),
+        "{:?}",
+        report.effects.iter().map(|e| &e.label).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn paper_static_case_gap() {
+    // Our model with the authors' deviation table (applied as their CoppeliaSim script did) leaves
+    // 0.45 mm RMS against their coordinates (NOTES.md: 0.25 mm per coordinate). What explains it?
+    let Some(path) = shared("data/paper-coppeliasim/results-static-case-study.csv") else { return };
+    let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
+    let table = thermokin_io::read_deviation_table(&thermokin_testdata::workspace(
+        "fixtures/paper/deformations-case-study.toml",
+    ))
+    .unwrap();
+    let semantics = thermokin_deform::TableSemantics::CoppeliaSim(thermokin_deform::CoppeliaSimEdits::at(vec![0.0; 6]));
+    let chain = table.apply(&robot.chain, &semantics).unwrap();
+    let data = thermokin_io::read_measurements(&path, 6).unwrap();
+    assert_eq!(data.len(), 50);
+    let report = diagnose(&Base { chain, masses: robot.masses }, &data, None, &Config::default()).unwrap();
+    for row in &report.additive {
+        eprintln!(
+            "{:<40} mean {:.4}  rms {:.4}  max {:.4}",
+            row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+        );
+    }
+    let before = report.nominal.heldout_rms_mm;
+    let after = report.additive.last().unwrap().stats.heldout_rms_mm;
+    assert!((before - 0.4517).abs() < 1e-3, "{before}");
+    // A translation of the wrist (joint 6's row) explains nearly all of it: every target has the same
+    // tool orientation, so a constant offset there is what a wrist shift looks like.
+    assert_eq!(report.effects[0].label, "link_deviation[6]");
+    assert!(report.additive[1].stats.heldout_rms_mm < 0.01, "{:?}", report.additive[1]);
+    assert!(after < 0.005, "{after}");
 }
