@@ -16,10 +16,15 @@ const HEADER: [&str; 6] = ["Dx", "Dy", "Dz", "Dox", "Doy", "Doz"];
 /// (`joints = [[dx, dy, dz, dθx, dθy, dθz], …]`, optional `base` and `tool`; mm and degrees).
 pub fn read_deviation_table(path: &Path) -> Result<DeviationTable, IoError> {
     let text = read_text(path)?;
+    parse_deviation_table(path, &text)
+}
+
+/// Parses a deviation table's text; the format follows `path`'s extension (`.toml`, else CSV).
+pub fn parse_deviation_table(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
     if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
-        parse_toml(path, &text)
+        parse_toml(path, text)
     } else {
-        parse_csv(path, &text)
+        parse_csv(path, text)
     }
 }
 
@@ -116,7 +121,12 @@ fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
 /// dropped from sensor names.
 pub fn read_temperature_log(path: &Path) -> Result<TemperatureLog, IoError> {
     let text = read_text(path)?;
-    let recs = records(path, &text)?;
+    parse_temperature_log(path, &text)
+}
+
+/// Parses a temperature log's text.
+pub fn parse_temperature_log(path: &Path, text: &str) -> Result<TemperatureLog, IoError> {
+    let recs = records(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected time_min and sensor columns"));
     };

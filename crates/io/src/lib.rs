@@ -13,11 +13,13 @@ mod robot;
 mod targets;
 mod write;
 
-pub use deviation::{read_deviation_table, read_deviation_table_for, read_temperature_log};
-pub use measurements::{read_measurements, write_measurements};
-pub use paper::{PaperResultRow, read_paper_results};
+pub use deviation::{
+    parse_deviation_table, parse_temperature_log, read_deviation_table, read_deviation_table_for, read_temperature_log,
+};
+pub use measurements::{parse_measurements, read_measurements, write_measurements};
+pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml};
-pub use targets::{DEFAULT_ORIENTATION_DEG, Target, read_targets};
+pub use targets::{DEFAULT_ORIENTATION_DEG, Target, parse_targets, read_targets};
 pub use write::{write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};

@@ -8,13 +8,18 @@ use nalgebra::Vector3;
 use thermokin_diagnose::{Dataset, Measurement};
 
 use crate::csvtext::{column, number, records};
-use crate::{IoError, read_paper_results, read_text};
+use crate::{IoError, parse_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
 pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
     let text = read_text(path)?;
+    parse_measurements(path, &text, dof)
+}
+
+/// Parses a measurement set's text for a robot with `dof` joints.
+pub fn parse_measurements(path: &Path, text: &str, dof: usize) -> Result<Dataset, IoError> {
     if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
-        let rows = read_paper_results(path)?;
+        let rows = parse_paper_results(path, text)?;
         let measurements = rows
             .into_iter()
             .map(|r| Measurement {
@@ -26,7 +31,7 @@ pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
             .collect();
         return Ok(Dataset { measurements, temperature_names: Vec::new() });
     }
-    let recs = records(path, &text)?;
+    let recs = records(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
     };

@@ -31,7 +31,12 @@ pub struct PaperResultRow {
 /// Reads either results file (the transient one is recognised by its leading time column).
 pub fn read_paper_results(path: &Path) -> Result<Vec<PaperResultRow>, IoError> {
     let text = read_text(path)?;
-    let recs = records(path, &text)?;
+    parse_paper_results(path, &text)
+}
+
+/// Parses an authors' results file's text.
+pub fn parse_paper_results(path: &Path, text: &str) -> Result<Vec<PaperResultRow>, IoError> {
+    let recs = records(path, text)?;
     if recs.len() < 3 {
         return Err(IoError::input(path, None, "rows", "expected two header rows and data rows"));
     }

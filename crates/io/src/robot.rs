@@ -131,8 +131,16 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
     let file: RobotFile = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of(text, s.start));
         let message = e.message().to_string();
-        let field = key_in(&message).unwrap_or_else(|| "toml".to_string());
-        IoError::input(path, line, field, message)
+        let names_a_key = ["unknown field", "missing field", "duplicate key", "duplicate field"].iter().any(|p| message.starts_with(p));
+        let field = if names_a_key { key_in(&message).unwrap_or_else(|| "toml".to_string()) } else { "toml".to_string() };
+        // A key in other units than the file's: say which units the file takes.
+        let other_units = ["_m", "_rad", "_in", "_meters", "_radians", "_inches"];
+        let hint = if message.starts_with("unknown field") && other_units.iter().any(|u| field.ends_with(u)) {
+            " (robot files are in millimetres and degrees: offset_mm, translation_mm, rotation_xyz_deg, limits in degrees)"
+        } else {
+            ""
+        };
+        IoError::input(path, line, field, format!("{message}{hint}"))
     })?;
     let _ = &file.description;
     let name = file
@@ -157,10 +165,16 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             }
             let mut joints = Vec::with_capacity(file.joint.len());
             let mut masses = Vec::with_capacity(file.joint.len());
+            let mut names = std::collections::HashSet::new();
             for (i, spanned) in file.joint.iter().enumerate() {
                 let line = at(spanned.span());
                 let spec = spanned.get_ref();
                 let field = |f: &str| format!("joint[{}].{f}", i + 1);
+                if let Some(n) = &spec.name
+                    && !names.insert(n.clone())
+                {
+                    return Err(IoError::input(path, line, field("name"), format!("duplicate joint name `{n}`")));
+                }
                 let axis = axis(&spec.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
                 finite(path, line, &field("offset_mm"), &spec.offset_mm)?;
                 finite(path, line, &field("zero"), &[spec.zero])?;
@@ -356,7 +370,9 @@ pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoE
             thermokin_urdf::UrdfError::Element { element, name, message, .. } => {
                 (format!("<{element} name=\"{name}\">"), message.clone())
             }
-            thermokin_urdf::UrdfError::Parse { message, .. } => ("xml".to_string(), message.clone()),
+            thermokin_urdf::UrdfError::Parse { message, .. } => {
+                ("xml".to_string(), format!("malformed URDF: {message}"))
+            }
             thermokin_urdf::UrdfError::Structure { message, .. } => ("robot".to_string(), message.clone()),
             thermokin_urdf::UrdfError::Chain { source, .. } => ("chain".to_string(), source.to_string()),
         };

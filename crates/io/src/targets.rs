@@ -28,7 +28,12 @@ pub struct Target {
 /// Reads a targets CSV.
 pub fn read_targets(path: &Path) -> Result<Vec<Target>, IoError> {
     let text = read_text(path)?;
-    let recs = records(path, &text)?;
+    parse_targets(path, &text)
+}
+
+/// Parses a targets CSV's text.
+pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
+    let recs = records(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected the header ,X,Y,Z"));
     };

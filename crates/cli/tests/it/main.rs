@@ -1,4 +1,5 @@
 //! Integration tests of the `thermokin` binary: outputs, exit statuses, bad input, atomic writes.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail; case tables are tuples.
 
+mod bad_inputs;
 mod cli;
