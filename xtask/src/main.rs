@@ -78,20 +78,20 @@ fn bless() -> Result<()> {
     thermokin(&["--json", GOLDEN])
 }
 
-/// Median of a criterion estimate file, nanoseconds.
-fn median_ns(bench: &str) -> Option<f64> {
+/// One statistic (`median`, `mean`) of a criterion estimate file, nanoseconds.
+fn estimate_ns(bench: &str, statistic: &str) -> Option<f64> {
     let p = Path::new("target/criterion").join(bench).join("new/estimates.json");
     let text = std::fs::read_to_string(p).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v["median"]["point_estimate"].as_f64()
+    v[statistic]["point_estimate"].as_f64()
 }
 
-/// Mean of a criterion estimate file, nanoseconds.
+fn median_ns(bench: &str) -> Option<f64> {
+    estimate_ns(bench, "median")
+}
+
 fn mean_ns(bench: &str) -> Option<f64> {
-    let p = Path::new("target/criterion").join(bench).join("new/estimates.json");
-    let text = std::fs::read_to_string(p).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v["mean"]["point_estimate"].as_f64()
+    estimate_ns(bench, "mean")
 }
 
 fn bench(json: bool) -> Result<()> {

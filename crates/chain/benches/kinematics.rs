@@ -4,39 +4,14 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use nalgebra::{Isometry3, Vector3};
-use thermokin_chain::{Chain, ErrorParams, FixedRow, Joint};
+use thermokin_chain::{Chain, ErrorParams};
 
 /// Table 9's IRB 140 with the case-study deviations (1 mm, 1° everywhere) on every joint, so that every
 /// error rotation is really multiplied.
 fn irb140_deformed() -> Chain {
-    let axes = [
-        Vector3::z_axis(),
-        Vector3::y_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-    ];
-    let offsets = [
-        [0.0, 0.0, 104.5],
-        [70.0, 65.0, 247.5],
-        [0.0, -123.0, 360.0],
-        [238.5, 58.0, 0.0],
-        [141.5, 0.0, 0.0],
-        [39.5, 0.0, 0.0],
-    ];
-    let joints = axes
-        .iter()
-        .zip(offsets)
-        .enumerate()
-        .map(|(i, (a, o))| Joint {
-            error: ErrorParams::from_mm_deg([1.0; 6]),
-            ..Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a)
-        })
-        .collect();
-    let tool = Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, 90f64.to_radians(), 0.0));
-    Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&tool)).expect("valid")
+    let nominal = thermokin_testdata::irb140_table9();
+    let errors = vec![ErrorParams::from_mm_deg([1.0; 6]); 6];
+    nominal.with_errors(ErrorParams::ZERO, &errors, ErrorParams::ZERO).expect("valid")
 }
 
 fn benches(c: &mut Criterion) {

@@ -29,7 +29,11 @@ pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
         if raw.trim().is_empty() || raw.trim_start().starts_with('#') {
             continue; // blank lines and `#` comment lines (the fixtures carry their provenance so)
         }
-        let mut reader = csv::ReaderBuilder::new().has_headers(false).flexible(true).from_reader(raw.as_bytes());
+        let mut reader = csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .buffer_capacity(raw.len() + 16)
+            .from_reader(raw.as_bytes());
         let mut record = csv::StringRecord::new();
         match reader.read_record(&mut record) {
             Ok(_) => {}
@@ -57,4 +61,13 @@ pub(crate) fn number(path: &Path, line: usize, column: &str, cell: &str) -> Resu
 /// Finds a column by name (case-insensitive) in a header record.
 pub(crate) fn column(header: &Record, name: &str) -> Option<usize> {
     header.cells.iter().position(|c| c.eq_ignore_ascii_case(name))
+}
+
+/// Checks that a record has `expected` fields; the error names the line.
+pub(crate) fn expect_fields(path: &Path, r: &Record, expected: usize) -> Result<(), IoError> {
+    if r.cells.len() == expected {
+        Ok(())
+    } else {
+        Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected {expected}", r.cells.len())))
+    }
 }

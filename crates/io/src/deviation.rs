@@ -7,7 +7,7 @@ use serde::Deserialize;
 use thermokin_chain::ErrorParams;
 use thermokin_deform::{DeviationTable, TemperatureLog};
 
-use crate::csvtext::{column, number, records};
+use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, line_of, read_text};
 
 const HEADER: [&str; 6] = ["Dx", "Dy", "Dz", "Dox", "Doy", "Doz"];
@@ -71,9 +71,7 @@ fn parse_csv(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
     }
     let mut joints = Vec::with_capacity(rows.len());
     for r in rows {
-        if r.cells.len() != 6 {
-            return Err(IoError::input(path, Some(r.line), "row", format!("{} fields, expected 6", r.cells.len())));
-        }
+        expect_fields(path, r, 6)?;
         let mut v = [0.0; 6];
         for k in 0..6 {
             v[k] = number(path, r.line, HEADER[k], &r.cells[index[k]])?;
@@ -145,14 +143,7 @@ pub fn parse_temperature_log(path: &Path, text: &str) -> Result<TemperatureLog, 
     let mut times = Vec::with_capacity(rows.len());
     let mut series = vec![Vec::with_capacity(rows.len()); sensors.len()];
     for r in rows {
-        if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(
-                path,
-                Some(r.line),
-                "row",
-                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
-            ));
-        }
+        expect_fields(path, r, header.cells.len())?;
         let t = number(path, r.line, "time_min", &r.cells[t_col])?;
         if let Some(&prev) = times.last()
             && t <= prev

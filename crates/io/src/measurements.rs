@@ -7,7 +7,7 @@ use std::path::Path;
 use nalgebra::Vector3;
 use thermokin_diagnose::{Dataset, Measurement};
 
-use crate::csvtext::{column, number, records};
+use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, parse_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
@@ -59,14 +59,7 @@ pub fn parse_measurements(path: &Path, text: &str, dof: usize) -> Result<Dataset
     let r_cols: Vec<Option<usize>> = ["rx", "ry", "rz"].iter().map(|n| column(header, n)).collect();
     let mut measurements = Vec::with_capacity(rows.len());
     for r in rows {
-        if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(
-                path,
-                Some(r.line),
-                "row",
-                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
-            ));
-        }
+        expect_fields(path, r, header.cells.len())?;
         let q = q_cols
             .iter()
             .enumerate()

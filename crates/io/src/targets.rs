@@ -6,7 +6,7 @@ use std::path::Path;
 
 use nalgebra::Vector3;
 
-use crate::csvtext::{column, number, records};
+use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, read_text};
 
 /// The orientation of every target of Table 12, degrees (X-Y-Z Euler: the tool Z axis along world +X).
@@ -49,14 +49,7 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
     let label_col = (0..header.cells.len()).find(|i| !pos.contains(i) && !rot.contains(&Some(*i)));
     let mut out = Vec::with_capacity(rows.len());
     for r in rows {
-        if r.cells.len() != header.cells.len() {
-            return Err(IoError::input(
-                path,
-                Some(r.line),
-                "row",
-                format!("{} fields, expected {}", r.cells.len(), header.cells.len()),
-            ));
-        }
+        expect_fields(path, r, header.cells.len())?;
         let p = Vector3::new(
             number(path, r.line, "X", &r.cells[pos[0]])?,
             number(path, r.line, "Y", &r.cells[pos[1]])?,

@@ -38,3 +38,38 @@ pub fn shared(rel: &str) -> Option<PathBuf> {
     eprintln!("skip: shared data not found at {} (set THERMOKIN_SHARED or place ../shared)", p.display());
     None
 }
+
+/// Table 9's nominal ABB IRB 140 in the same-orientation convention, built in code for crates that must
+/// not read files (the bundled `configs/irb140.toml` holds the same numbers; a test in `thermokin-io`
+/// compares them). Joint axes Z, Y, Y, X, Y, X; the TCP 25.5 mm along X past joint 6, turned Ry(90°).
+pub fn irb140_table9() -> thermokin_chain::Chain {
+    use nalgebra::{Isometry3, Vector3};
+    use thermokin_chain::{Chain, FixedRow, Joint};
+    let axes = [
+        Vector3::z_axis(),
+        Vector3::y_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+        Vector3::y_axis(),
+        Vector3::x_axis(),
+    ];
+    let offsets = [
+        [0.0, 0.0, 104.5],
+        [70.0, 65.0, 247.5],
+        [0.0, -123.0, 360.0],
+        [238.5, 58.0, 0.0],
+        [141.5, 0.0, 0.0],
+        [39.5, 0.0, 0.0],
+    ];
+    let joints = axes
+        .iter()
+        .zip(offsets)
+        .enumerate()
+        .map(|(i, (a, o))| Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a))
+        .collect();
+    let tool = Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, 90f64.to_radians(), 0.0));
+    match Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&tool)) {
+        Ok(c) => c,
+        Err(e) => unreachable!("Table 9 is a valid chain: {e}"),
+    }
+}

@@ -47,44 +47,14 @@ pub fn random_error(rng: &mut ChaCha8Rng, mm: f64, rad: f64) -> ErrorParams {
 
 /// A 6R chain shaped like the IRB 140 (Table 9), with random error parameters on every row.
 pub fn irb140_like(rng: &mut ChaCha8Rng, with_errors: bool) -> Chain {
-    let axes = [
-        Vector3::z_axis(),
-        Vector3::y_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-    ];
-    let offsets = [
-        [0.0, 0.0, 104.5],
-        [70.0, 65.0, 247.5],
-        [0.0, -123.0, 360.0],
-        [238.5, 58.0, 0.0],
-        [141.5, 0.0, 0.0],
-        [39.5, 0.0, 0.0],
-    ];
-    let joints: Vec<Joint> = axes
-        .iter()
-        .zip(offsets)
-        .enumerate()
-        .map(|(i, (a, o))| {
-            let mut j = Joint::revolute(format!("j{}", i + 1), Vector3::from(o), *a);
-            if with_errors {
-                j.error = random_error(rng, 1.0, 0.02);
-            }
-            j
-        })
-        .collect();
-    let mut base = FixedRow::identity();
-    let mut tool = FixedRow::from_isometry(&Isometry3::new(
-        Vector3::new(25.5, 0.0, 0.0),
-        Vector3::new(0.0, std::f64::consts::FRAC_PI_2, 0.0),
-    ));
-    if with_errors {
-        base.error = random_error(rng, 1.0, 0.02);
-        tool.error = random_error(rng, 1.0, 0.02);
+    let nominal = thermokin_testdata::irb140_table9();
+    if !with_errors {
+        return nominal;
     }
-    Chain::new(base, joints, tool).expect("valid chain")
+    let joints: Vec<ErrorParams> = (0..6).map(|_| random_error(rng, 1.0, 0.02)).collect();
+    let base = random_error(rng, 1.0, 0.02);
+    let tool = random_error(rng, 1.0, 0.02);
+    nominal.with_errors(base, &joints, tool).expect("valid chain")
 }
 
 /// A chain with general (non-principal) axes and a prismatic joint.

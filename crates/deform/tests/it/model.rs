@@ -81,35 +81,7 @@ fn eq_18_to_20_multiplied_out_for_two_joints() {
 }
 
 fn irb140() -> Chain {
-    thermokin_io_free_irb140()
-}
-
-/// Table 9's nominal IRB 140, built here without the TOML reader (this crate does not depend on it).
-fn thermokin_io_free_irb140() -> Chain {
-    let axes = [
-        Vector3::z_axis(),
-        Vector3::y_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-        Vector3::y_axis(),
-        Vector3::x_axis(),
-    ];
-    let offsets = [
-        [0.0, 0.0, 104.5],
-        [70.0, 65.0, 247.5],
-        [0.0, -123.0, 360.0],
-        [238.5, 58.0, 0.0],
-        [141.5, 0.0, 0.0],
-        [39.5, 0.0, 0.0],
-    ];
-    let joints = axes
-        .iter()
-        .zip(offsets)
-        .enumerate()
-        .map(|(i, (a, o))| Joint::revolute(format!("A{}", i + 1), Vector3::from(o), *a))
-        .collect();
-    let tool = Isometry3::new(Vector3::new(25.5, 0.0, 0.0), Vector3::new(0.0, 90f64.to_radians(), 0.0));
-    Chain::new(FixedRow::identity(), joints, FixedRow::from_isometry(&tool)).unwrap()
+    thermokin_testdata::irb140_table9()
 }
 
 #[test]

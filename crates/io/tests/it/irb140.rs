@@ -119,3 +119,13 @@ fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
     assert!(per_coordinate <= 0.005, "{per_coordinate}");
     assert!(rms_centred <= 0.005, "RMS about the mean {rms_centred} mm");
 }
+
+#[test]
+fn the_bundled_toml_equals_the_table_built_in_code() {
+    let toml = robot("irb140.toml").chain;
+    let code = thermokin_testdata::irb140_table9();
+    for q in configs(&robot("irb140.toml"), 100, 9) {
+        let (a, b) = (toml.tool_pose(&q).unwrap(), code.tool_pose(&q).unwrap());
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-12);
+    }
+}
