@@ -115,7 +115,8 @@ pub struct RobotArgs {
     #[arg(long, value_name = "FILE")]
     pub deformation: Option<PathBuf>,
     /// Growth of the table with operating time: static, linear:T (plateau after T min), linear-grow:T
-    /// (no plateau, the authors' transient file), exp:TAU, cubic:C1,C2,C3.
+    /// (no plateau, the authors' transient file), exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv (table per
+    /// kelvin of the mean logged rise), or a profile TOML file.
     #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
     pub profile: Option<TimeProfile>,
     /// Operating time for fk/ik with --profile, minutes.
@@ -303,9 +304,20 @@ pub struct ReproduceArgs {
     pub check: Option<PathBuf>,
 }
 
-/// Parses `static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`.
+/// Parses `static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`, `temperature:LOG.csv`
+/// (every row scaled by the mean logged temperature rise; the table then holds values per kelvin), or a
+/// TOML file holding a profile (`kind = "exponential"`, `tau_min = 45.0`).
 pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
+    if s.ends_with(".toml") {
+        let path = std::path::Path::new(s);
+        let text = thermokin_io::read_text(path).map_err(|e| e.to_string())?;
+        return toml::from_str(&text).map_err(|e| format!("{s}: {}", e.message()));
+    }
     let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
+    if kind == "temperature" {
+        let log = thermokin_io::read_temperature_log(std::path::Path::new(rest)).map_err(|e| e.to_string())?;
+        return Ok(TimeProfile::Temperature { log, sensors: Vec::new(), reference_c: None });
+    }
     let num = |v: &str| -> Result<f64, String> {
         let x: f64 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
         if x.is_finite() { Ok(x) } else { Err(format!("`{v}` is not finite")) }
@@ -332,7 +344,7 @@ pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
         }
         _ => {
             return Err(format!(
-                "unknown profile `{s}`: use static, linear:T, linear-grow:T, exp:TAU or cubic:C1,C2,C3"
+                "unknown profile `{s}`: use static, linear:T, linear-grow:T, exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv or a .toml file"
             ));
         }
     };

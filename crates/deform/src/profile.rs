@@ -45,11 +45,11 @@ pub enum TimeProfile {
     },
     /// Temperature-driven: the table holds coefficients per kelvin, and joint `i`'s row is scaled by the
     /// temperature rise of its sensor, `T_sensor(t) − T_reference`. The base row follows joint 1's sensor,
-    /// the tool row the last joint's.
+    /// the tool row the last joint's. With no sensors named, every row follows the mean of all sensors.
     Temperature {
         /// The temperature log.
         log: TemperatureLog,
-        /// For each joint, the log column (sensor name) that drives it.
+        /// For each joint, the log column (sensor name) that drives it; empty: the mean of all columns.
         sensors: Vec<String>,
         /// Reference temperature, °C; the log's first sample of each sensor when absent.
         reference_c: Option<f64>,
@@ -134,14 +134,22 @@ impl TimeProfile {
                 Ok(())
             }
             TimeProfile::Temperature { log, sensors, reference_c } => {
-                if sensors.len() != dof {
+                if !sensors.is_empty() && sensors.len() != dof {
                     return bad(format!("{} sensors named for {dof} joints", sensors.len()));
+                }
+                if log.sensors.is_empty() {
+                    return bad("the temperature log has no sensor columns".into());
                 }
                 if log.times_min.len() < 2 {
                     return bad("the temperature log needs at least two samples".into());
                 }
                 if log.times_min.windows(2).any(|w| w[1] <= w[0]) || log.times_min.iter().any(|t| !t.is_finite()) {
                     return bad("temperature log times must be finite and strictly increasing".into());
+                }
+                for (name, series) in &log.sensors {
+                    if series.len() != log.times_min.len() || series.iter().any(|x| !x.is_finite()) {
+                        return bad(format!("sensor `{name}`: every sample must be a finite temperature"));
+                    }
                 }
                 for s in sensors {
                     match log.series(s) {
@@ -180,9 +188,17 @@ impl TimeProfile {
             TimeProfile::Cubic { coefficients: [c1, c2, c3] } => uniform(t * (c1 + t * (c2 + t * c3))),
             TimeProfile::Temperature { log, sensors, reference_c } => {
                 let mut joints = Vec::with_capacity(dof);
-                for s in sensors {
+                let mean: Vec<f64> = (0..log.times_min.len())
+                    .map(|k| log.sensors.iter().map(|(_, v)| v[k]).sum::<f64>() / log.sensors.len() as f64)
+                    .collect();
+                let names: Vec<Option<&String>> =
+                    if sensors.is_empty() { vec![None; dof] } else { sensors.iter().map(Some).collect() };
+                for s in names {
                     // validate() guarantees the series exists.
-                    let series = log.series(s).unwrap_or_default();
+                    let series = match s {
+                        Some(s) => log.series(s).unwrap_or_default(),
+                        None => &mean,
+                    };
                     let now = log.interpolate(series, t).ok_or_else(|| DeformError::BadTime {
                         time_min: t,
                         reason: format!(

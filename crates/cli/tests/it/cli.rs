@@ -387,3 +387,21 @@ fn simulate_then_diagnose() {
         assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
     }
 }
+
+#[test]
+fn profiles_from_a_temperature_log_and_a_toml_file() {
+    let log = tmp("log.csv");
+    std::fs::write(&log, "time_min,temp_a,temp_b\n0,20,20\n100,21,21\n").unwrap();
+    // At 100 min the mean rise is 1 K: the table (per kelvin) applies in full, as with --profile static.
+    let spec = format!("temperature:{}", log.display());
+    let by_log = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", &spec, "--time", "100", "--joints", J, "--json"]);
+    let full = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--joints", J, "--json"]);
+    assert!(close(&by_log, &full), "{by_log:?} vs {full:?}");
+    let prof = tmp("p.toml");
+    std::fs::write(&prof, "kind = \"linear\"\nstabilization_min = 180.0\nafter = \"plateau\"\n").unwrap();
+    let from_toml = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", prof.to_str().unwrap(), "--time", "90", "--joints", J, "--json"]);
+    let from_flag = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--time", "90", "--joints", J, "--json"]);
+    assert!(close(&from_toml, &from_flag));
+}
+
+const J: &str = "10,20,30,40,50,60";

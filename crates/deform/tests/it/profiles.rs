@@ -87,3 +87,13 @@ fn profiles_are_plain_serde_values() {
     assert_eq!(p, TimeProfile::Exponential { tau_min: 40.0 });
     assert!(toml::from_str::<TimeProfile>("kind = \"exponential\"\ntau = 40.0\n").is_err());
 }
+
+#[test]
+fn temperature_profile_without_sensor_names_follows_the_mean_rise() {
+    let p = TimeProfile::Temperature { log: log(), sensors: Vec::new(), reference_c: None };
+    // At 120 min: sensor a 28 °C (+8 K), sensor b 23 °C (+2 K): mean rise 5 K on every row.
+    let f = p.row_factors(120.0, 3).unwrap();
+    assert_eq!(f.joints, vec![5.0; 3]);
+    assert_eq!((f.base, f.tool), (5.0, 5.0));
+    assert!(p.table_at(&table(), 0.0).unwrap().is_zero());
+}
