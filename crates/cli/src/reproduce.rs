@@ -321,6 +321,24 @@ fn measure(
         joint_diff.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
     );
 
+    // Table 14 in full: the published coordinates against the programmed ones and ours.
+    let _ = writeln!(w, "### Table 14 in full: coordinates reached (static case)\n");
+    let _ = writeln!(w, "| target | programmed (Table 12) | published reached (Table 14) | published − programmed | ours reached | ours − programmed |");
+    let _ = writeln!(w, "|---|---|---|---|---|---|");
+    for (label, p14) in table14 {
+        let Some(ours) = static_run.rows.iter().find(|r| &r.label == label) else { continue };
+        let prog = ours.programmed.translation.vector;
+        let reached = ours.reached.translation.vector;
+        let d_pub = Vector3::new(p14[0], p14[1], p14[2]) - prog;
+        let d_ours = reached - prog;
+        let _ = writeln!(
+            w,
+            "| {label} | {:.0}, {:.0}, {:.0} | {:.3}, {:.3}, {:.3} | {:+.3}, {:+.3}, {:+.3} | {:.3}, {:.3}, {:.3} | {:+.1e}, {:+.1e}, {:+.1e} |",
+            prog.x, prog.y, prog.z, p14[0], p14[1], p14[2], d_pub.x, d_pub.y, d_pub.z, reached.x, reached.y, reached.z, d_ours.x, d_ours.y, d_ours.z
+        );
+    }
+    let _ = writeln!(w);
+
     // Transient.
     let t = &transient_run.summary;
     let _ = writeln!(w, "## Transient case: Tables 17 and 18 (200 minutes, every minute, 10,050 solves)\n");
