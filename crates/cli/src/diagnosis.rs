@@ -89,6 +89,31 @@ fn print_report(r: &Report) {
             println!("      {name:<44} {:>12.6} ± {:.6}", v.value, v.std);
         }
     }
+    println!("\nwhere the nominal model's residuals lie (RMS, mm; → after the effects found):");
+    let (b, a) = (&r.residuals_before, &r.residuals_after);
+    for (j, (qb, qa)) in b.by_joint.iter().zip(&a.by_joint).enumerate() {
+        println!(
+            "  joint {} angle quartiles   {}   →   {}",
+            j + 1,
+            qb.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" "),
+            qa.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" ")
+        );
+    }
+    let four = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
+    println!(
+        "  workspace (near-low near-high far-low far-high)   {}   →   {}",
+        four(&b.by_workspace_region),
+        four(&a.by_workspace_region)
+    );
+    println!(
+        "  joint space (elbow × wrist)                       {}   →   {}",
+        four(&b.by_joint_space_region),
+        four(&a.by_joint_space_region)
+    );
+    if !b.by_time.is_empty() {
+        let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
+        println!("  time quartiles                                    {}   →   {}", list(&b.by_time), list(&a.by_time));
+    }
     if let Some(o) = &r.identifiability.observability {
         println!(
             "\nidentifiability: {} parameters from {} residuals; condition number {:.3e}; O1 {:.3e} O2 {:.3e} O3 {:.3e} O4 {:.3e} O5 {:.3e}",

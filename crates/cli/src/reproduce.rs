@@ -323,7 +323,10 @@ fn measure(
 
     // Table 14 in full: the published coordinates against the programmed ones and ours.
     let _ = writeln!(w, "### Table 14 in full: coordinates reached (static case)\n");
-    let _ = writeln!(w, "| target | programmed (Table 12) | published reached (Table 14) | published − programmed | ours reached | ours − programmed |");
+    let _ = writeln!(
+        w,
+        "| target | programmed (Table 12) | published reached (Table 14) | published − programmed | ours reached | ours − programmed |"
+    );
     let _ = writeln!(w, "|---|---|---|---|---|---|");
     for (label, p14) in table14 {
         let Some(ours) = static_run.rows.iter().find(|r| &r.label == label) else { continue };
@@ -334,7 +337,21 @@ fn measure(
         let _ = writeln!(
             w,
             "| {label} | {:.0}, {:.0}, {:.0} | {:.3}, {:.3}, {:.3} | {:+.3}, {:+.3}, {:+.3} | {:.3}, {:.3}, {:.3} | {:+.1e}, {:+.1e}, {:+.1e} |",
-            prog.x, prog.y, prog.z, p14[0], p14[1], p14[2], d_pub.x, d_pub.y, d_pub.z, reached.x, reached.y, reached.z, d_ours.x, d_ours.y, d_ours.z
+            prog.x,
+            prog.y,
+            prog.z,
+            p14[0],
+            p14[1],
+            p14[2],
+            d_pub.x,
+            d_pub.y,
+            d_pub.z,
+            reached.x,
+            reached.y,
+            reached.z,
+            d_ours.x,
+            d_ours.y,
+            d_ours.z
         );
     }
     let _ = writeln!(w);

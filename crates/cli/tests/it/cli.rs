@@ -394,14 +394,90 @@ fn profiles_from_a_temperature_log_and_a_toml_file() {
     std::fs::write(&log, "time_min,temp_a,temp_b\n0,20,20\n100,21,21\n").unwrap();
     // At 100 min the mean rise is 1 K: the table (per kelvin) applies in full, as with --profile static.
     let spec = format!("temperature:{}", log.display());
-    let by_log = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", &spec, "--time", "100", "--joints", J, "--json"]);
+    let by_log = fk_position(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--profile",
+        &spec,
+        "--time",
+        "100",
+        "--joints",
+        J,
+        "--json",
+    ]);
     let full = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--joints", J, "--json"]);
     assert!(close(&by_log, &full), "{by_log:?} vs {full:?}");
     let prof = tmp("p.toml");
     std::fs::write(&prof, "kind = \"linear\"\nstabilization_min = 180.0\nafter = \"plateau\"\n").unwrap();
-    let from_toml = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", prof.to_str().unwrap(), "--time", "90", "--joints", J, "--json"]);
-    let from_flag = fk_position(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--time", "90", "--joints", J, "--json"]);
+    let from_toml = fk_position(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--profile",
+        prof.to_str().unwrap(),
+        "--time",
+        "90",
+        "--joints",
+        J,
+        "--json",
+    ]);
+    let from_flag = fk_position(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--deformation",
+        TABLE,
+        "--profile",
+        "linear:180",
+        "--time",
+        "90",
+        "--joints",
+        J,
+        "--json",
+    ]);
     assert!(close(&from_toml, &from_flag));
 }
 
 const J: &str = "10,20,30,40,50,60";
+
+#[test]
+fn diagnose_with_an_explicit_holdout() {
+    let (train, test) = (tmp("train.csv"), tmp("test.csv"));
+    for (path, seed) in [(&train, "1"), (&test, "2")] {
+        let o = thermokin(&[
+            "simulate",
+            "--robot",
+            ROBOT,
+            "--effect",
+            "tool_frame=0.3,0.2,-0.4",
+            "--poses",
+            "60",
+            "--minutes",
+            "0",
+            "--seed",
+            seed,
+            "-o",
+            path.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let o = thermokin(&[
+        "diagnose",
+        "--robot",
+        ROBOT,
+        "--measurements",
+        train.to_str().unwrap(),
+        "--holdout",
+        test.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("validation: explicit hold-out set"), "{out}");
+    assert!(out.contains("tool_frame"), "{out}");
+    assert!(out.contains("where the nominal model's residuals lie"), "{out}");
+}
