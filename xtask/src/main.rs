@@ -148,56 +148,25 @@ fn bench(json: bool) -> Result<()> {
     Ok(())
 }
 
-/// Each library crate and the workspace crates it must never depend on (directly or not).
-const FORBIDDEN: &[(&str, &[&str])] = &[
-    (
-        "thermokin-chain",
-        &[
-            "thermokin-io",
-            "thermokin-deform",
-            "thermokin-ik",
-            "thermokin-compensate",
-            "thermokin",
-            "toml",
-            "csv",
-            "clap",
-        ],
-    ),
-    ("thermokin-deform", &["thermokin-io", "thermokin-ik", "thermokin-compensate", "thermokin", "csv", "clap"]),
-    ("thermokin-ik", &["thermokin-io", "thermokin-deform", "thermokin-compensate", "thermokin", "toml", "csv", "clap"]),
-    ("thermokin-io", &["thermokin-ik", "thermokin-compensate", "thermokin", "clap"]),
-    (
-        "thermokin-urdf",
-        &[
-            "thermokin-io",
-            "thermokin-deform",
-            "thermokin-ik",
-            "thermokin-compensate",
-            "thermokin",
-            "toml",
-            "csv",
-            "clap",
-        ],
-    ),
-    (
-        "thermokin-diagnose",
-        &[
-            "thermokin-io",
-            "thermokin-deform",
-            "thermokin-ik",
-            "thermokin-compensate",
-            "thermokin",
-            "toml",
-            "csv",
-            "clap",
-        ],
-    ),
-    ("thermokin-compensate", &["thermokin-io", "thermokin", "toml", "csv", "clap"]),
+/// Each library crate and the workspace crates it may depend on (directly or not): the layering of
+/// ARCHITECTURE.md. Anything else of ours in its tree is an error, and so are file-format crates outside
+/// `thermokin-io` and the CLI parser anywhere in a library.
+const ALLOWED: &[(&str, &[&str])] = &[
+    ("thermokin-chain", &[]),
+    ("thermokin-deform", &["thermokin-chain"]),
+    ("thermokin-ik", &["thermokin-chain"]),
+    ("thermokin-urdf", &["thermokin-chain"]),
+    ("thermokin-diagnose", &["thermokin-chain"]),
+    ("thermokin-compensate", &["thermokin-chain", "thermokin-deform", "thermokin-ik"]),
+    ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf", "thermokin-diagnose"]),
 ];
+
+/// File-format and CLI crates, allowed only where named.
+const FORMAT_CRATES: &[(&str, &[&str])] = &[("toml", &["thermokin-io"]), ("csv", &["thermokin-io"]), ("clap", &[])];
 
 fn deps() -> Result<()> {
     let mut bad = Vec::new();
-    for (krate, forbidden) in FORBIDDEN {
+    for (krate, allowed) in ALLOWED {
         let out = cargo()
             .args(["tree", "--edges", "normal", "--prefix", "none", "--format", "{p}", "--package", krate])
             .output()
@@ -206,14 +175,21 @@ fn deps() -> Result<()> {
             bail!("cargo tree failed for {krate}: {}", String::from_utf8_lossy(&out.stderr));
         }
         let tree = String::from_utf8_lossy(&out.stdout);
-        for f in *forbidden {
-            if tree.lines().any(|l| l.split_whitespace().next() == Some(f)) {
-                bad.push(format!("{krate} depends on {f}"));
+        let names: std::collections::BTreeSet<&str> =
+            tree.lines().filter_map(|l| l.split_whitespace().next()).collect();
+        for name in &names {
+            if name.starts_with("thermokin") && name != krate && !allowed.contains(name) {
+                bad.push(format!("{krate} depends on {name}"));
+            }
+        }
+        for (format, users) in FORMAT_CRATES {
+            if names.contains(format) && !users.contains(krate) {
+                bad.push(format!("{krate} depends on {format}"));
             }
         }
     }
     if bad.is_empty() {
-        println!("deps: dependency direction ok ({} crates checked)", FORBIDDEN.len());
+        println!("deps: dependency direction ok ({} crates checked)", ALLOWED.len());
         Ok(())
     } else {
         bail!("dependency direction broken:\n  {}", bad.join("\n  "))
