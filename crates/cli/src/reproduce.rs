@@ -316,7 +316,7 @@ fn measure(
         "\nFK of the 25 printed Table 16 angles on our deformed model vs Table 14: RMS {:.4} mm (3-D; {:.4} mm per coordinate), mean {} mm; with the canonical reading of the table instead: RMS {:.2} mm. Largest joint difference ours − published per joint: {} °.\n",
         t16_residual["rms_mm"].as_f64().unwrap_or(f64::NAN),
         t16_residual["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-        t16_residual["mean_mm"],
+        fmt_vec(&t16_residual["mean_mm"]),
         t16_residual_canonical["rms_mm"].as_f64().unwrap_or(f64::NAN),
         joint_diff.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
     );
@@ -405,7 +405,7 @@ fn measure(
             "- Static, all 50 rows: FK of their angles on our deformed model vs their coordinates: RMS {:.4} mm (3-D), {:.4} mm per coordinate, mean {} mm. Our angles vs theirs: largest difference {:.4}°.",
             res["rms_mm"].as_f64().unwrap_or(f64::NAN),
             res["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-            res["mean_mm"],
+            fmt_vec(&res["mean_mm"]),
             joint
         );
         let authors_transient = read_paper_results(&transient_file).map_err(Failure::input)?;
@@ -421,7 +421,7 @@ fn measure(
             "- Transient, minute 0 (nominal robot): FK of their angles on our nominal model vs their coordinates: RMS {:.4} mm (3-D), {:.4} mm per coordinate, mean {} mm (a tool-point offset along the tool axis: see ARCHITECTURE.md's notes).",
             nominal_res["rms_mm"].as_f64().unwrap_or(f64::NAN),
             nominal_res["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-            nominal_res["mean_mm"]
+            fmt_vec(&nominal_res["mean_mm"])
         );
         let _ = writeln!(
             w,
@@ -446,6 +446,14 @@ fn measure(
         "## Plots\n\n![deviation per minute](img/transient-deviation.svg)\n\n![Figure 15](img/figure15-structure.svg)\n"
     );
     Ok(Measured { json: j, report: r })
+}
+
+/// `(x, y, z)` with three decimals from a JSON array.
+fn fmt_vec(v: &Value) -> String {
+    let parts: Vec<String> = v
+        .as_array()
+        .map_or_else(Vec::new, |a| a.iter().map(|x| format!("{:+.3}", x.as_f64().unwrap_or(f64::NAN))).collect());
+    format!("({})", parts.join(", "))
 }
 
 fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
