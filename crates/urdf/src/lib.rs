@@ -92,8 +92,14 @@ fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
 /// Imports a serial chain from URDF text. `source_name` is used in messages.
 pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Result<ImportedRobot, UrdfError> {
     let src = source_name.to_string();
-    let robot = urdf_rs::read_from_string(text)
-        .map_err(|e| UrdfError::Parse { source_name: src.clone(), message: e.to_string() })?;
+    check_namespaces(text).map_err(|message| UrdfError::Parse { source_name: src.clone(), message })?;
+    // urdf-rs re-serialises through RustyXML, which panics on namespace shapes the check above refuses;
+    // the unwind guard is the backstop for any other panic inside the third-party parser.
+    let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text)).map_err(|_| UrdfError::Parse {
+        source_name: src.clone(),
+        message: "the XML parser failed on this input".into(),
+    })?;
+    let robot = parsed.map_err(|e| UrdfError::Parse { source_name: src.clone(), message: e.to_string() })?;
     let element = |element: &'static str, name: &str, message: String| UrdfError::Element {
         source_name: src.clone(),
         element,
@@ -270,6 +276,53 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
         .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
         .collect();
     Ok(ImportedRobot { name: robot.name.clone(), chain, masses, base_link: base, tip_link: tip })
+}
+
+/// Refuses XML namespace use that the parser underneath cannot handle (found by fuzzing: RustyXML panics
+/// with "No namespace prefix bound"): a prefix used on an element or attribute but never declared with
+/// `xmlns:prefix`, and a declaration of the reserved `xmlns` prefix itself. Comments are skipped.
+fn check_namespaces(text: &str) -> Result<(), String> {
+    let mut stripped = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find("<!--") {
+        stripped.push_str(&rest[..start]);
+        rest = match rest[start..].find("-->") {
+            Some(end) => &rest[start + end + 3..],
+            None => "",
+        };
+    }
+    stripped.push_str(rest);
+    let is_name = |c: char| c.is_alphanumeric() || matches!(c, '_' | '-' | '.');
+    let mut declared: HashSet<&str> = ["xml", "xmlns"].into_iter().collect();
+    let mut used: Vec<&str> = Vec::new();
+    let bytes = stripped.as_bytes();
+    for (i, _) in stripped.match_indices(':') {
+        // The qualified name around this colon.
+        let before = stripped[..i].rfind(|c: char| !is_name(c)).map_or(0, |k| k + 1);
+        let after = stripped[i + 1..].find(|c: char| !is_name(c)).map_or(stripped.len(), |k| i + 1 + k);
+        let prefix = &stripped[before..i];
+        let local = &stripped[i + 1..after];
+        if prefix.is_empty() || local.is_empty() {
+            continue;
+        }
+        let opener = before.checked_sub(1).map(|k| bytes[k]);
+        let next = bytes.get(after).copied();
+        let is_element =
+            matches!(opener, Some(b'<')) || (matches!(opener, Some(b'/')) && before >= 2 && bytes[before - 2] == b'<');
+        let is_attribute = matches!(opener, Some(b' ' | b'\t' | b'\n' | b'\r')) && next == Some(b'=');
+        if prefix == "xmlns" && is_attribute {
+            if local == "xmlns" || local == "xml" {
+                return Err(format!("the reserved prefix `{local}` cannot be declared"));
+            }
+            declared.insert(local);
+        } else if is_element || is_attribute {
+            used.push(prefix);
+        }
+    }
+    match used.into_iter().find(|p| !declared.contains(p)) {
+        Some(p) => Err(format!("namespace prefix `{p}` is used but never declared (xmlns:{p})")),
+        None => Ok(()),
+    }
 }
 
 /// Formats a number so that it parses back to the same `f64`.

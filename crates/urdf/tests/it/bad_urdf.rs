@@ -47,3 +47,16 @@ fn located_errors() {
         assert!(e.starts_with("bad.urdf"), "{e}");
     }
 }
+
+#[test]
+fn namespace_shapes_that_crashed_the_parser_are_errors() {
+    // Found by fuzzing (docs/reliability.md): RustyXML, under urdf-rs, panicked on these.
+    let d = ImportOptions::default();
+    let e = err(r#"<robot name="r" xmlns:xmlns="http://example.invalid"><link name="a"/></robot>"#, &d);
+    assert!(e.contains("the reserved prefix `xmlns` cannot be declared"), "{e}");
+    let e = err(r#"<robot name="r"><link name="a" foo:bar="1"/></robot>"#, &d);
+    assert!(e.contains("namespace prefix `foo` is used but never declared"), "{e}");
+    // A declared prefix (xacro's, as in the ROS-Industrial files) is fine.
+    let ok = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="0" velocity="0"/></joint></robot>"#;
+    assert!(import_urdf(ok, "ok.urdf", &d).is_ok());
+}
