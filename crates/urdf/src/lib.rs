@@ -298,7 +298,8 @@ fn check_namespaces(text: &str) -> Result<(), String> {
     let bytes = stripped.as_bytes();
     for (i, _) in stripped.match_indices(':') {
         // The qualified name around this colon.
-        let before = stripped[..i].rfind(|c: char| !is_name(c)).map_or(0, |k| k + 1);
+        let before =
+            stripped[..i].char_indices().rev().find(|&(_, c)| !is_name(c)).map_or(0, |(k, c)| k + c.len_utf8());
         let after = stripped[i + 1..].find(|c: char| !is_name(c)).map_or(stripped.len(), |k| i + 1 + k);
         let prefix = &stripped[before..i];
         let local = &stripped[i + 1..after];

@@ -60,3 +60,14 @@ fn namespace_shapes_that_crashed_the_parser_are_errors() {
     let ok = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="0" velocity="0"/></joint></robot>"#;
     assert!(import_urdf(ok, "ok.urdf", &d).is_ok());
 }
+
+#[test]
+fn multibyte_text_next_to_a_prefix_is_an_error_not_a_panic() {
+    // Found by fuzzing: the namespace check itself sliced inside a multi-byte character.
+    let d = ImportOptions::default();
+    for text in
+        ["<robot name=\"r\"><link name=\"a\" \u{e9}:b=\"1\"/></robot>", "<robot name=\"r\">\u{52356}o:x</robot>"]
+    {
+        assert!(import_urdf(text, "bad.urdf", &d).is_err());
+    }
+}
