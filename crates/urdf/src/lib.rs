@@ -303,17 +303,25 @@ fn check_namespaces(text: &str) -> Result<(), String> {
         let after = stripped[i + 1..].find(|c: char| !is_name(c)).map_or(stripped.len(), |k| i + 1 + k);
         let prefix = &stripped[before..i];
         let local = &stripped[i + 1..after];
+        let opener = before.checked_sub(1).map(|k| bytes[k]);
+        let next = bytes.get(after).copied();
+        let in_name_position = matches!(opener, Some(b'<' | b'/' | b' ' | b'\t' | b'\n' | b'\r'));
+        if in_name_position && (prefix.is_empty() || local.is_empty()) && (next == Some(b'=') || opener == Some(b'<')) {
+            return Err(format!("malformed qualified name `{prefix}:{local}`"));
+        }
         if prefix.is_empty() || local.is_empty() {
             continue;
         }
-        let opener = before.checked_sub(1).map(|k| bytes[k]);
-        let next = bytes.get(after).copied();
         let is_element =
             matches!(opener, Some(b'<')) || (matches!(opener, Some(b'/')) && before >= 2 && bytes[before - 2] == b'<');
         let is_attribute = matches!(opener, Some(b' ' | b'\t' | b'\n' | b'\r')) && next == Some(b'=');
         if prefix == "xmlns" && is_attribute {
             if local == "xmlns" || local == "xml" {
                 return Err(format!("the reserved prefix `{local}` cannot be declared"));
+            }
+            let value = stripped[after + 1..].trim_start();
+            if value.starts_with("\"\"") || value.starts_with("''") {
+                return Err(format!("namespace prefix `{local}` is bound to an empty URI"));
             }
             declared.insert(local);
         } else if is_element || is_attribute {

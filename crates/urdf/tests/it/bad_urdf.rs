@@ -71,3 +71,13 @@ fn multibyte_text_next_to_a_prefix_is_an_error_not_a_panic() {
         assert!(import_urdf(text, "bad.urdf", &d).is_err());
     }
 }
+
+#[test]
+fn empty_prefixes_and_unbound_uris_are_errors() {
+    // Found by fuzzing: an attribute `:name` under a default namespace crashed RustyXML.
+    let d = ImportOptions::default();
+    let e = err(r#"<robot xmlns="0" name="r"><link :name="a"/></robot>"#, &d);
+    assert!(e.contains("malformed qualified name `:name`"), "{e}");
+    let e = err(r#"<robot name="r" xmlns:p=""><link name="a" p:x="1"/></robot>"#, &d);
+    assert!(e.contains("bound to an empty URI"), "{e}");
+}
