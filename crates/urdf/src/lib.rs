@@ -278,9 +278,10 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
     Ok(ImportedRobot { name: robot.name.clone(), chain, masses, base_link: base, tip_link: tip })
 }
 
-/// Refuses XML namespace use that the parser underneath cannot handle (found by fuzzing: RustyXML panics
-/// with "No namespace prefix bound"): a prefix used on an element or attribute but never declared with
-/// `xmlns:prefix`, and a declaration of the reserved `xmlns` prefix itself. Comments are skipped.
+/// Refuses XML namespace use, which URDF does not have and the parser underneath mishandles (found by
+/// fuzzing: RustyXML panics with "No namespace prefix bound"): namespaced element and attribute names,
+/// malformed qualified names, default namespaces, reserved or empty-URI prefix declarations. Only
+/// `xmlns:prefix="…"` declarations (xacro leftovers in real files) pass. Comments are skipped.
 fn check_namespaces(text: &str) -> Result<(), String> {
     let mut stripped = String::with_capacity(text.len());
     let mut rest = text;
@@ -293,8 +294,6 @@ fn check_namespaces(text: &str) -> Result<(), String> {
     }
     stripped.push_str(rest);
     let is_name = |c: char| c.is_alphanumeric() || matches!(c, '_' | '-' | '.');
-    let mut declared: HashSet<&str> = ["xml", "xmlns"].into_iter().collect();
-    let mut used: Vec<&str> = Vec::new();
     let bytes = stripped.as_bytes();
     for (i, _) in stripped.match_indices(':') {
         // The qualified name around this colon.
@@ -323,15 +322,20 @@ fn check_namespaces(text: &str) -> Result<(), String> {
             if value.starts_with("\"\"") || value.starts_with("''") {
                 return Err(format!("namespace prefix `{local}` is bound to an empty URI"));
             }
-            declared.insert(local);
         } else if is_element || is_attribute {
-            used.push(prefix);
+            // URDF has no namespaced elements or attributes; only `xmlns:` declarations (xacro's) occur.
+            return Err(format!("namespaced name `{prefix}:{local}` is not URDF"));
         }
     }
-    match used.into_iter().find(|p| !declared.contains(p)) {
-        Some(p) => Err(format!("namespace prefix `{p}` is used but never declared (xmlns:{p})")),
-        None => Ok(()),
+    // A default namespace (`xmlns="…"`) is not URDF either, and the parser underneath mishandles it.
+    for (i, _) in stripped.match_indices("xmlns") {
+        let opener = i.checked_sub(1).map(|k| bytes[k]);
+        let after = stripped[i + 5..].trim_start();
+        if matches!(opener, Some(b' ' | b'\t' | b'\n' | b'\r')) && after.starts_with('=') {
+            return Err("a default XML namespace (xmlns=\"…\") is not URDF".into());
+        }
     }
+    Ok(())
 }
 
 /// Formats a number so that it parses back to the same `f64`.

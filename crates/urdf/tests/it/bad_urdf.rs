@@ -55,7 +55,9 @@ fn namespace_shapes_that_crashed_the_parser_are_errors() {
     let e = err(r#"<robot name="r" xmlns:xmlns="http://example.invalid"><link name="a"/></robot>"#, &d);
     assert!(e.contains("the reserved prefix `xmlns` cannot be declared"), "{e}");
     let e = err(r#"<robot name="r"><link name="a" foo:bar="1"/></robot>"#, &d);
-    assert!(e.contains("namespace prefix `foo` is used but never declared"), "{e}");
+    assert!(e.contains("namespaced name `foo:bar` is not URDF"), "{e}");
+    let e = err(r#"<robot name="r" xmlns="urn:x"><link name="a"/></robot>"#, &d);
+    assert!(e.contains("a default XML namespace"), "{e}");
     // A declared prefix (xacro's, as in the ROS-Industrial files) is fine.
     let ok = r#"<robot name="r" xmlns:xacro="http://ros.org/wiki/xacro"><link name="a"/><link name="b"/><joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="0" velocity="0"/></joint></robot>"#;
     assert!(import_urdf(ok, "ok.urdf", &d).is_ok());
@@ -76,8 +78,10 @@ fn multibyte_text_next_to_a_prefix_is_an_error_not_a_panic() {
 fn empty_prefixes_and_unbound_uris_are_errors() {
     // Found by fuzzing: an attribute `:name` under a default namespace crashed RustyXML.
     let d = ImportOptions::default();
-    let e = err(r#"<robot xmlns="0" name="r"><link :name="a"/></robot>"#, &d);
+    let e = err(r#"<robot name="r"><link :name="a"/></robot>"#, &d);
     assert!(e.contains("malformed qualified name `:name`"), "{e}");
+    let e = err(r#"<robot xmlns="0" name="r"><link name="a"/></robot>"#, &d);
+    assert!(e.contains("a default XML namespace"), "{e}");
     let e = err(r#"<robot name="r" xmlns:p=""><link name="a" p:x="1"/></robot>"#, &d);
     assert!(e.contains("bound to an empty URI"), "{e}");
 }
