@@ -191,7 +191,6 @@ pub(crate) fn fit(
     let (mut r, mut jac) = residuals(base, model, &theta, data, rows, pre, true)?;
     let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut cost = ssr(&r);
-    let mut iterations = 0;
     let mut free = vec![false; model.len];
     let mut fixed = Vec::new();
     let mut cols: Vec<usize> = Vec::new();
@@ -212,7 +211,6 @@ pub(crate) fn fit(
         let mut lambda = 1e-3;
         let mut a = Mat::<f64>::zeros(rows.len() * 3, p);
         for _ in 0..100 {
-            iterations += 1;
             if p == 0 {
                 break;
             }
@@ -283,7 +281,6 @@ pub(crate) fn fit(
             std[c] = (sigma2 * inv[(k, k)]).max(0.0).sqrt() / scale[k];
         }
     }
-    let _ = iterations;
     Ok(Fit { theta, std, fixed, free, ssr: cost })
 }
 
