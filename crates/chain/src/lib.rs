@@ -8,6 +8,7 @@ mod chain;
 mod dh;
 mod error_params;
 mod frame;
+mod so3;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
 /// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
@@ -22,6 +23,7 @@ pub struct LinkMass {
 
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_rotation};
+pub use so3::{rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -64,7 +64,7 @@ pub enum Command {
     )]
     Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
-    /// authors' full files when ../shared is present.
+    /// authors' full files (bundled in fixtures/paper/authors).
     ReproducePaper(ReproduceArgs),
 }
 
@@ -72,7 +72,7 @@ pub enum Command {
 #[derive(Subcommand, Debug)]
 pub enum UrdfCommand {
     /// Import a URDF's serial chain (fixed joints folded in) and write it as an extended-table TOML.
-    #[command(after_help = "Example:\n  thermokin urdf import ../shared/urdf/ur5.urdf --tip tool0 -o ur5.toml")]
+    #[command(after_help = "Example:\n  thermokin urdf import fixtures/urdf/ur5.urdf --tip tool0 -o ur5.toml")]
     Import {
         /// The URDF file.
         file: PathBuf,
@@ -287,9 +287,9 @@ pub struct ReproduceArgs {
     /// The bundled IRB 140.
     #[arg(long, value_name = "FILE", default_value = "configs/irb140.toml")]
     pub robot: PathBuf,
-    /// The authors' files (compared when present).
-    #[arg(long, value_name = "DIR", default_value = "../shared/data/paper-coppeliasim")]
-    pub shared: PathBuf,
+    /// The authors' published CoppeliaSim files (bundled; compared when present).
+    #[arg(long, value_name = "DIR", default_value = "fixtures/paper/authors", alias = "shared")]
+    pub authors: PathBuf,
     /// Write the side-by-side report here (Markdown).
     #[arg(long, value_name = "FILE")]
     pub report: Option<PathBuf>,

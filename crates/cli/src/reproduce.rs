@@ -1,6 +1,6 @@
 //! `thermokin reproduce-paper`: the paper's two case studies (section 4, Tables 10–18) rerun with our
 //! model and IK from the transcribed tables in `fixtures/paper/`, compared side by side with the printed
-//! results and, when `../shared` is present, with the authors' full files.
+//! results and with the authors' full files (bundled in `fixtures/paper/authors`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -391,15 +391,15 @@ fn measure(
     });
 
     // The authors' full files, when present.
-    let static_file = a.shared.join("results-static-case-study.csv");
-    let transient_file = a.shared.join("results-transient-case-study.csv");
+    let static_file = a.authors.join("results-static-case-study.csv");
+    let transient_file = a.authors.join("results-transient-case-study.csv");
     if static_file.exists() && transient_file.exists() {
         let authors_static = read_paper_results(&static_file).map_err(Failure::input)?;
         let rows: Vec<(Vec<f64>, Vector3<f64>)> =
             authors_static.iter().map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
         let res = fk_residual(deformed, &rows);
         let joint = max_joint_diff(&authors_static, static_run);
-        let _ = writeln!(w, "## The authors' full files (`../shared/data/paper-coppeliasim`)\n");
+        let _ = writeln!(w, "## The authors' full files (`fixtures/paper/authors`)\n");
         let _ = writeln!(
             w,
             "- Static, all 50 rows: FK of their angles on our deformed model vs their coordinates: RMS {:.4} mm (3-D), {:.4} mm per coordinate, mean {} mm. Our angles vs theirs: largest difference {:.4}°.",
@@ -438,7 +438,7 @@ fn measure(
         let _ = writeln!(
             w,
             "The authors' full files were not found at `{}`; only the printed tables were compared.\n",
-            a.shared.display()
+            a.authors.display()
         );
     }
     let _ = writeln!(
@@ -471,8 +471,8 @@ fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
 /// Compares the measured numbers with the golden file. Keys ending in `_error_mm` or `_error_deg` under
 /// `static`/`transient` are bounds: ≤ 1e-6 (the compensation must stay exact); every other number must
 /// match the golden value within 1e-6 (absolute, mm or degrees) — the runs are deterministic, so any
-/// larger change is a change of the model. Keys present in only one of the two (the shared-data ones
-/// when `../shared` is absent) are skipped.
+/// larger change is a change of the model. Keys present in only one of the two (the authors'-file ones
+/// when their directory is absent) are skipped.
 fn check(golden: &PathBuf, measured: &Value) -> Result<Vec<String>, Failure> {
     let text = std::fs::read_to_string(golden)
         .with_context(|| format!("reading {}", golden.display()))

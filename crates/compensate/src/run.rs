@@ -2,7 +2,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, xyz_rotation};
+use thermokin_chain::{Chain, rotation_log, xyz_rotation};
 use thermokin_deform::{DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Seeds, Solution, Status, Target, solve_batch};
 
@@ -26,7 +26,8 @@ pub fn pose_from_xyz_deg(position_mm: Vector3<f64>, rotation_xyz_deg: Vector3<f6
 /// The orientation error of `reached` against `programmed` as a rotation vector in degrees (world frame):
 /// the axis of `R_reached R_programmedᵀ` times its angle; for small errors, the per-axis rotations.
 pub fn orientation_error_deg(programmed: &Isometry3<f64>, reached: &Isometry3<f64>) -> Vector3<f64> {
-    (reached.rotation * programmed.rotation.inverse()).scaled_axis().map(f64::to_degrees)
+    let programmed_to_reached = (reached.rotation * programmed.rotation.inverse()).to_rotation_matrix();
+    rotation_log(programmed_to_reached.matrix()).map(f64::to_degrees)
 }
 
 /// The run's time axis: from 0 to `duration_min` every `step_min` (the paper: 200 min, every minute).

@@ -13,12 +13,12 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
-use nalgebra::{Isometry3, Matrix3, Matrix6, Rotation3, Vector3, Vector6};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Vector3, Vector6};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Serialize;
-use thermokin_chain::{Chain, JointKind};
+use thermokin_chain::{Chain, JointKind, rotation_angle, rotation_log};
 
 use crate::IkError;
 
@@ -77,8 +77,10 @@ pub struct Params {
     pub orientation_tolerance_deg: f64,
     /// Random restarts after the first attempt fails.
     pub restarts: usize,
-    /// Wall-clock budget for one target, all attempts together.
-    pub time_budget: Duration,
+    /// Optional wall-clock budget for one target, all attempts together. `None` (the default) makes the
+    /// result a function of the inputs alone: the iteration and restart budgets bound the work, and the
+    /// same target gives the same answer on a busy or an idle machine, on 1 or N threads.
+    pub time_budget: Option<Duration>,
     /// Joint limits.
     pub limits: LimitPolicy,
     /// Seed of the restart generator (combined with the target index: the batch is deterministic).
@@ -105,7 +107,7 @@ impl Default for Params {
             position_tolerance_mm: 1e-9,
             orientation_tolerance_deg: 1e-9,
             restarts: 100,
-            time_budget: Duration::from_millis(50),
+            time_budget: None,
             limits: LimitPolicy::Enforce,
             rng_seed: 0x7e57_0140,
             length_scale_mm: 100.0,
@@ -120,6 +122,7 @@ impl Default for Params {
 
 /// How a solve ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[non_exhaustive]
 pub enum Status {
     /// Within both tolerances.
     Converged,
@@ -131,6 +134,9 @@ pub enum Status {
     Singular,
     /// A solution was found, but farther from the seed than `max_distance_from_seed` allows.
     FarFromSeed,
+    /// The solver's residual reached the tolerances but the independent recomputation of the pose error
+    /// (see [`solve`]) did not: the answer is not trusted. Never expected; a bug if seen.
+    Unverified,
 }
 
 /// The result of one solve.
@@ -216,26 +222,6 @@ fn evaluate(chain: &Chain, q: &[f64], target: &Target, l: f64, cols: &mut [[f64;
             Eval { e, rows: 3, cost: dp.norm_squared(), pos_err: dp.norm(), rot_err: 0.0 }
         }
     })
-}
-
-/// The rotation vector (axis × angle) of a rotation matrix, accurate to rounding near the identity.
-///
-/// `acos((tr R − 1)/2)`, which nalgebra's `scaled_axis` uses, resolves angles only to ~1e-8 rad near zero
-/// (the square root of machine epsilon), far above the 1.7e-11 rad (1e-9°) the solver must reach. The
-/// skew part `(R − Rᵀ)/2 = sin θ [u]×` keeps full relative precision there; the angle is then
-/// `atan2(sin θ, cos θ)`. Near θ = π the skew part vanishes and the general formula takes over.
-fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
-    let s = Vector3::new(r[(2, 1)] - r[(1, 2)], r[(0, 2)] - r[(2, 0)], r[(1, 0)] - r[(0, 1)]) * 0.5;
-    let sin = s.norm();
-    let cos = (r.trace() - 1.0) * 0.5;
-    if cos > -0.5 {
-        if sin < 1e-300 {
-            return Vector3::zeros();
-        }
-        let angle = sin.atan2(cos);
-        return s * (angle / sin);
-    }
-    Rotation3::from_matrix_unchecked(*r).scaled_axis()
 }
 
 /// Copies Jacobian columns into the faer matrix, angular rows scaled by `l`.
@@ -339,6 +325,11 @@ fn step(ws: &mut Workspace, ev: &Eval, lambda: f64, backend: Backend) -> bool {
     true
 }
 
+/// `true` once an optional deadline has passed (never without one).
+fn past(deadline: Option<Instant>) -> bool {
+    deadline.is_some_and(|d| Instant::now() > d)
+}
+
 /// Position error (mm) above which the wide trust region applies.
 const FAR_MM: f64 = 50.0;
 
@@ -374,7 +365,7 @@ fn attempt(
     q: &mut [f64],
     params: &Params,
     ws: &mut Workspace,
-    deadline: Instant,
+    deadline: Option<Instant>,
 ) -> (Option<Eval>, usize, bool) {
     let l = params.length_scale_mm;
     let tol_rot = params.orientation_tolerance_deg.to_radians();
@@ -388,7 +379,7 @@ fn attempt(
         if converged(&ev) {
             return (Some(ev), it, true);
         }
-        if it % 16 == 15 && Instant::now() > deadline {
+        if it % 16 == 15 && past(deadline) {
             return (Some(ev), it, false);
         }
         // An attempt still far off after many iterations is in a poor basin (a local minimum or a
@@ -503,6 +494,35 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Solves one target from `seed`. `index` only feeds the restart generator (batch determinism).
+///
+/// `Converged` is a claim checked before it is made: the solver stops when its residual (matrix log of the
+/// rotation error, [`rotation_log`]) is within the tolerances, and the answer is then re-measured
+/// independently — forward kinematics through [`Chain::tool_pose`] and the quaternion angle
+/// [`rotation_angle`]. Only when that too is within the tolerances is the status `Converged`; the errors
+/// reported in every [`Solution`] are the independent ones.
+///
+/// ```
+/// use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+/// use thermokin_chain::{Chain, FixedRow, Joint};
+/// use thermokin_ik::{Params, Target, Workspace, solve};
+///
+/// // A planar 3R arm with 300 mm links.
+/// let link = Vector3::new(300.0, 0.0, 0.0);
+/// let joints = vec![
+///     Joint::revolute("j1", Vector3::zeros(), Vector3::z_axis()),
+///     Joint::revolute("j2", link, Vector3::z_axis()),
+///     Joint::revolute("j3", link, Vector3::z_axis()),
+/// ];
+/// let tool = FixedRow::from_isometry(&Isometry3::translation(300.0, 0.0, 0.0));
+/// let chain = Chain::new(FixedRow::identity(), joints, tool).unwrap();
+/// let goal = chain.tool_pose(&[0.3, -0.6, 0.9]).unwrap();
+/// let mut ws = Workspace::new(chain.dof());
+/// let params = Params { restarts: 20, ..Params::default() };
+/// let sol = solve(&chain, &Target::Position(goal.translation.vector), &[0.0; 3], &params, &mut ws, 0).unwrap();
+/// assert!(sol.converged());
+/// assert!(sol.position_error_mm <= 1e-9);
+/// # let _ = UnitQuaternion::<f64>::identity();
+/// ```
 pub fn solve(
     chain: &Chain,
     target: &Target,
@@ -518,22 +538,22 @@ pub fn solve(
     if ws.dof != chain.dof() {
         *ws = Workspace::new(chain.dof());
     }
-    let start = Instant::now();
-    let deadline = start + params.time_budget;
-    let fail = |q: Vec<f64>, status, ev: Option<Eval>, iterations, restarts| Solution {
-        q,
-        status,
-        iterations,
-        restarts,
-        position_error_mm: ev.map_or(f64::NAN, |e| e.pos_err),
-        orientation_error_deg: ev.map_or(f64::NAN, |e| e.rot_err.to_degrees()),
+    let deadline = params.time_budget.map(|b| Instant::now() + b);
+    let record = |q: Vec<f64>, status, iterations, restarts| {
+        let (position_error_mm, orientation_error_rad) = independent_error(chain, &q, target);
+        Solution {
+            q,
+            status,
+            iterations,
+            restarts,
+            position_error_mm,
+            orientation_error_deg: orientation_error_rad.to_degrees(),
+        }
     };
     if let Some((o1, reach)) = reach_bound(chain) {
         let d = (target.position() - o1).norm();
         if d > reach * (1.0 + 1e-9) {
-            let mut cols = vec![[0.0; 6]; chain.dof()];
-            let ev = evaluate(chain, seed, target, params.length_scale_mm, &mut cols);
-            return Ok(fail(seed.to_vec(), Status::Unreachable, ev, 0, 0));
+            return Ok(record(seed.to_vec(), Status::Unreachable, 0, 0));
         }
     }
     let mut rng = ChaCha8Rng::seed_from_u64(params.rng_seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15));
@@ -541,9 +561,10 @@ pub fn solve(
     let mut best: Option<Eval> = None;
     let mut total_iterations = 0;
     let mut far_found = false;
+    let mut unverified_found = false;
     for restart in 0..=params.restarts {
         if restart > 0 {
-            if Instant::now() > deadline {
+            if past(deadline) {
                 break;
             }
             q = if restart % 2 == 1 && restart < 2 * LOCAL_RESTARTS {
@@ -560,20 +581,14 @@ pub fn solve(
         if converged {
             nearest_turn(chain, &mut q, seed, params.limits);
             let too_far = params.max_distance_from_seed.is_some_and(|m| distance(&q, seed) > m);
-            if !too_far {
-                // Re-evaluate at the (possibly turned) final q, so that the reported errors are exact.
-                let mut cols = vec![[0.0; 6]; chain.dof()];
-                let ev = evaluate(chain, &q, target, params.length_scale_mm, &mut cols).or(ev);
-                return Ok(Solution {
-                    q,
-                    status: Status::Converged,
-                    iterations: total_iterations,
-                    restarts: restart,
-                    position_error_mm: ev.map_or(f64::NAN, |e| e.pos_err),
-                    orientation_error_deg: ev.map_or(f64::NAN, |e| e.rot_err.to_degrees()),
-                });
+            if too_far {
+                far_found = true;
+            } else if verified(chain, &q, target, params) {
+                return Ok(record(q, Status::Converged, total_iterations, restart));
+            } else {
+                // The residual says converged, the independent check does not: not an answer.
+                unverified_found = true;
             }
-            far_found = true;
         }
         if let Some(e) = ev
             && best.is_none_or(|b| e.cost < b.cost)
@@ -584,8 +599,41 @@ pub fn solve(
     }
     let restarts_used = params.restarts;
     let q_best = if best.is_some() { ws.best.clone() } else { seed.to_vec() };
-    let status = if far_found { Status::FarFromSeed } else { classify(chain, &q_best, target, params) };
-    Ok(fail(q_best, status, best, total_iterations, restarts_used))
+    let status = if far_found {
+        Status::FarFromSeed
+    } else if unverified_found {
+        Status::Unverified
+    } else {
+        classify(chain, &q_best, target, params)
+    };
+    Ok(record(q_best, status, total_iterations, restarts_used))
+}
+
+/// The pose error at `q` recomputed independently of the solver's residual: forward kinematics through
+/// [`Chain::tool_pose`] (an isometry with a unit quaternion, not the rotation matrix the residual uses),
+/// and the quaternion angle [`rotation_angle`] instead of the matrix log. Returns (mm, rad); NaN when the
+/// chain cannot evaluate `q`.
+fn independent_error(chain: &Chain, q: &[f64], target: &Target) -> (f64, f64) {
+    let Ok(base_from_tcp) = chain.tool_pose(q) else { return (f64::NAN, f64::NAN) };
+    let position = (target.position() - base_from_tcp.translation.vector).norm();
+    let orientation = match target {
+        Target::Pose(goal) => rotation_angle(&goal.rotation, &base_from_tcp.rotation),
+        Target::Position(_) => 0.0,
+    };
+    (position, orientation)
+}
+
+/// `true` when the independent recomputation of the pose error at `q` is within the tolerances.
+///
+/// The two metrics compute the same quantities by different arithmetic, so they differ by rounding: a few
+/// ulps of the TCP coordinates (|p| ≲ 10 m → ~1e-12 mm) and of the rotation entries (~1e-15 rad). The
+/// allowance `64 ε (1 + |p|)` mm and `64 ε` rad covers that and stays three orders below the default
+/// tolerances (1e-9 mm, 1.7e-11 rad), so it cannot turn a real miss into a pass.
+fn verified(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> bool {
+    let (position, orientation) = independent_error(chain, q, target);
+    let rounding = 64.0 * f64::EPSILON;
+    position <= params.position_tolerance_mm + rounding * (1.0 + target.position().norm())
+        && orientation <= params.orientation_tolerance_deg.to_radians() + rounding
 }
 
 /// Why the best solution is not a solution.
@@ -691,5 +739,30 @@ pub fn solve_batch(
             }
             Ok(out)
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use std::f64::consts::PI;
+
+    use nalgebra::{Isometry3, UnitQuaternion, Vector3};
+
+    use super::{Params, Target, verified};
+
+    #[test]
+    fn the_independent_check_sees_a_half_turn() {
+        let chain = thermokin_testdata::irb140_table9();
+        let q = [0.1, 0.2, -0.3, 0.4, 0.5, 0.6];
+        let base_from_tcp = chain.tool_pose(&q).unwrap();
+        for axis in [Vector3::x_axis(), Vector3::y_axis(), Vector3::z_axis()] {
+            let turned = base_from_tcp.rotation * UnitQuaternion::from_axis_angle(&axis, PI);
+            let flipped = Isometry3::from_parts(base_from_tcp.translation, turned);
+            assert!(!verified(&chain, &q, &Target::Pose(flipped), &Params::default()));
+        }
+        assert!(verified(&chain, &q, &Target::Pose(base_from_tcp), &Params::default()));
+        let moved = Target::Position(base_from_tcp.translation.vector + Vector3::new(0.0, 0.0, 1e-6));
+        assert!(!verified(&chain, &q, &moved, &Params::default()));
     }
 }

@@ -1,8 +1,8 @@
-//! Test support: where the workspace, its fixtures and the shared data (`../shared`, other people's
-//! files that are never copied into the project) are.
+//! Test support: where the workspace and its fixtures are, and Table 9's IRB 140 built in code.
 //!
-//! A test that needs shared data calls [`shared`]: when the data are missing it fails under `CI=true`
-//! and otherwise prints a skip note and returns `None`.
+//! Every file a test reads is inside the repository (`fixtures/`, `configs/`): the authors' published
+//! files, the real tracker data and the URDFs were copied in with their provenance (`fixtures/README.md`),
+//! so no test skips and none depends on anything beside the checkout.
 
 use std::path::{Path, PathBuf};
 
@@ -17,26 +17,19 @@ pub fn workspace(rel: &str) -> PathBuf {
     workspace_root().join(rel)
 }
 
-/// The shared data directory: `$THERMOKIN_SHARED`, else `../shared` beside the workspace.
-pub fn shared_root() -> PathBuf {
-    std::env::var_os("THERMOKIN_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| workspace_root().join("..").join("shared"))
+/// A file of the authors' published CoppeliaSim data (`fixtures/paper/authors/`).
+pub fn authors(file: &str) -> PathBuf {
+    workspace("fixtures/paper/authors").join(file)
 }
 
-/// A file under the shared data directory, or `None` (with a skip note) when it is missing.
-///
-/// # Panics
-/// Under `CI=true`, when the file is missing: CI must run every test.
-pub fn shared(rel: &str) -> Option<PathBuf> {
-    let p = shared_root().join(rel);
-    if p.exists() {
-        return Some(p);
-    }
-    let ci = std::env::var("CI").is_ok_and(|v| v == "true" || v == "1");
-    assert!(!ci, "shared data missing under CI=true: {}", p.display());
-    eprintln!("skip: shared data not found at {} (set THERMOKIN_SHARED or place ../shared)", p.display());
-    None
+/// A file of the real Rokae robot B tracker data (`fixtures/real/rokae-robot-b/`).
+pub fn rokae_robot_b(file: &str) -> PathBuf {
+    workspace("fixtures/real/rokae-robot-b").join(file)
+}
+
+/// One of the public URDFs (`fixtures/urdf/`).
+pub fn urdf(file: &str) -> PathBuf {
+    workspace("fixtures/urdf").join(file)
 }
 
 /// Table 9's nominal ABB IRB 140 in the same-orientation convention, built in code for crates that must

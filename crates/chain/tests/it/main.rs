@@ -3,4 +3,5 @@
 
 mod conversions;
 mod jacobians;
+mod rotation_log;
 mod support;

@@ -299,7 +299,7 @@ fn close(a: &[f64], b: &[f64]) -> bool {
 
 #[test]
 fn urdf_robots_everywhere_and_import_export() {
-    let Some(ur5) = thermokin_testdata::shared("urdf/ur5.urdf") else { return };
+    let ur5 = thermokin_testdata::urdf("ur5.urdf");
     let ur5 = ur5.to_str().unwrap().to_string();
     let q = "10,-40,30,20,50,-60";
     let direct = fk_position(&["fk", "--robot", &ur5, "--tip", "tool0", "--joints", q, "--json"]);
@@ -480,4 +480,25 @@ fn diagnose_with_an_explicit_holdout() {
     assert!(out.contains("validation: explicit hold-out set"), "{out}");
     assert!(out.contains("tool_frame"), "{out}");
     assert!(out.contains("where the nominal model's residuals lie"), "{out}");
+}
+
+#[test]
+fn ik_tool_down_is_right_or_not_converged() {
+    // The reported case: this pose printed `Converged` with FK of the answer 180° from the request.
+    let o = thermokin(&["ik", "--robot", ROBOT, "--pose", "500,0,300,180,0,0", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!(s["status"], "Converged", "{s}");
+    let q: Vec<String> =
+        s["joints_deg"].as_array().unwrap().iter().map(|v| format!("{:.12}", v.as_f64().unwrap())).collect();
+    let o = thermokin(&["fk", "--robot", ROBOT, "--joints", &q.join(","), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    let p: Vec<f64> = v["position_mm"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    // The solver's tolerance is 1e-9 mm; joints printed to 1e-12° (2e-14 rad × ≤ 1 m of lever) add < 2e-11 mm.
+    let miss = ((p[0] - 500.0).powi(2) + p[1].powi(2) + (p[2] - 300.0).powi(2)).sqrt();
+    assert!(miss < 1e-9 + 2e-11, "{p:?}");
+    // The tool's Z axis (third column of R) points down: world −Z.
+    let r = &v["rotation"];
+    let z_axis: Vec<f64> = (0..3).map(|i| r[i][2].as_f64().unwrap()).collect();
+    assert!((z_axis[2] + 1.0).abs() < 1e-9 && z_axis[0].abs() < 1e-9 && z_axis[1].abs() < 1e-9, "{z_axis:?}");
 }

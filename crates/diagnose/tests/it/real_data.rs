@@ -4,7 +4,7 @@
 use nalgebra::Vector3;
 use thermokin_chain::{DhConvention, DhRow, DhTable};
 use thermokin_diagnose::{Base, Config, Dataset, FrameMode, Measurement, ToolMode, diagnose};
-use thermokin_testdata::shared;
+use thermokin_testdata::{authors, rokae_robot_b};
 
 /// Rows of numbers of a small comma-separated file with one header line.
 fn numbers(path: &std::path::Path) -> Vec<Vec<f64>> {
@@ -17,10 +17,10 @@ fn numbers(path: &std::path::Path) -> Vec<Vec<f64>> {
         .collect()
 }
 
-pub fn rokae() -> Option<(Base, Dataset)> {
-    let mdh = shared("data/rokae-robot-b/nominal-mdh.csv")?;
-    let joints = shared("data/rokae-robot-b/joints-deg.csv")?;
-    let poses = shared("data/rokae-robot-b/tracker-poses.csv")?;
+pub fn rokae() -> (Base, Dataset) {
+    let mdh = rokae_robot_b("nominal-mdh.csv");
+    let joints = rokae_robot_b("joints-deg.csv");
+    let poses = rokae_robot_b("tracker-poses.csv");
     let rows = numbers(&mdh)
         .iter()
         .enumerate()
@@ -47,12 +47,12 @@ pub fn rokae() -> Option<(Base, Dataset)> {
         })
         .collect();
     let n = chain.dof();
-    Some((Base { chain, masses: vec![None; n] }, Dataset { measurements, temperature_names: Vec::new() }))
+    (Base { chain, masses: vec![None; n] }, Dataset { measurements, temperature_names: Vec::new() })
 }
 
 #[test]
 fn rokae_robot_b_additive_table() {
-    let Some((base, data)) = rokae() else { return };
+    let (base, data) = rokae();
     assert_eq!(data.len(), 30);
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     let report = diagnose(&base, &data, None, &config).unwrap();
@@ -86,7 +86,7 @@ fn rokae_robot_b_additive_table() {
 fn paper_static_case_gap() {
     // Our model with the authors' deviation table (applied as their CoppeliaSim script did) leaves
     // 0.45 mm RMS against their coordinates (NOTES.md: 0.25 mm per coordinate). What explains it?
-    let Some(path) = shared("data/paper-coppeliasim/results-static-case-study.csv") else { return };
+    let path = authors("results-static-case-study.csv");
     let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
     let table = thermokin_io::read_deviation_table(&thermokin_testdata::workspace(
         "fixtures/paper/deformations-case-study.toml",

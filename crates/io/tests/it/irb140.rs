@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_io::{Robot, read_paper_results, read_robot};
-use thermokin_testdata::{shared, workspace};
+use thermokin_testdata::{authors, workspace};
 
 fn robot(name: &str) -> Robot {
     read_robot(&workspace(&format!("configs/{name}"))).expect("bundled config loads")
@@ -75,7 +75,7 @@ const PINNED_TABLE4_MM: f64 = 1140.153724917;
 
 #[test]
 fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
-    let Some(path) = shared("data/paper-coppeliasim/results-transient-case-study.csv") else { return };
+    let path = authors("results-transient-case-study.csv");
     let rows = read_paper_results(&path).unwrap();
     assert_eq!(rows.len(), 10_050);
     let r = robot("irb140.toml");

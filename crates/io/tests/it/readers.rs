@@ -1,17 +1,17 @@
 //! The authors' files load; the TOML and CSV forms agree.
 
 use thermokin_io::{read_deviation_table, read_paper_results, read_targets, read_temperature_log};
-use thermokin_testdata::shared;
+use thermokin_testdata::authors;
 
 #[test]
 fn published_deviation_tables_load() {
-    let Some(case) = shared("data/paper-coppeliasim/deformations-case-study.csv") else { return };
+    let case = authors("deformations-case-study.csv");
     let t = read_deviation_table(&case).unwrap();
     assert_eq!(t.dof(), 6);
     for row in &t.joints {
         assert_eq!(row.to_mm_deg().map(|v| (v * 1e9).round() / 1e9), [1.0; 6]);
     }
-    let Some(measured) = shared("data/paper-coppeliasim/deformations-measured.csv") else { return };
+    let measured = authors("deformations-measured.csv");
     let m = read_deviation_table(&measured).unwrap();
     assert_eq!(m.dof(), 6);
     // Table 9 row 1 ΔX and Table 8 row 1 Δθz.
@@ -19,18 +19,18 @@ fn published_deviation_tables_load() {
     assert!((m.joints[0].rotation.z.to_degrees() + 0.0137).abs() < 1e-12);
     // Table 9's seventh row (−0.0166 mm along X) sits on joint 6 in the CSV.
     assert!((m.joints[5].translation.x + 0.0166).abs() < 1e-3, "{:?}", m.joints[5]);
-    let Some(zero) = shared("data/paper-coppeliasim/deformations-zero.csv") else { return };
+    let zero = authors("deformations-zero.csv");
     assert!(read_deviation_table(&zero).unwrap().is_zero());
 }
 
 #[test]
 fn targets_and_results_load() {
-    let Some(front) = shared("data/paper-coppeliasim/targets-cube-front.csv") else { return };
+    let front = authors("targets-cube-front.csv");
     let t = read_targets(&front).unwrap();
     assert_eq!(t[0].label, "P1");
     assert_eq!(t[0].position_mm.as_slice(), &[400.0, 300.0, 250.0]);
     assert_eq!(t[0].rotation_xyz_deg.as_slice(), &[0.0, 90.0, 0.0]);
-    let Some(stat) = shared("data/paper-coppeliasim/results-static-case-study.csv") else { return };
+    let stat = authors("results-static-case-study.csv");
     let rows = read_paper_results(&stat).unwrap();
     assert_eq!(rows.len(), 50);
     assert_eq!(rows[0].joints_deg[0], 2.810995);

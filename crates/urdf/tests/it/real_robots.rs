@@ -1,9 +1,9 @@
-//! Every shared URDF: our imported table against the `k` crate (an independent implementation), and the
+//! Every bundled URDF (`fixtures/urdf`): our imported table against the `k` crate (an independent implementation), and the
 //! export → import round trip.
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_testdata::shared;
+use thermokin_testdata::urdf;
 use thermokin_urdf::{ImportOptions, export_urdf, import_urdf};
 
 /// (file, tip link): the tip is the flange where a URDF's tree branches into fingers.
@@ -28,7 +28,7 @@ const MM: f64 = 1e-9;
 #[test]
 fn imported_fk_equals_the_k_crate() {
     for (file, tip) in ROBOTS {
-        let Some(path) = shared(&format!("urdf/{file}")) else { return };
+        let path = urdf(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let robot = import_urdf(&text, file, &options(*tip)).unwrap_or_else(|e| panic!("{e}"));
         let k_chain = k::Chain::<f64>::from_urdf_file(&path).unwrap();
@@ -76,7 +76,7 @@ fn imported_fk_equals_the_k_crate() {
 #[test]
 fn export_then_import_is_exact() {
     for (file, tip) in ROBOTS {
-        let Some(path) = shared(&format!("urdf/{file}")) else { return };
+        let path = urdf(file);
         let text = std::fs::read_to_string(&path).unwrap();
         let robot = import_urdf(&text, file, &options(*tip)).unwrap();
         // Deform it first: every joint gets error parameters, so the export must carry them.
@@ -115,7 +115,7 @@ fn export_then_import_is_exact() {
 
 #[test]
 fn ros_industrial_irb140_against_the_bundled_table() {
-    let Some(path) = shared("urdf/abb_irb140.urdf") else { return };
+    let path = urdf("abb_irb140.urdf");
     let robot =
         import_urdf(&std::fs::read_to_string(&path).unwrap(), "abb_irb140.urdf", &options(Some("tool0"))).unwrap();
     let toml_robot = std::fs::read_to_string(thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
