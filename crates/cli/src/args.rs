@@ -284,9 +284,13 @@ pub struct ReproduceArgs {
     /// The transcribed paper tables (Tables 10–18).
     #[arg(long, value_name = "DIR", default_value = "fixtures/paper")]
     pub fixtures: PathBuf,
-    /// The bundled IRB 140.
+    /// Table 9's IRB 140: the canonical-semantics run and the identification of the scene.
     #[arg(long, value_name = "FILE", default_value = "configs/irb140.toml")]
     pub robot: PathBuf,
+    /// The IRB 140 of the authors' CoppeliaSim scene (Table 9 with joint 6's object at the flange and the
+    /// tool point identified on their minute-0 rows): the CoppeliaSim-semantics runs.
+    #[arg(long, value_name = "FILE", default_value = "configs/irb140-scene.toml")]
+    pub scene_robot: PathBuf,
     /// The authors' published CoppeliaSim files (bundled; compared when present).
     #[arg(long, value_name = "DIR", default_value = "fixtures/paper/authors", alias = "shared")]
     pub authors: PathBuf,

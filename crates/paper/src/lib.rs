@@ -1,0 +1,38 @@
+//! `thermokin-paper`: the paper's case studies as values, compared with the authors' own files.
+//!
+//! This crate holds what is specific to reproducing *the paper* rather than to compensating a user's
+//! robot. Today: [`scene`], the authors' CoppeliaSim scene identified from their files and replayed —
+//! why FK of their published static angles sat 0.45 mm from their published coordinates, and which
+//! explanations the data confirm or reject.
+//!
+//! Every number here is computed from the authors' files (`fixtures/paper/authors/`) and Table 9; none
+//! is transcribed from our own earlier output.
+
+pub mod scene;
+
+pub use scene::{
+    Hypothesis, Residuals, TransientCandidate, Verdict, identify_tool_point, residuals, scene_chain, static_hypotheses,
+    transient_candidates,
+};
+
+/// Errors of the reproduction.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum PaperError {
+    /// The kinematic model could not be built or evaluated.
+    #[error(transparent)]
+    Chain(#[from] thermokin_chain::ChainError),
+    /// The deformation could not be applied.
+    #[error(transparent)]
+    Deform(#[from] thermokin_deform::DeformError),
+    /// The authors' rows do not fit the robot.
+    #[error("{what}: expected {expected} rows or joints, got {got}")]
+    Shape {
+        /// Which data.
+        what: &'static str,
+        /// Expected count.
+        expected: usize,
+        /// Count found.
+        got: usize,
+    },
+}
