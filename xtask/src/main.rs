@@ -184,11 +184,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
 
 /// File-format and CLI crates, allowed only where named.
 /// (`thermokin-paper` sees them only through `thermokin-io`, whose readers it calls.)
-const FORMAT_CRATES: &[(&str, &[&str])] = &[
-    ("toml", &["thermokin-io", "thermokin-paper"]),
-    ("csv", &["thermokin-io", "thermokin-paper"]),
-    ("clap", &[]),
-];
+const FORMAT_CRATES: &[(&str, &[&str])] =
+    &[("toml", &["thermokin-io", "thermokin-paper"]), ("csv", &["thermokin-io", "thermokin-paper"]), ("clap", &[])];
 
 fn deps() -> Result<()> {
     let mut bad = Vec::new();

@@ -111,6 +111,17 @@ pub struct RobotArgs {
     /// URDF tip link (default: the single leaf).
     #[arg(long, value_name = "LINK")]
     pub tip: Option<String>,
+    /// Replace the robot file's tool: the TCP in the last joint's frame, x,y,z (mm) and the orientation in
+    /// the --orientation convention (or a JSON pose).
+    #[arg(long, value_name = "X,Y,Z,A,B,C", allow_hyphen_values = true)]
+    pub tool_pose: Option<String>,
+    /// Replace the robot file's base: the robot base in the world frame, as --tool-pose.
+    #[arg(long, value_name = "X,Y,Z,A,B,C", allow_hyphen_values = true)]
+    pub base_pose: Option<String>,
+    /// Orientation convention of --pose, --tool-pose and --base-pose: xyz (X-Y-Z Euler degrees,
+    /// R = Rx·Ry·Rz, the paper's), rpy (ROS roll,pitch,yaw degrees, R = Rz·Ry·Rx) or quat (w,x,y,z).
+    #[arg(long, value_name = "CONVENTION", default_value = "xyz", value_parser = parse_orientation)]
+    pub orientation: thermokin_io::Orientation,
     /// Deviation table (the authors' CSV `Dx,Dy,Dz,Dox,Doy,Doz`, or TOML), mm and degrees.
     #[arg(long, value_name = "FILE")]
     pub deformation: Option<PathBuf>,
@@ -145,7 +156,8 @@ pub struct FkArgs {
     /// Joint values, degrees (mm for prismatic joints), comma separated.
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub joints: String,
-    /// Print JSON: `{"position_mm": [x,y,z], "rotation": [[3x3]], "rpy_deg": [rx,ry,rz]}` (X-Y-Z Euler).
+    /// Print JSON: position_mm, rotation (3×3), xyz_euler_deg (the paper's R = Rx·Ry·Rz), ros_rpy_deg
+    /// (R = Rz·Ry·Rx), quaternion_wxyz, and outside_limits (joints beyond their limits, named).
     #[arg(long)]
     pub json: bool,
 }
@@ -323,6 +335,11 @@ pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
         return Ok(TimeProfile::Temperature { log, sensors: Vec::new(), reference_c: None });
     }
     let num = |v: &str| -> Result<f64, String> {
+        if v.trim().is_empty() {
+            return Err(format!(
+                "`{kind}` needs a value after a colon, e.g. {kind}:180 (see --help for every profile)"
+            ));
+        }
         let x: f64 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
         if x.is_finite() { Ok(x) } else { Err(format!("`{v}` is not finite")) }
     };
@@ -353,6 +370,11 @@ pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
         }
     };
     Ok(p)
+}
+
+/// Parses `--orientation`.
+pub fn parse_orientation(s: &str) -> Result<thermokin_io::Orientation, String> {
+    s.parse()
 }
 
 /// Parses a comma-separated list of finite numbers, naming the flag in errors.

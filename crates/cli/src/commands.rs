@@ -1,25 +1,22 @@
 //! The subcommands: load inputs (degrees → radians here, at the edge), run the library, print and write.
 
-use std::path::Path;
 use std::time::Duration;
 
 use anyhow::{Context, anyhow};
-use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
-use thermokin_chain::{Chain, JointKind, xyz_angles};
+use thermokin_chain::Chain;
 use thermokin_compensate::{
-    Cycle, ProgramTarget, RapidSettings, RunOutput, RunSettings, compensate_static, compensate_transient,
-    pose_from_xyz_deg, rapid_module, write_joint_csv, write_results_csv,
+    Cycle, RapidSettings, RunOutput, RunSettings, compensate_static, compensate_transient, rapid_module,
+    write_joint_csv, write_results_csv,
 };
-use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
+use thermokin_deform::TimeProfile;
 use thermokin_ik::{Params, Target, Workspace, solve};
-use thermokin_io::{
-    Robot, RobotOptions, read_deviation_table_for, read_robot_with, read_targets, robot_to_toml, write_atomic,
-    write_atomic_with,
-};
+use thermokin_io::units::{quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
+use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
-use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, RobotArgs, Semantics, UrdfCommand, parse_list};
+use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, UrdfCommand, parse_list};
+use crate::input::{Loaded, joints, joints_out, load, pose, program, progress_bar, working_chain};
 use crate::{Failure, exit, plots, reproduce};
 
 /// Runs a parsed command line; returns the exit status.
@@ -35,95 +32,67 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
     }
 }
 
-/// The loaded robot, its deviation table (if any) and the semantics.
-pub struct Loaded {
-    pub robot: Robot,
-    pub table: Option<DeviationTable>,
-    pub semantics: TableSemantics,
+/// A pose in every convention: position, rotation matrix, X-Y-Z Euler (the paper's), ROS rpy and the
+/// quaternion; numbers at their meaningful precision, not binary noise: 1e-10 mm and degrees (a tenth of
+/// the solver's 1e-9 tolerance, so a printed pose fed back to `ik` loses nothing), 1e-13 for matrix and
+/// quaternion entries.
+fn pose_json(pose: &Isometry3<f64>) -> serde_json::Value {
+    let m = pose.rotation.to_rotation_matrix().into_inner();
+    let p = pose.translation.vector;
+    let r9 = |x: f64| rounded(x, 10);
+    let r12 = |x: f64| rounded(x, 13);
+    json!({
+        "position_mm": [r9(p.x), r9(p.y), r9(p.z)],
+        "rotation": [[r12(m[(0, 0)]), r12(m[(0, 1)]), r12(m[(0, 2)])], [r12(m[(1, 0)]), r12(m[(1, 1)]), r12(m[(1, 2)])], [r12(m[(2, 0)]), r12(m[(2, 1)]), r12(m[(2, 2)])]],
+        "xyz_euler_deg": xyz_euler_deg(&pose.rotation).map(r9),
+        "ros_rpy_deg": ros_rpy_deg(&pose.rotation).map(r9),
+        "quaternion_wxyz": quaternion_wxyz(&pose.rotation).map(r12),
+    })
 }
 
-pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
-    let options = RobotOptions { base: args.base.clone(), tip: args.tip.clone() };
-    let robot = read_robot_with(&args.robot, &options).map_err(Failure::input)?;
-    let table = match &args.deformation {
-        Some(p) => Some(read_deviation_table_for(p, robot.chain.dof()).map_err(Failure::input)?),
-        None => None,
-    };
-    if table.is_none() && (args.profile.is_some() || args.time.is_some()) {
-        return Err(Failure::input(anyhow!("--profile and --time need --deformation")));
-    }
-    if let Some(p) = &args.profile {
-        p.validate(robot.chain.dof()).map_err(Failure::input)?;
-    }
-    let semantics = semantics(args.semantics, robot.chain.dof());
-    Ok(Loaded { robot, table, semantics })
-}
-
-pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
-    match s {
-        Semantics::Canonical => TableSemantics::Canonical,
-        Semantics::Coppeliasim => TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof])),
+fn print_pose(pose: &Isometry3<f64>) {
+    let p = pose.translation.vector;
+    let [a, b, c] = xyz_euler_deg(&pose.rotation);
+    let [roll, pitch, yaw] = ros_rpy_deg(&pose.rotation);
+    let [w, x, y, z] = quaternion_wxyz(&pose.rotation);
+    println!("position_mm     {:.6} {:.6} {:.6}", p.x, p.y, p.z);
+    println!("xyz_euler_deg   {a:.6} {b:.6} {c:.6}   (R = Rx·Ry·Rz, the paper's convention)");
+    println!("ros_rpy_deg     {roll:.6} {pitch:.6} {yaw:.6}   (R = Rz(yaw)·Ry(pitch)·Rx(roll))");
+    println!("quaternion_wxyz {w:.9} {x:.9} {y:.9} {z:.9}");
+    if b.abs() == 90.0 {
+        println!("note: RY = ±90° is the X-Y-Z Euler singularity; only RX ± RZ is defined, shown as RX = 0");
     }
 }
 
-/// The chain fk/ik work on: nominal, or deformed by the table at `--time` under `--profile`.
-pub fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
-    let Some(table) = &loaded.table else { return Ok(loaded.robot.chain.clone()) };
-    let table = match (&args.profile, args.time) {
-        (Some(p), Some(t)) => p.table_at(table, t).map_err(Failure::input)?,
-        (Some(_), None) => return Err(Failure::input(anyhow!("--profile needs --time (minutes)"))),
-        (None, Some(_)) => return Err(Failure::input(anyhow!("--time needs --profile"))),
-        (None, None) => table.clone(),
-    };
-    table.apply(&loaded.robot.chain, &loaded.semantics).map_err(Failure::input)
-}
-
-/// Degrees (or mm) → the library's radians (or mm), per joint kind.
-pub fn joints_in(chain: &Chain, flag: &str, values: &[f64]) -> Result<Vec<f64>, Failure> {
-    if values.len() != chain.dof() {
-        return Err(Failure::input(anyhow!(
-            "--{flag}: {} values for a robot with {} joints",
-            values.len(),
-            chain.dof()
-        )));
-    }
-    Ok(chain
+/// Joints outside the robot's limits, named, in degrees (mm for prismatic joints).
+fn outside_limits(chain: &Chain, q: &[f64]) -> Vec<String> {
+    let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
+    let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
+    let (lo, hi, v) = (joints_out(chain, &lower), joints_out(chain, &upper), joints_out(chain, q));
+    chain
         .joints()
         .iter()
-        .zip(values)
-        .map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_radians() } else { v })
-        .collect())
-}
-
-pub fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
-    chain.joints().iter().zip(q).map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_degrees() } else { v }).collect()
-}
-
-fn pose_json(pose: &Isometry3<f64>) -> serde_json::Value {
-    let r = pose.rotation.to_rotation_matrix();
-    let m = r.matrix();
-    let rpy = xyz_angles(m).map(f64::to_degrees);
-    let p = pose.translation.vector;
-    json!({
-        "position_mm": [p.x, p.y, p.z],
-        "rotation": [[m[(0, 0)], m[(0, 1)], m[(0, 2)]], [m[(1, 0)], m[(1, 1)], m[(1, 2)]], [m[(2, 0)], m[(2, 1)], m[(2, 2)]]],
-        "rpy_deg": [rpy.x, rpy.y, rpy.z],
-    })
+        .enumerate()
+        .filter(|(i, j)| j.limits.is_some_and(|l| !l.contains(q[*i])))
+        .map(|(i, j)| format!("{} = {:.6} outside [{:.6}, {:.6}]", j.name, v[i], lo[i], hi[i]))
+        .collect()
 }
 
 fn fk(a: FkArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
-    let values = parse_list("joints", &a.joints).map_err(Failure::input)?;
-    let q = joints_in(&chain, "joints", &values)?;
+    let q = joints(&chain, "joints", &a.joints)?;
     let pose = chain.tool_pose(&q).map_err(Failure::input)?;
+    let outside = outside_limits(&chain, &q);
+    for o in &outside {
+        eprintln!("warning: {o} (the pose is computed anyway)");
+    }
     if a.json {
-        println!("{}", pose_json(&pose));
+        let mut v = pose_json(&pose);
+        v["outside_limits"] = json!(outside);
+        println!("{v}");
     } else {
-        let p = pose.translation.vector;
-        let r = xyz_angles(pose.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
-        println!("position_mm  {:.6} {:.6} {:.6}", p.x, p.y, p.z);
-        println!("rpy_deg      {:.6} {:.6} {:.6}   (X-Y-Z Euler, R = Rx·Ry·Rz)", r.x, r.y, r.z);
+        print_pose(&pose);
     }
     Ok(exit::OK)
 }
@@ -131,17 +100,23 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
 fn ik(a: IkArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
-    let v = parse_list("pose", &a.pose).map_err(Failure::input)?;
-    let target = match (v.len(), a.position_only) {
-        (6, false) => Target::Pose(pose_from_xyz_deg(Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]))),
-        (3, true) | (6, true) => Target::Position(Vector3::new(v[0], v[1], v[2])),
-        (3, false) => {
-            return Err(Failure::input(anyhow!("--pose: 3 values need --position-only (or give x,y,z,rx,ry,rz)")));
+    let target = if a.position_only {
+        let v = parse_list("pose", &a.pose).map_err(Failure::input)?;
+        if v.len() < 3 {
+            return Err(Failure::input(anyhow!("--pose: --position-only needs at least x,y,z")));
         }
-        (n, _) => return Err(Failure::input(anyhow!("--pose: expected 6 values (x,y,z,rx,ry,rz), got {n}"))),
+        Target::Position(Vector3::new(v[0], v[1], v[2]))
+    } else {
+        let v = parse_list("pose", &a.pose).ok();
+        if v.as_ref().is_some_and(|v| v.len() == 3) {
+            return Err(Failure::input(anyhow!(
+                "--pose: 3 values need --position-only (or give x,y,z and an orientation)"
+            )));
+        }
+        Target::Pose(pose(&a.pose, "pose", a.robot.orientation)?)
     };
     let seed = match &a.seed {
-        Some(s) => joints_in(&chain, "seed", &parse_list("seed", s).map_err(Failure::input)?)?,
+        Some(s) => joints(&chain, "seed", s)?,
         None => vec![0.0; chain.dof()],
     };
     let params = Params { restarts: a.restarts, ..Params::default() };
@@ -151,39 +126,18 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     if a.json {
         println!(
             "{}",
-            json!({"joints_deg": deg, "status": format!("{:?}", s.status), "iterations": s.iterations, "restarts": s.restarts,
+            json!({"joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(), "status": format!("{:?}", s.status), "iterations": s.iterations, "restarts": s.restarts,
                    "position_error_mm": s.position_error_mm, "orientation_error_deg": s.orientation_error_deg})
         );
     } else {
-        let list: Vec<String> = deg.iter().map(|d| format!("{d:.6}")).collect();
+        let list: Vec<String> = deg.iter().map(|&d| format!("{:.6}", rounded(d, 6))).collect();
         println!("joints_deg   {}", list.join(","));
         println!(
-            "status       {:?} after {} iterations, {} restarts; error {:.3e} mm, {:.3e}°",
+            "status       {:?} after {} iterations, {} restarts; error {:.3e} mm, {:.3e}° (checked by FK)",
             s.status, s.iterations, s.restarts, s.position_error_mm, s.orientation_error_deg
         );
     }
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
-}
-
-/// Reads a targets file into a program.
-pub fn program(path: &Path) -> Result<Vec<ProgramTarget>, Failure> {
-    Ok(read_targets(path)
-        .map_err(Failure::input)?
-        .into_iter()
-        .map(|t| ProgramTarget { label: t.label, pose: pose_from_xyz_deg(t.position_mm, t.rotation_xyz_deg) })
-        .collect())
-}
-
-/// A progress bar that shows itself only when a run lasts more than a second.
-pub fn progress_bar(len: u64, label: &str) -> ProgressBar {
-    let bar = ProgressBar::hidden();
-    bar.set_length(len);
-    bar.set_style(
-        ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len} steps ({eta})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    bar.set_message(label.to_string());
-    bar
 }
 
 fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
@@ -195,7 +149,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     let chain = &loaded.robot.chain;
     let prog = program(&a.targets)?;
     let start = match &a.seed {
-        Some(s) => joints_in(chain, "seed", &parse_list("seed", s).map_err(Failure::input)?)?,
+        Some(s) => joints(chain, "seed", s)?,
         None => vec![0.0; chain.dof()],
     };
     let settings = RunSettings { semantics: loaded.semantics.clone(), ik: Params::default(), start };

@@ -13,7 +13,7 @@ use thermokin_diagnose::{
 use thermokin_io::{read_measurements, write_atomic, write_atomic_with, write_measurements};
 
 use crate::args::{DiagnoseArgs, FrameArg, SimulateArgs, ToolArg};
-use crate::commands::{load, working_chain};
+use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {

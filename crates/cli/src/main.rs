@@ -4,6 +4,7 @@
 mod args;
 mod commands;
 mod diagnosis;
+mod input;
 mod plots;
 mod reproduce;
 

@@ -16,7 +16,7 @@ use thermokin_ik::Params;
 use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, read_robot, write_atomic};
 
 use crate::args::ReproduceArgs;
-use crate::commands::{program, progress_bar};
+use crate::input::{program, progress_bar};
 use crate::{Failure, exit, plots};
 
 #[derive(Deserialize)]

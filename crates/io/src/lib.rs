@@ -11,6 +11,7 @@ mod measurements;
 mod paper;
 mod robot;
 mod targets;
+pub mod units;
 mod write;
 
 pub use deviation::{
@@ -20,6 +21,7 @@ pub use measurements::{parse_measurements, read_measurements, write_measurements
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml};
 pub use targets::{DEFAULT_ORIENTATION_DEG, Target, parse_targets, read_targets};
+pub use units::Orientation;
 pub use write::{write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
@@ -36,7 +38,7 @@ pub enum IoError {
         message: String,
     },
     /// The content is wrong at a known place.
-    #[error("{path}:{line}: {field}: {message}", path = path.display(), line = line.map_or("?".to_string(), |l| l.to_string()))]
+    #[error("{path}{at}: {field}: {message}", path = path.display(), at = line.map_or(String::new(), |l| format!(":{l}")))]
     Input {
         /// The file.
         path: PathBuf,

@@ -1,13 +1,17 @@
-//! Target programs: the authors' CSV (`,X,Y,Z` then `P1,400,300,250`, mm), optionally with `RX,RY,RZ`
-//! (degrees, CoppeliaSim X-Y-Z Euler). Without orientation columns every target gets (0, 90, 0), the
-//! orientation of Table 12.
+//! Target programs: the authors' CSV (`,X,Y,Z` then `P1,400,300,250`, mm), optionally with an
+//! orientation in one of three conventions, told apart by the column names:
+//! - `RX,RY,RZ`: X-Y-Z Euler angles in degrees, `R = Rx·Ry·Rz` (the paper's and CoppeliaSim's);
+//! - `ROLL,PITCH,YAW`: ROS roll-pitch-yaw in degrees, `R = Rz(yaw)·Ry(pitch)·Rx(roll)`;
+//! - `QW,QX,QY,QZ`: a unit quaternion.
+//!
+//! Without orientation columns every target gets X-Y-Z Euler (0, 90, 0), the orientation of Table 12.
 
 use std::path::Path;
 
-use nalgebra::Vector3;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::csvtext::{column, expect_fields, number, records};
-use crate::{IoError, read_text};
+use crate::{IoError, Orientation, read_text};
 
 /// The orientation of every target of Table 12, degrees (X-Y-Z Euler: the tool Z axis along world +X).
 pub const DEFAULT_ORIENTATION_DEG: [f64; 3] = [0.0, 90.0, 0.0];
@@ -19,10 +23,17 @@ pub struct Target {
     pub label: String,
     /// Position, mm.
     pub position_mm: Vector3<f64>,
-    /// Orientation, degrees, X-Y-Z Euler (`R = Rx Ry Rz`).
-    pub rotation_xyz_deg: Vector3<f64>,
+    /// Orientation of the TCP in the base frame.
+    pub rotation: UnitQuaternion<f64>,
     /// Line in the file.
     pub line: usize,
+}
+
+impl Target {
+    /// The programmed TCP pose in the base frame (mm).
+    pub fn pose(&self) -> Isometry3<f64> {
+        Isometry3::from_parts(Translation3::from(self.position_mm), self.rotation)
+    }
 }
 
 /// Reads a targets CSV.
@@ -42,10 +53,37 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
         .iter()
         .map(|n| find(n).ok_or_else(|| IoError::input(path, Some(header.line), *n, format!("missing column `{n}`"))))
         .collect::<Result<_, _>>()?;
-    let rot: Vec<Option<usize>> = ["RX", "RY", "RZ"].iter().map(|n| find(n)).collect();
-    if rot.iter().any(Option::is_some) && rot.iter().any(Option::is_none) {
-        return Err(IoError::input(path, Some(header.line), "RX,RY,RZ", "give all three orientation columns or none"));
+    let conventions = [
+        (Orientation::XyzEuler, &["RX", "RY", "RZ"][..]),
+        (Orientation::Rpy, &["ROLL", "PITCH", "YAW"][..]),
+        (Orientation::Quaternion, &["QW", "QX", "QY", "QZ"][..]),
+    ];
+    let mut orientation: Option<(Orientation, &[&str], Vec<usize>)> = None;
+    for (convention, names) in conventions {
+        let cols: Vec<Option<usize>> = names.iter().map(|n| find(n)).collect();
+        if cols.iter().all(Option::is_none) {
+            continue;
+        }
+        if cols.iter().any(Option::is_none) {
+            return Err(IoError::input(
+                path,
+                Some(header.line),
+                names.join(","),
+                "give all the columns of an orientation or none",
+            ));
+        }
+        if let Some((_, other, _)) = &orientation {
+            return Err(IoError::input(
+                path,
+                Some(header.line),
+                names.join(","),
+                format!("two orientations given ({} and {})", other.join(","), names.join(",")),
+            ));
+        }
+        orientation = Some((convention, names, cols.into_iter().flatten().collect()));
     }
+    let rot: Vec<Option<usize>> =
+        orientation.as_ref().map_or_else(Vec::new, |(_, _, c)| c.iter().map(|&i| Some(i)).collect());
     let label_col = (0..header.cells.len()).find(|i| !pos.contains(i) && !rot.contains(&Some(*i)));
     let mut out = Vec::with_capacity(rows.len());
     for r in rows {
@@ -55,19 +93,24 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
             number(path, r.line, "Y", &r.cells[pos[1]])?,
             number(path, r.line, "Z", &r.cells[pos[2]])?,
         );
-        let o = match (rot[0], rot[1], rot[2]) {
-            (Some(a), Some(b), Some(c)) => Vector3::new(
-                number(path, r.line, "RX", &r.cells[a])?,
-                number(path, r.line, "RY", &r.cells[b])?,
-                number(path, r.line, "RZ", &r.cells[c])?,
-            ),
-            _ => Vector3::from(DEFAULT_ORIENTATION_DEG),
+        let rotation = match &orientation {
+            Some((convention, names, cols)) => {
+                let values: Vec<f64> = names
+                    .iter()
+                    .zip(cols)
+                    .map(|(n, &c)| number(path, r.line, n, &r.cells[c]))
+                    .collect::<Result<_, _>>()?;
+                convention.rotation(&values).map_err(|m| IoError::input(path, Some(r.line), names.join(","), m))?
+            }
+            None => Orientation::XyzEuler
+                .rotation(&DEFAULT_ORIENTATION_DEG)
+                .map_err(|m| IoError::input(path, Some(r.line), "RX,RY,RZ", m))?,
         };
         let label = label_col
             .map(|c| r.cells[c].clone())
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| format!("P{}", out.len() + 1));
-        out.push(Target { label, position_mm: p, rotation_xyz_deg: o, line: r.line });
+        out.push(Target { label, position_mm: p, rotation, line: r.line });
     }
     if out.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));

@@ -32,7 +32,7 @@ fn fk_json_at_home() {
     let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
     let p: Vec<f64> = v["position_mm"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!((p[0] - 515.0).abs() < 1e-9 && p[1].abs() < 1e-9 && (p[2] - 712.0).abs() < 1e-9, "{p:?}");
-    let rpy: Vec<f64> = v["rpy_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let rpy: Vec<f64> = v["xyz_euler_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
     assert!((rpy[1] - 90.0).abs() < 1e-9, "{rpy:?}");
     assert_eq!(v["rotation"].as_array().unwrap().len(), 3);
 }
@@ -42,7 +42,7 @@ fn fk_then_ik_round_trip() {
     let o = thermokin(&["fk", "--robot", ROBOT, "--deformation", TABLE, "--joints", "10,30,10,20,-40,5", "--json"]);
     let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
     let p = &v["position_mm"];
-    let r = &v["rpy_deg"];
+    let r = &v["xyz_euler_deg"];
     let pose = format!("{},{},{},{},{},{}", p[0], p[1], p[2], r[0], r[1], r[2]);
     let o = thermokin(&[
         "ik",
@@ -557,4 +557,78 @@ fn the_committed_reproduction_report_is_what_the_run_renders() {
         let committed = std::fs::read(workspace("docs/img").join(svg)).unwrap();
         assert!(rendered == committed, "docs/img/{svg} is stale; run `cargo xtask bless-golden`");
     }
+}
+
+#[test]
+fn poses_in_every_orientation_convention_reach_the_same_joints() {
+    // One tool-down pose written four ways: X-Y-Z Euler (180, 0, 0), ROS rpy (180, 0, 0) — the same
+    // rotation here, a half turn about X — a quaternion, and `fk --json`'s own rotation matrix.
+    let forms: [(&str, &str); 4] = [
+        ("xyz", "480,60,320,180,0,0"),
+        ("rpy", "480,60,320,180,0,0"),
+        ("quat", "480,60,320,0,1,0,0"),
+        ("xyz", r#"{"position_mm":[480,60,320],"rotation":[[1,0,0],[0,-1,0],[0,0,-1]]}"#),
+    ];
+    let mut answers = Vec::new();
+    for (convention, pose) in forms {
+        let o = thermokin(&["ik", "--robot", ROBOT, "--orientation", convention, "--pose", pose, "--json"]);
+        assert!(o.status.success(), "{convention} {pose}: {}", stderr(&o));
+        let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+        assert_eq!(s["status"], "Converged");
+        answers.push(s["joints_deg"].clone());
+    }
+    // The same pose up to the rounding of the written forms: the same branch, the same joints to 1e-6°.
+    let q = |v: &serde_json::Value| -> Vec<f64> { v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect() };
+    for w in answers.windows(2) {
+        assert!(q(&w[0]).iter().zip(q(&w[1])).all(|(a, b)| (a - b).abs() < 1e-6), "{answers:?}");
+    }
+    // A pose where the conventions differ: ROS rpy (10, 20, 30) is X-Y-Z Euler of another rotation;
+    // fk prints both for the same joints, and each read back in its convention gives the same pose.
+    let o = thermokin(&["fk", "--robot", ROBOT, "--joints", "10,30,10,20,-40,5", "--json"]);
+    let v: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    let p = &v["position_mm"];
+    for (convention, key) in [("xyz", "xyz_euler_deg"), ("rpy", "ros_rpy_deg"), ("quat", "quaternion_wxyz")] {
+        let values: Vec<String> = v[key].as_array().unwrap().iter().map(|x| x.to_string()).collect();
+        let pose = format!("{},{},{},{}", p[0], p[1], p[2], values.join(","));
+        let o = thermokin(&[
+            "ik",
+            "--robot",
+            ROBOT,
+            "--orientation",
+            convention,
+            "--pose",
+            &pose,
+            "--seed",
+            "0,20,20,0,-45,0",
+            "--json",
+        ]);
+        let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+        assert_eq!(s["status"], "Converged", "{convention}");
+        let q: Vec<f64> = s["joints_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        // The printed pose is rounded to 1e-9 mm and degrees: the joints agree to ~1e-8°.
+        assert!(
+            q.iter().zip([10.0, 30.0, 10.0, 20.0, -40.0, 5.0]).all(|(a, b)| (a - b).abs() < 1e-6),
+            "{convention}: {q:?}"
+        );
+    }
+    assert_ne!(v["xyz_euler_deg"], v["ros_rpy_deg"]);
+}
+
+#[test]
+fn tool_and_base_flags_override_the_robot_file() {
+    let plain = fk_position(&["fk", "--robot", ROBOT, "--joints", "0,0,0,0,0,0", "--json"]);
+    // The TCP 100 mm further along joint 6's axis (X), and the robot base lifted by 250 mm.
+    let moved = fk_position(&[
+        "fk",
+        "--robot",
+        ROBOT,
+        "--joints",
+        "0,0,0,0,0,0",
+        "--tool-pose",
+        "125.5,0,0,0,90,0",
+        "--base-pose",
+        "0,0,250,0,0,0",
+        "--json",
+    ]);
+    assert!(close(&moved, &[plain[0] + 100.0, plain[1], plain[2] + 250.0]), "{plain:?} → {moved:?}");
 }

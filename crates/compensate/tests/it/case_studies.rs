@@ -3,8 +3,8 @@
 
 use nalgebra::Isometry3;
 use thermokin_compensate::{
-    Cycle, ProgramTarget, RapidSettings, RunSettings, compensate_static, compensate_transient, pose_from_xyz_deg,
-    rapid_module, write_results_csv,
+    Cycle, ProgramTarget, RapidSettings, RunSettings, compensate_static, compensate_transient, rapid_module,
+    write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Status};
@@ -19,7 +19,7 @@ fn program() -> Vec<ProgramTarget> {
     read_targets(&workspace("fixtures/paper/table12-targets.csv"))
         .unwrap()
         .into_iter()
-        .map(|t| ProgramTarget { label: t.label, pose: pose_from_xyz_deg(t.position_mm, t.rotation_xyz_deg) })
+        .map(|t| ProgramTarget { pose: t.pose(), label: t.label })
         .collect()
 }
 

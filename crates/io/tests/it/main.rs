@@ -4,4 +4,5 @@
 mod bad_input;
 mod fuzz_replay;
 mod irb140;
+mod orientation;
 mod readers;

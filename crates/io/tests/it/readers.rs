@@ -29,7 +29,7 @@ fn targets_and_results_load() {
     let t = read_targets(&front).unwrap();
     assert_eq!(t[0].label, "P1");
     assert_eq!(t[0].position_mm.as_slice(), &[400.0, 300.0, 250.0]);
-    assert_eq!(t[0].rotation_xyz_deg.as_slice(), &[0.0, 90.0, 0.0]);
+    assert_eq!(thermokin_io::units::xyz_euler_deg(&t[0].rotation), [0.0, 90.0, 0.0]);
     let stat = authors("results-static-case-study.csv");
     let rows = read_paper_results(&stat).unwrap();
     assert_eq!(rows.len(), 50);
