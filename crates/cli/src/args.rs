@@ -21,7 +21,7 @@ Examples:
   thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0
   thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0
   thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\
-      --targets fixtures/paper/table12-targets.csv --out results.csv --rapid prog.mod
+      --targets fixtures/paper/table12-targets.csv --out results.csv --program prog.mod
   thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --plot plots/
   thermokin reproduce-paper";
 
@@ -47,7 +47,7 @@ pub enum Command {
     Ik(IkArgs),
     /// Compensate a program of targets for a deviation table, static or over a warm-up cycle.
     #[command(
-        after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --rapid prog.mod --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
+        after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --program prog.src --controller kuka --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
     )]
     Compensate(CompensateArgs),
     /// URDF: import a serial chain into the extended table (TOML), or export a (deformed) robot as URDF.
@@ -207,9 +207,23 @@ pub struct CompensateArgs {
     /// Also write the compensated joint targets as CSV.
     #[arg(long, value_name = "FILE")]
     pub joints_out: Option<PathBuf>,
-    /// Also write an ABB RAPID module (MoveAbsJ with jointtargets).
-    #[arg(long, value_name = "FILE")]
-    pub rapid: Option<PathBuf>,
+    /// Also write a robot program of the compensated joints: ABB RAPID (.mod), KUKA KRL (.src) or
+    /// Universal Robots URScript (.script), by --controller or the extension. A transient run writes one
+    /// program per time step, FILE's stem + `_t<minutes>`.
+    #[arg(long, value_name = "FILE", alias = "rapid")]
+    pub program: Option<PathBuf>,
+    /// Controller language of --program: abb, kuka or ur (default: from the file extension).
+    #[arg(long, value_enum)]
+    pub controller: Option<ControllerArg>,
+    /// Motion speed in the controller's terms: ABB speeddata (v100), KUKA axis % (30), UR rad/s (1.05).
+    #[arg(long, value_name = "SPEED")]
+    pub speed: Option<String>,
+    /// Zone in the controller's terms: ABB zonedata (fine, z10), KUKA fine or C_PTP, UR blend radius m (0).
+    #[arg(long, value_name = "ZONE")]
+    pub zone: Option<String>,
+    /// ABB tooldata of the MoveAbsJ instructions.
+    #[arg(long, value_name = "NAME", default_value = "tool0")]
+    pub tooldata: String,
     /// Write SVG plots (deviation vs time; nominal vs deformed structure) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
@@ -245,6 +259,17 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+}
+
+/// `--controller`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ControllerArg {
+    /// ABB RAPID (MoveAbsJ to jointtargets).
+    Abb,
+    /// KUKA KRL (PTP to E6AXIS).
+    Kuka,
+    /// Universal Robots URScript (movej).
+    Ur,
 }
 
 /// `--frame`.

@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    Cycle, RapidSettings, RunOutput, RunSettings, compensate_static, compensate_transient, rapid_module,
+    Controller, Cycle, ProgramSettings, RunOutput, RunSettings, compensate_static, compensate_transient, programs,
     write_joint_csv, write_results_csv,
 };
 use thermokin_deform::TimeProfile;
@@ -15,7 +15,9 @@ use thermokin_ik::{Params, Target, Workspace, solve};
 use thermokin_io::units::{quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
-use crate::args::{Cli, Command, CompensateArgs, FkArgs, IkArgs, UrdfCommand, parse_list};
+use std::path::{Path, PathBuf};
+
+use crate::args::{Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, UrdfCommand, parse_list};
 use crate::input::{Loaded, joints, joints_out, load, pose, program, progress_bar, working_chain};
 use crate::{Failure, exit, plots, reproduce};
 
@@ -183,9 +185,10 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
     if let Some(p) = &a.joints_out {
         write_atomic_with(p, |w| write_joint_csv(w, run)).map_err(Failure::internal)?;
     }
-    if let Some(p) = &a.rapid {
-        let module = rapid_module(run, &RapidSettings::default());
-        write_atomic(p, module.as_bytes()).map_err(Failure::internal)?;
+    if let Some(p) = &a.program {
+        for (path, text) in robot_programs(a, p, run)? {
+            write_atomic(&path, text.as_bytes()).map_err(Failure::internal)?;
+        }
     }
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir)
@@ -201,6 +204,39 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
         }
     }
     Ok(())
+}
+
+/// The program files of `--program`: one, or one per time step of a transient run.
+fn robot_programs(a: &CompensateArgs, path: &Path, run: &RunOutput) -> Result<Vec<(PathBuf, String)>, Failure> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let controller = match (a.controller, ext.as_deref()) {
+        (Some(ControllerArg::Abb), _) | (None, Some("mod" | "modx" | "prg")) => Controller::Abb,
+        (Some(ControllerArg::Kuka), _) | (None, Some("src")) => Controller::Kuka,
+        (Some(ControllerArg::Ur), _) | (None, Some("script" | "urscript")) => Controller::UniversalRobots,
+        (None, _) => {
+            return Err(Failure::input(anyhow!(
+                "--program {}: say --controller abb, kuka or ur (or use .mod, .src or .script)",
+                path.display()
+            )));
+        }
+    };
+    let mut settings = ProgramSettings::new(controller);
+    if let Some(stem) = path.file_stem().and_then(|s| s.to_str()) {
+        settings.name = stem.to_string();
+    }
+    if let Some(v) = &a.speed {
+        settings.speed.clone_from(v);
+    }
+    if let Some(v) = &a.zone {
+        settings.zone.clone_from(v);
+    }
+    settings.tool.clone_from(&a.tooldata);
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("program");
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or(controller.extension());
+    Ok(programs(run, &settings)
+        .into_iter()
+        .map(|p| (path.with_file_name(format!("{stem}{}.{ext}", p.suffix)), p.text))
+        .collect())
 }
 
 fn print_summary(run: &RunOutput, as_json: bool) {

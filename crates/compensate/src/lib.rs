@@ -12,9 +12,11 @@
 //! on the deformed robot).
 
 mod export;
+mod program;
 mod run;
 
-pub use export::{RapidSettings, rapid_module, write_joint_csv, write_results_csv};
+pub use export::{write_joint_csv, write_results_csv};
+pub use program::{Controller, Program, ProgramSettings, programs};
 pub use run::{
     Axes, Cycle, ProgramTarget, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error_deg, pose_from_xyz_deg,

@@ -169,7 +169,7 @@ fn compensate_writes_outputs_and_reports_failures() {
         targets.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
-        "--rapid",
+        "--program",
         rapid.to_str().unwrap(),
         "--plot",
         plots.to_str().unwrap(),

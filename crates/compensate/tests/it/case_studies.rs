@@ -3,7 +3,7 @@
 
 use nalgebra::Isometry3;
 use thermokin_compensate::{
-    Cycle, ProgramTarget, RapidSettings, RunSettings, compensate_static, compensate_transient, rapid_module,
+    Controller, Cycle, ProgramSettings, ProgramTarget, RunSettings, compensate_static, compensate_transient, programs,
     write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
@@ -95,7 +95,7 @@ fn unreachable_targets_are_records_and_the_run_goes_on() {
     assert_eq!(run.rows[2].status, Status::Unreachable);
     assert!(run.rows.iter().enumerate().all(|(i, row)| i == 2 || row.status == Status::Converged));
     // The RAPID module never moves to a failed target.
-    let rapid = rapid_module(&run, &RapidSettings::default());
+    let rapid = programs(&run, &ProgramSettings::new(Controller::Abb)).remove(0).text;
     assert!(rapid.contains("! jt_FAR: not reached (Unreachable)"));
     assert!(!rapid.contains("MoveAbsJ jt_FAR"));
     assert_eq!(rapid.matches("MoveAbsJ").count(), 5);
@@ -128,10 +128,87 @@ fn rapid_module_is_well_formed() {
     let mut prog = program();
     prog.truncate(3);
     let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
-    let m = rapid_module(&run, &RapidSettings::default());
+    let m = programs(&run, &ProgramSettings::new(Controller::Abb)).remove(0).text;
     assert!(m.starts_with("MODULE thermokin_compensated\n"));
     assert!(m.trim_end().ends_with("ENDMODULE"));
     let line = m.lines().find(|l| l.contains("CONST jointtarget jt_P1:=")).unwrap();
     assert!(line.ends_with(",[9E9,9E9,9E9,9E9,9E9,9E9]];"), "{line}");
     assert!(m.contains("    MoveAbsJ jt_P1\\NoEOffs, v100, fine, tool0;"));
+}
+
+/// The numbers between `open` and `close` on a line, split on commas (the last word of each cell, past
+/// KUKA's `A1 ` names).
+fn numbers_between(line: &str, open: &str, close: &str) -> Vec<f64> {
+    let start = line.find(open).unwrap() + open.len();
+    let end = start + line[start..].find(close).unwrap();
+    line[start..end]
+        .split(',')
+        .map(|cell| cell.split_whitespace().last().unwrap().parse::<f64>().unwrap())
+        .collect()
+}
+
+/// Reads each program back with a parser of its own syntax and compares with the run's joints.
+#[test]
+fn programs_for_abb_kuka_and_ur_parse_back_to_the_same_joints() {
+    let r = robot();
+    let mut prog = program();
+    prog.truncate(10);
+    prog.insert(4, ProgramTarget { label: "FAR".into(), pose: Isometry3::translation(3000.0, 0.0, 0.0) });
+    let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
+    let reached: Vec<&Vec<f64>> =
+        run.rows.iter().filter(|r| r.status == Status::Converged).map(|r| &r.joints_deg).collect();
+    assert_eq!(reached.len(), 10);
+    let parsed = |controller: Controller, settings: ProgramSettings| -> Vec<Vec<f64>> {
+        let text = programs(&run, &settings).remove(0).text;
+        match controller {
+            Controller::Abb => text
+                .lines()
+                .filter(|l| l.contains("CONST jointtarget"))
+                .map(|l| numbers_between(l, ":=[[", "]"))
+                .collect(),
+            Controller::Kuka => {
+                assert!(text.starts_with("DEF ") && text.trim_end().ends_with("END"));
+                text.lines()
+                    .filter(|l| l.starts_with("PTP {E6AXIS:"))
+                    .map(|l| numbers_between(l, "E6AXIS:", "}"))
+                    .collect()
+            }
+            Controller::UniversalRobots => {
+                assert!(text.starts_with("def ") && text.trim_end().ends_with("end"));
+                text.lines()
+                    .filter(|l| l.trim_start().starts_with("movej("))
+                    .map(|l| numbers_between(l, "movej([", "]").into_iter().map(f64::to_degrees).collect())
+                    .collect()
+            }
+            _ => unreachable!(),
+        }
+    };
+    for controller in [Controller::Abb, Controller::Kuka, Controller::UniversalRobots] {
+        let mut settings = ProgramSettings::new(controller);
+        settings.zone = if controller == Controller::UniversalRobots { "0.002".into() } else { "z5".into() };
+        let back = parsed(controller, settings.clone());
+        assert_eq!(back.len(), 10, "{controller:?}: the failed target must not be a motion");
+        for (b, q) in back.iter().zip(&reached) {
+            // Six decimals of degrees (nine of radians for UR): 1e-6° after the round trip.
+            assert!(b.iter().zip(q.iter()).all(|(x, y)| (x - y).abs() <= 1e-6), "{controller:?}: {b:?} vs {q:?}");
+        }
+        let text = programs(&run, &settings).remove(0).text;
+        assert!(text.contains("FAR"), "{controller:?}: the failed target is named in a comment");
+        assert!(text.contains(&settings.zone), "{controller:?}: zone flag honoured");
+    }
+}
+
+#[test]
+fn a_transient_run_gives_one_program_per_time_step() {
+    let r = robot();
+    let mut prog = program();
+    prog.truncate(4);
+    let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
+    let cycle = Cycle { duration_min: 3.0, step_min: 1.0 };
+    let run =
+        compensate_transient(&r.chain, &table(), &profile, cycle, &prog, &settings(coppelia()), |_, _| {}).unwrap();
+    let out = programs(&run, &ProgramSettings::new(Controller::Kuka));
+    let suffixes: Vec<&str> = out.iter().map(|p| p.suffix.as_str()).collect();
+    assert_eq!(suffixes, ["_t0", "_t1", "_t2", "_t3"]);
+    assert!(out.iter().all(|p| p.text.matches("PTP {E6AXIS").count() == 4));
 }
