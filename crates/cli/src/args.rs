@@ -46,6 +46,7 @@ pub enum Command {
     )]
     Ik(IkArgs),
     /// Compensate a program of targets for a deviation table, static or over a warm-up cycle.
+    #[command(mut_arg("deformation", |a| a.required(true)))]
     #[command(
         after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --program prog.src --controller kuka --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
     )]
@@ -126,8 +127,10 @@ pub struct RobotArgs {
     #[arg(long, value_name = "FILE")]
     pub deformation: Option<PathBuf>,
     /// Growth of the table with operating time: static, linear:T (plateau after T min), linear-grow:T
-    /// (no plateau, the authors' transient file), exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv (table per
-    /// kelvin of the mean logged rise), or a profile TOML file.
+    /// (no plateau, the authors' transient file), exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv (the table
+    /// then holds values per kelvin, scaled by the mean rise of the logged temperatures over their first
+    /// row; LOG.csv is `time_min,<sensor>,<sensor>,…` in minutes and °C, one row per reading, linearly
+    /// interpolated), or a profile TOML file.
     #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
     pub profile: Option<TimeProfile>,
     /// Operating time for fk/ik with --profile, minutes.

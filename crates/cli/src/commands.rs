@@ -246,6 +246,15 @@ fn print_summary(run: &RunOutput, as_json: bool) {
         return;
     }
     println!("solves {}  failed {}", s.solves, s.failures);
+    if !s.failed.is_empty() {
+        let shown: Vec<&str> = s.failed.iter().take(20).map(String::as_str).collect();
+        let more = if s.failed.len() > 20 {
+            format!(" … and {} more (status column of the results)", s.failed.len() - 20)
+        } else {
+            String::new()
+        };
+        println!("not reached (left out of the statistics below): {}{more}", shown.join(", "));
+    }
     println!(
         "position deviation (programmed − reached), mm:  min {:+.3e} {:+.3e} {:+.3e}   max {:+.3e} {:+.3e} {:+.3e}",
         s.position_mm.min[0],

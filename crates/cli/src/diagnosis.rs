@@ -239,19 +239,20 @@ fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<
             })
             .collect(),
     };
-    // Report units → internal: degrees → radians for angles, compliance degrees per N·m → rad per N·m.
-    let values = report_units
-        .iter()
-        .enumerate()
-        .map(|(k, &v)| match (kind, k) {
-            (EffectKind::JointOffset | EffectKind::JointCompliance, _) => v.to_radians(),
-            (EffectKind::ToolFrame, _) => v,
-            (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => v,
-            (_, 3..=5) => v.to_radians(),
-            _ => v,
-        })
-        .collect();
+    let values =
+        report_units.iter().enumerate().map(|(k, &v)| if is_angle(kind, k) { v.to_radians() } else { v }).collect();
     Ok(HiddenEffect { effect, values })
+}
+
+/// Whether value `k` of an effect is an angle (degrees in reports and flags, radians inside; compliance
+/// in degrees per N·m).
+fn is_angle(kind: EffectKind, k: usize) -> bool {
+    match (kind, k) {
+        (EffectKind::JointOffset | EffectKind::JointCompliance, _) => true,
+        (EffectKind::ToolFrame, _) | (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => false,
+        (_, 3..=5) => true,
+        _ => false,
+    }
 }
 
 pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
@@ -279,7 +280,17 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     let data = thermokin_diagnose::simulate(&base, &hidden, &config).map_err(Failure::input)?;
     write_atomic_with(&a.out, |w| write_measurements(w, &data)).map_err(Failure::internal)?;
     for h in &hidden {
-        println!("hidden {}: {:?}", h.effect.label(), h.values);
+        let shown: Vec<String> = h
+            .values
+            .iter()
+            .enumerate()
+            .map(
+                |(k, &v)| {
+                    if is_angle(h.effect.kind, k) { format!("{:.6}°", v.to_degrees()) } else { format!("{v:.6}") }
+                },
+            )
+            .collect();
+        println!("hidden {}: {} (mm, degrees, minutes)", h.effect.label(), shown.join(", "));
     }
     println!("{} poses over {} min, noise {} mm → {}", a.poses, a.minutes, a.noise, a.out.display());
     Ok(exit::OK)

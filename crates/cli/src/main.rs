@@ -2,6 +2,7 @@
 //! reproduction of the paper's case studies.
 
 mod args;
+mod bundled;
 mod commands;
 mod diagnosis;
 mod input;
@@ -46,7 +47,7 @@ impl Failure {
 }
 
 fn main() -> ExitCode {
-    let cli = match args::Cli::try_parse() {
+    let mut cli = match args::Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
             let code = if e.use_stderr() { exit::BAD_INPUT } else { exit::OK };
@@ -54,6 +55,7 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
+    bundled::resolve_inputs(&mut cli);
     match commands::run(cli) {
         Ok(code) => ExitCode::from(code),
         Err(f) => {

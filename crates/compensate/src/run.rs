@@ -126,6 +126,9 @@ pub struct Summary {
     pub solves: usize,
     /// Solves that did not converge.
     pub failures: usize,
+    /// The failed targets, named: `label (status)`, with `@ t min` in a transient run. They are left out
+    /// of every statistic below.
+    pub failed: Vec<String>,
     /// Programmed − reached, mm.
     pub position_mm: Axes,
     /// Orientation error rotation vector, degrees.
@@ -134,7 +137,7 @@ pub struct Summary {
     pub max_position_error_mm: f64,
     /// Largest orientation error angle, degrees.
     pub max_orientation_error_deg: f64,
-    /// Largest position error of the uncompensated program, mm.
+    /// Largest position error of the uncompensated program over the reached targets, mm.
     pub max_uncompensated_error_mm: f64,
 }
 
@@ -150,9 +153,18 @@ pub struct RunOutput {
 impl RunOutput {
     fn new(rows: Vec<TargetResult>) -> Self {
         let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.status == Status::Converged).collect();
+        let transient = rows.iter().any(|r| r.time_min != 0.0);
         let summary = Summary {
             solves: rows.len(),
             failures: rows.len() - ok.len(),
+            failed: rows
+                .iter()
+                .filter(|r| r.status != Status::Converged)
+                .map(|r| {
+                    let at = if transient { format!(" @ {} min", r.time_min) } else { String::new() };
+                    format!("{}{at} ({:?})", r.label, r.status)
+                })
+                .collect(),
             position_mm: Axes::of(ok.iter().map(|r| r.position_deviation_mm)),
             orientation_deg: Axes::of(ok.iter().map(|r| r.orientation_deviation_deg)),
             max_position_error_mm: ok.iter().map(|r| Vector3::from(r.position_deviation_mm).norm()).fold(0.0, f64::max),
@@ -160,7 +172,7 @@ impl RunOutput {
                 .iter()
                 .map(|r| Vector3::from(r.orientation_deviation_deg).norm())
                 .fold(0.0, f64::max),
-            max_uncompensated_error_mm: rows.iter().map(|r| r.uncompensated_error_mm).fold(0.0, f64::max),
+            max_uncompensated_error_mm: ok.iter().map(|r| r.uncompensated_error_mm).fold(0.0, f64::max),
         };
         Self { rows, summary }
     }

@@ -632,3 +632,48 @@ fn tool_and_base_flags_override_the_robot_file() {
     ]);
     assert!(close(&moved, &[plain[0] + 100.0, plain[1], plain[2] + 250.0]), "{plain:?} → {moved:?}");
 }
+
+/// The README's command block, line by line (continuations joined), without the leading `thermokin`.
+fn readme_commands() -> Vec<Vec<String>> {
+    let readme = std::fs::read_to_string(workspace("README.md")).unwrap();
+    let block = readme.split("```sh\nthermokin fk").nth(1).expect("the README's command block");
+    let block = format!("thermokin fk{}", block.split("```").next().unwrap());
+    block
+        .replace("\\\n", " ")
+        .lines()
+        .filter(|l| l.starts_with("thermokin "))
+        .map(|l| l.split('#').next().unwrap().split_whitespace().skip(1).map(str::to_string).collect())
+        .collect()
+}
+
+#[test]
+fn every_readme_command_works_from_another_directory() {
+    // An empty directory, not the repository: the binary must find its bundled robots and fixtures.
+    let dir = tmp("readme-elsewhere");
+    std::fs::create_dir_all(&dir).unwrap();
+    let commands = readme_commands();
+    assert!(commands.len() >= 10, "{commands:?}");
+    for args in &commands {
+        let o = Command::new(env!("CARGO_BIN_EXE_thermokin")).args(args).current_dir(&dir).output().unwrap();
+        assert!(o.status.success(), "thermokin {}: exit {:?}\n{}", args.join(" "), o.status.code(), stderr(&o));
+    }
+    // The static case as the README says: joints within 0.005° of Table 16 for its 25 printed rows.
+    let results = std::fs::read_to_string(dir.join("static.csv")).unwrap();
+    let table16 = std::fs::read_to_string(workspace("fixtures/paper/table16-joints-static.csv")).unwrap();
+    let mut compared = 0;
+    for line in table16.lines().filter(|l| l.starts_with('P')) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let ours = results.lines().find(|l| l.starts_with(&format!("{},", cells[0]))).unwrap();
+        let ours: Vec<f64> = ours.split(',').skip(19).take(6).map(|c| c.parse().unwrap()).collect();
+        let printed: Vec<f64> = cells[1..7].iter().map(|c| c.trim().parse().unwrap()).collect();
+        // Table 16 prints four decimals; their solver stopped within its own tolerance: 0.005°.
+        assert!(
+            ours.iter().zip(&printed).all(|(a, b)| (a - b).abs() <= 0.005),
+            "{}: {ours:?} vs {printed:?}",
+            cells[0]
+        );
+        compared += 1;
+    }
+    assert_eq!(compared, 25);
+    assert!(dir.join("warmup_t200.src").exists() && dir.join("warmup_t0.src").exists());
+}

@@ -141,10 +141,7 @@ fn rapid_module_is_well_formed() {
 fn numbers_between(line: &str, open: &str, close: &str) -> Vec<f64> {
     let start = line.find(open).unwrap() + open.len();
     let end = start + line[start..].find(close).unwrap();
-    line[start..end]
-        .split(',')
-        .map(|cell| cell.split_whitespace().last().unwrap().parse::<f64>().unwrap())
-        .collect()
+    line[start..end].split(',').map(|cell| cell.split_whitespace().last().unwrap().parse::<f64>().unwrap()).collect()
 }
 
 /// Reads each program back with a parser of its own syntax and compares with the run's joints.
