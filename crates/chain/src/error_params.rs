@@ -160,3 +160,20 @@ pub fn xyz_angles(r: &Matrix3<f64>) -> Vector3<f64> {
     let c = (ca * r[(1, 0)] + sa * r[(2, 0)]).atan2(ca * r[(1, 1)] + sa * r[(2, 1)]);
     Vector3::new(a, b, c)
 }
+
+/// `cos β` below which X-Y-Z Euler angles are at their singularity (β within ~1e-9 rad of ±90°), where
+/// only `a ± c` is defined.
+const GIMBAL_COS: f64 = 1e-9;
+
+/// X-Y-Z Euler angles for reports and files: as [`xyz_angles`], but at the singularity (β within 1e-9 rad
+/// of ±90°) β is exactly ±90° and the split is fixed explicitly, `a = 0`, instead of being left to
+/// rounding — which turned (0, 90°, 0) into (−180°, 89.99999999999999°, 180°).
+pub fn xyz_angles_for_output(r: &Matrix3<f64>) -> Vector3<f64> {
+    let cos_b = (r[(0, 0)] * r[(0, 0)] + r[(0, 1)] * r[(0, 1)]).sqrt();
+    if cos_b < GIMBAL_COS {
+        // R = Ry(±90°)·Rz(c): row 1 is (sin c, cos c, 0).
+        let b = std::f64::consts::FRAC_PI_2.copysign(r[(0, 2)]);
+        return Vector3::new(0.0, b, r[(1, 0)].atan2(r[(1, 1)]));
+    }
+    xyz_angles(r)
+}

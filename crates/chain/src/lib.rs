@@ -22,7 +22,7 @@ pub struct LinkMass {
 }
 
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
-pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_rotation};
+pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use so3::{rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.

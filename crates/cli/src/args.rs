@@ -195,9 +195,14 @@ pub struct CompensateArgs {
     /// Program of targets: CSV `,X,Y,Z` (mm) with optional `RX,RY,RZ` (degrees; default 0,90,0).
     #[arg(long, value_name = "FILE")]
     pub targets: PathBuf,
-    /// Results CSV in the authors' column layout (written atomically).
+    /// The results (written atomically), in --format.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
+    /// Layout of --out: authors (their CSV layout, two header rows, diffs against their files), long
+    /// (one row per target, time and value: time_min,label,status,quantity,component,value,unit — for
+    /// pandas and SQL) or json ({"summary": …, "rows": […]}).
+    #[arg(long, value_enum, default_value_t = ResultsFormat::Authors)]
+    pub format: ResultsFormat,
     /// Transient cycle length, minutes (with --profile).
     #[arg(long, value_name = "MIN", default_value_t = 200.0)]
     pub duration: f64,
@@ -262,6 +267,17 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+}
+
+/// `--format` of the results.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ResultsFormat {
+    /// The authors' results layout.
+    Authors,
+    /// Long (tidy) CSV.
+    Long,
+    /// JSON.
+    Json,
 }
 
 /// `--controller`.

@@ -8,7 +8,7 @@ use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
     Controller, Cycle, ProgramSettings, RunOutput, RunSettings, compensate_static, compensate_transient, programs,
-    write_joint_csv, write_results_csv,
+    write_joint_csv, write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Params, Target, Workspace, solve};
@@ -17,7 +17,9 @@ use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, w
 
 use std::path::{Path, PathBuf};
 
-use crate::args::{Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, UrdfCommand, parse_list};
+use crate::args::{
+    Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
+};
 use crate::input::{Loaded, joints, joints_out, load, pose, program, progress_bar, working_chain};
 use crate::{Failure, exit, plots, reproduce};
 
@@ -181,7 +183,12 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
 }
 
 fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient: bool) -> Result<(), Failure> {
-    write_atomic_with(&a.out, |w| write_results_csv(w, run, transient)).map_err(Failure::internal)?;
+    match a.format {
+        ResultsFormat::Authors => write_atomic_with(&a.out, |w| write_results_csv(w, run, transient)),
+        ResultsFormat::Long => write_atomic_with(&a.out, |w| write_long_csv(w, run)),
+        ResultsFormat::Json => write_atomic_with(&a.out, |w| write_results_json(w, run)),
+    }
+    .map_err(Failure::internal)?;
     if let Some(p) = &a.joints_out {
         write_atomic_with(p, |w| write_joint_csv(w, run)).map_err(Failure::internal)?;
     }

@@ -40,7 +40,12 @@ pub fn deviation_vs_time(path: &Path, run: &RunOutput) -> Result<()> {
             .x_label_area_size(45)
             .y_label_area_size(70)
             .build_cartesian_2d(0.0..t_max, (1e-12..y_max).log_scale())?;
-        chart.configure_mesh().x_desc("operating time [min]").y_desc("error [mm]").draw()?;
+        chart
+            .configure_mesh()
+            .x_desc("operating time [min]")
+            .y_desc("error [mm]")
+            .y_label_formatter(&|v| tick(*v))
+            .draw()?;
         chart
             .draw_series(LineSeries::new(before, RED.stroke_width(2)))?
             .label("uncompensated program on the deformed robot")
@@ -106,4 +111,24 @@ pub fn structure(path: &Path, nominal: &Chain, deformed: &Chain, magnify: f64) -
         root.present()?;
     }
     save(path, svg)
+}
+
+/// A tick label at its meaningful precision: three significant digits (`1e-9`, not
+/// `9.999999999999999e-10`).
+fn tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let text = format!("{v:.2e}");
+    // 1.00e-9 → 1e-9, 2.50e1 → 2.5e1
+    match text.split_once('e') {
+        Some((mantissa, exponent)) => {
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            match exponent {
+                "0" => mantissa.to_string(),
+                _ => format!("{mantissa}e{exponent}"),
+            }
+        }
+        None => text,
+    }
 }

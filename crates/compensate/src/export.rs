@@ -4,18 +4,32 @@
 
 use std::io::{self, Write};
 
-use thermokin_chain::xyz_angles;
+use serde::Serialize;
+use thermokin_chain::xyz_angles_for_output;
 
-use crate::run::{RunOutput, TargetResult};
+use crate::run::{RunOutput, Summary, TargetResult};
+
+/// Decimals written for millimetres and degrees: 1e-9, the solver's tolerance. Below it a number is
+/// binary noise (`640.9999999999994` is written `641`, `5.68e-13` is written `0`).
+const DECIMALS: i32 = 9;
+
+/// `x` at the written precision; −0 becomes 0.
+fn meaningful(x: f64) -> f64 {
+    if !x.is_finite() {
+        return x;
+    }
+    let scale = 10f64.powi(DECIMALS);
+    (x * scale).round() / scale + 0.0
+}
 
 fn euler_deg(r: &TargetResult, reached: bool) -> [f64; 3] {
     let pose = if reached { &r.reached } else { &r.programmed };
-    let a = xyz_angles(pose.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
+    let a = xyz_angles_for_output(pose.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
     [a.x, a.y, a.z]
 }
 
 fn join(values: &[f64]) -> String {
-    values.iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",")
+    values.iter().map(|&v| format!("{}", meaningful(v))).collect::<Vec<_>>().join(",")
 }
 
 /// The results in the authors' column layout: two header rows; per target `time`, label, programmed
@@ -41,7 +55,7 @@ pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool)
     for r in &run.rows {
         let p = r.programmed.translation.vector;
         let q = r.reached.translation.vector;
-        let time = if with_time { format!("{},", r.time_min) } else { String::new() };
+        let time = if with_time { format!("{},", meaningful(r.time_min)) } else { String::new() };
         writeln!(
             out,
             "{time}{},{},{},{},{},{},{},{},{:?}",
@@ -69,7 +83,110 @@ pub fn write_joint_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> 
     let joints: Vec<String> = (1..=n).map(|i| format!("A{i}")).collect();
     writeln!(out, "time_min,label,{},status", joints.join(","))?;
     for r in &run.rows {
-        writeln!(out, "{},{},{},{:?}", r.time_min, r.label, join(&r.joints_deg), r.status)?;
+        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join(&r.joints_deg), r.status)?;
     }
     Ok(())
+}
+
+/// The results in long format for notebooks and databases: one header row, then one row per target,
+/// time and value — `time_min,label,status,quantity,component,value,unit` — so that
+/// `pandas.read_csv(...).pivot_table(...)` or a SQL `GROUP BY` needs no knowledge of the layout.
+///
+/// Quantities: `programmed_position`, `reached_position`, `deviation` (programmed − reached) in mm with
+/// components x, y, z; `programmed_orientation`, `reached_orientation` as quaternions (w, x, y, z);
+/// `orientation_deviation` (rotation vector) in degrees; `joint` (A1…An) in degrees, mm for prismatic
+/// joints; `uncompensated_error` (norm) in mm. Rows of targets that were not reached carry their status
+/// and only the programmed pose.
+pub fn write_long_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
+    writeln!(out, "time_min,label,status,quantity,component,value,unit")?;
+    for r in &run.rows {
+        let head = format!("{},{},{:?}", meaningful(r.time_min), r.label, r.status);
+        let mut row = |quantity: &str, component: &str, value: f64, unit: &str| {
+            writeln!(out, "{head},{quantity},{component},{},{unit}", meaningful(value))
+        };
+        let xyz = ["x", "y", "z"];
+        let wxyz = ["w", "x", "y", "z"];
+        let quaternion = |q: &nalgebra::UnitQuaternion<f64>| {
+            let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+            [s * q.w, s * q.i, s * q.j, s * q.k]
+        };
+        let p = r.programmed.translation.vector;
+        for (c, v) in xyz.iter().zip(p.iter()) {
+            row("programmed_position", c, *v, "mm")?;
+        }
+        for (c, v) in wxyz.iter().zip(quaternion(&r.programmed.rotation)) {
+            row("programmed_orientation", c, v, "1")?;
+        }
+        if r.status != thermokin_ik::Status::Converged {
+            continue;
+        }
+        for (c, v) in xyz.iter().zip(r.reached.translation.vector.iter()) {
+            row("reached_position", c, *v, "mm")?;
+        }
+        for (c, v) in wxyz.iter().zip(quaternion(&r.reached.rotation)) {
+            row("reached_orientation", c, v, "1")?;
+        }
+        for (c, v) in xyz.iter().zip(r.position_deviation_mm) {
+            row("deviation", c, v, "mm")?;
+        }
+        for (c, v) in xyz.iter().zip(r.orientation_deviation_deg) {
+            row("orientation_deviation", c, v, "deg")?;
+        }
+        for (i, v) in r.joints_deg.iter().enumerate() {
+            row("joint", &format!("A{}", i + 1), *v, "deg")?;
+        }
+        row("uncompensated_error", "norm", r.uncompensated_error_mm, "mm")?;
+    }
+    Ok(())
+}
+
+/// One target of the JSON results.
+#[derive(Serialize)]
+struct JsonRow<'a> {
+    time_min: f64,
+    label: &'a str,
+    status: String,
+    programmed_mm: [f64; 3],
+    programmed_quaternion_wxyz: [f64; 4],
+    reached_mm: Option<[f64; 3]>,
+    deviation_mm: Option<[f64; 3]>,
+    orientation_deviation_deg: Option<[f64; 3]>,
+    joints_deg: Option<Vec<f64>>,
+    uncompensated_error_mm: Option<f64>,
+}
+
+/// The results as one JSON document `{"summary": {…}, "rows": [{…}, …]}`: the same fields as the long
+/// CSV, one object per target and time; fields of targets not reached are `null`.
+pub fn write_results_json(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
+    let m3 = |v: [f64; 3]| v.map(meaningful);
+    let rows: Vec<JsonRow<'_>> = run
+        .rows
+        .iter()
+        .map(|r| {
+            let ok = r.status == thermokin_ik::Status::Converged;
+            let q = r.programmed.rotation;
+            let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+            let p = r.programmed.translation.vector;
+            let reached = r.reached.translation.vector;
+            JsonRow {
+                time_min: meaningful(r.time_min),
+                label: &r.label,
+                status: format!("{:?}", r.status),
+                programmed_mm: m3([p.x, p.y, p.z]),
+                programmed_quaternion_wxyz: [s * q.w, s * q.i, s * q.j, s * q.k].map(meaningful),
+                reached_mm: ok.then(|| m3([reached.x, reached.y, reached.z])),
+                deviation_mm: ok.then(|| m3(r.position_deviation_mm)),
+                orientation_deviation_deg: ok.then(|| m3(r.orientation_deviation_deg)),
+                joints_deg: ok.then(|| r.joints_deg.iter().map(|&v| meaningful(v)).collect()),
+                uncompensated_error_mm: ok.then(|| meaningful(r.uncompensated_error_mm)),
+            }
+        })
+        .collect();
+    #[derive(Serialize)]
+    struct Doc<'a> {
+        summary: &'a Summary,
+        rows: Vec<JsonRow<'a>>,
+    }
+    serde_json::to_writer(&mut *out, &Doc { summary: &run.summary, rows }).map_err(io::Error::other)?;
+    writeln!(out)
 }

@@ -15,7 +15,7 @@ mod export;
 mod program;
 mod run;
 
-pub use export::{write_joint_csv, write_results_csv};
+pub use export::{write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use program::{Controller, Program, ProgramSettings, programs};
 pub use run::{
     Axes, Cycle, ProgramTarget, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

@@ -381,8 +381,22 @@ pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoE
     Ok(Robot { name: imported.name, chain: imported.chain, masses: imported.masses })
 }
 
+/// Decimals of lengths (mm) and angles (degrees) in a written robot file: 1e-12 keeps FK exact to far
+/// below any tolerance here and drops the binary noise of unit conversions (`100.00000000000001` mm from
+/// 0.1 m, `-360.0000000000237`° from a rounded 2π).
+const FILE_DECIMALS: i32 = 12;
+
+/// One number as written: rounded to [`FILE_DECIMALS`], always with a decimal point (valid TOML float).
+fn num(x: f64) -> String {
+    format!("{:?}", crate::units::rounded(x, FILE_DECIMALS))
+}
+
 fn fmt3(v: &Vector3<f64>) -> String {
-    format!("[{:?}, {:?}, {:?}]", v.x, v.y, v.z)
+    format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
+}
+
+fn fmt6(v: [f64; 6]) -> String {
+    format!("[{}]", v.map(num).join(", "))
 }
 
 fn axis_toml(a: &Vector3<f64>) -> String {
@@ -399,19 +413,20 @@ fn axis_toml(a: &Vector3<f64>) -> String {
 }
 
 fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
-    let angles = thermokin_chain::xyz_angles(row.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
+    let angles =
+        thermokin_chain::xyz_angles_for_output(row.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
     out.push_str(&format!(
         "\n[{which}]\ntranslation_mm = {}\nrotation_xyz_deg = {}\n",
         fmt3(&row.translation),
         fmt3(&angles)
     ));
     if !row.error.is_zero() {
-        out.push_str(&format!("error = {:?}\n", row.error.to_mm_deg()));
+        out.push_str(&format!("error = {}\n", fmt6(row.error.to_mm_deg())));
     }
 }
 
 /// The robot as TOML in the extended convention (what `read_robot` reads back), millimetres and
-/// degrees, numbers printed so that they parse back to the same value.
+/// degrees, numbers rounded to 1e-12 (see [`FILE_DECIMALS`]).
 pub fn robot_to_toml(robot: &Robot) -> String {
     let mut s = format!(
         "# Written by thermokin: the same-orientation extended table, mm and degrees.\nname = {:?}\nconvention = \"extended\"\n",
@@ -429,16 +444,16 @@ pub fn robot_to_toml(robot: &Robot) -> String {
             s.push_str("type = \"prismatic\"\n");
         }
         if j.zero != 0.0 {
-            s.push_str(&format!("zero = {:?}\n", to_file(j.zero)));
+            s.push_str(&format!("zero = {}\n", num(to_file(j.zero))));
         }
         if let Some(l) = j.limits {
-            s.push_str(&format!("limits = [{:?}, {:?}]\n", to_file(l.lower), to_file(l.upper)));
+            s.push_str(&format!("limits = [{}, {}]\n", num(to_file(l.lower)), num(to_file(l.upper))));
         }
         if !j.error.is_zero() {
-            s.push_str(&format!("error = {:?}\n", j.error.to_mm_deg()));
+            s.push_str(&format!("error = {}\n", fmt6(j.error.to_mm_deg())));
         }
         if let Some(Some(m)) = robot.masses.get(i) {
-            s.push_str(&format!("mass_kg = {:?}\ncom_mm = {}\n", m.mass_kg, fmt3(&m.com_mm)));
+            s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
         }
     }
     if robot.chain.base() != &FixedRow::identity() {

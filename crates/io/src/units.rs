@@ -89,10 +89,8 @@ pub fn rotation_from_matrix(rows: [[f64; 3]; 3]) -> Result<UnitQuaternion<f64>, 
     Ok(UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&m)))
 }
 
-/// `cos(pitch)` below which an Euler triple is at its singularity (pitch within ~1e-9 rad, 6e-8°, of ±90°):
-/// only the sum or difference of the first and last angles is defined there. The split is then fixed
-/// explicitly — first angle 0 — instead of being left to rounding, which printed (−180, 89.99999999999999,
-/// 180) for (0, 90, 0).
+/// `cos(pitch)` below which ROS roll-pitch-yaw is at its singularity (pitch within ~1e-9 rad of ±90°):
+/// roll is then fixed at 0 (the same rule as [`thermokin_chain::xyz_angles_for_output`]).
 const GIMBAL_COS: f64 = 1e-9;
 
 /// Removes rounding noise for printing: −0 becomes 0 and −180° becomes 180°.
@@ -101,18 +99,11 @@ fn tidy_deg(v: f64) -> f64 {
     if (v + 180.0).abs() < 1e-9 { 180.0 } else { v }
 }
 
-/// X-Y-Z Euler angles in degrees (`R = Rx·Ry·Rz`), with `ry` in [−90°, 90°]; at the singularity `rx = 0`.
+/// X-Y-Z Euler angles in degrees (`R = Rx·Ry·Rz`), with `ry` in [−90°, 90°]; at the singularity `rx = 0`
+/// ([`thermokin_chain::xyz_angles_for_output`]).
 pub fn xyz_euler_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let r = rotation.to_rotation_matrix().into_inner();
-    let cos_b = (r[(0, 0)] * r[(0, 0)] + r[(0, 1)] * r[(0, 1)]).sqrt();
-    let angles = if cos_b < GIMBAL_COS {
-        // R = Ry(±90°)·Rz(c): row 1 is (sin c, cos c, 0).
-        let b = std::f64::consts::FRAC_PI_2.copysign(r[(0, 2)]);
-        Vector3::new(0.0, b, r[(1, 0)].atan2(r[(1, 1)]))
-    } else {
-        thermokin_chain::xyz_angles(&r)
-    };
-    let d = angles.map(f64::to_degrees);
+    let d = thermokin_chain::xyz_angles_for_output(&r).map(f64::to_degrees);
     [tidy_deg(d.x), tidy_deg(d.y), tidy_deg(d.z)]
 }
 

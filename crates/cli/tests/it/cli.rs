@@ -132,7 +132,7 @@ fn bad_input_exit_status_2_with_located_messages() {
         (&["ik", "--robot", ROBOT, "--pose", "1,2,3"], "3 values need --position-only"),
         (
             &["compensate", "--robot", ROBOT, "--targets", "fixtures/paper/table12-targets.csv", "--out", "/tmp/x.csv"],
-            "compensate needs --deformation",
+            "required arguments were not provided:\n  --deformation <FILE>",
         ),
     ];
     for (args, needle) in cases {
@@ -184,6 +184,55 @@ fn compensate_writes_outputs_and_reports_failures() {
     assert!(std::fs::read_to_string(&rapid).unwrap().contains("MoveAbsJ jt_P1"));
     assert!(plots.join("structure.svg").exists());
     assert!(stdout(&o).contains("failed 1"));
+    assert!(stdout(&o).contains("not reached (left out of the statistics below): FAR (Unreachable)"), "{}", stdout(&o));
+    // The same run in the long and JSON layouts.
+    for format in ["long", "json"] {
+        let out = tmp(&format!("results.{format}"));
+        let o = thermokin(&[
+            "compensate",
+            "--robot",
+            ROBOT,
+            "--deformation",
+            TABLE,
+            "--targets",
+            targets.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--format",
+            format,
+            "--seed",
+            "0,20,20,0,-45,0",
+        ]);
+        assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+        let text = std::fs::read_to_string(&out).unwrap();
+        let joints_p1: Vec<f64> = if format == "long" {
+            let mut lines = text.lines();
+            assert_eq!(lines.next(), Some("time_min,label,status,quantity,component,value,unit"));
+            let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+            assert!(rows.iter().all(|r| r.len() == 7));
+            // The unreached target has its programmed pose and status only.
+            assert!(
+                rows.iter().filter(|r| r[1] == "FAR").all(|r| r[2] == "Unreachable" && r[3].starts_with("programmed"))
+            );
+            rows.iter().filter(|r| r[1] == "P1" && r[3] == "joint").map(|r| r[5].parse().unwrap()).collect()
+        } else {
+            let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            assert_eq!(v["summary"]["failed"][0], "FAR (Unreachable)");
+            assert!(v["rows"][2]["joints_deg"].is_null());
+            v["rows"][0]["joints_deg"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+        };
+        // Same joints as the authors' layout (19 columns before A1), to the written precision.
+        let authors: Vec<f64> = csv
+            .lines()
+            .find(|l| l.starts_with("P1,"))
+            .unwrap()
+            .split(',')
+            .skip(19)
+            .take(6)
+            .map(|c| c.parse().unwrap())
+            .collect();
+        assert_eq!(joints_p1, authors, "{format}");
+    }
 }
 
 #[test]
