@@ -21,6 +21,17 @@ pub struct LinkMass {
     pub com_mm: nalgebra::Vector3<f64>,
 }
 
+/// Rated maximum speed and effort of a joint — what URDF's `<limit velocity effort>` and a controller's
+/// axis data carry: rad/s and N·m for a revolute joint, mm/s and N for a prismatic one. Description data
+/// carried beside the chain, like [`LinkMass`]; `None` where the robot's description does not say.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointRatings {
+    /// Largest joint speed.
+    pub velocity: Option<f64>,
+    /// Largest joint torque or force.
+    pub effort: Option<f64>,
+}
+
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use so3::{rotation_angle, rotation_log};

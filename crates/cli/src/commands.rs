@@ -296,7 +296,11 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
         UrdfCommand::Export { robot, out } => {
             let loaded = load(&robot)?;
             let chain = working_chain(&robot, &loaded)?;
-            let xml = thermokin_urdf::export_urdf(&chain, &loaded.robot.name);
+            let options = thermokin_urdf::ExportOptions {
+                masses: loaded.robot.masses.clone(),
+                ratings: loaded.robot.ratings.clone(),
+            };
+            let xml = thermokin_urdf::export_urdf_with(&chain, &loaded.robot.name, &options);
             write_atomic(&out, xml.as_bytes()).map_err(Failure::internal)?;
             println!("{}: {} joints → {}", loaded.robot.name, chain.dof(), out.display());
         }

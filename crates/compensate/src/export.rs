@@ -13,13 +13,25 @@ use crate::run::{RunOutput, Summary, TargetResult};
 /// binary noise (`640.9999999999994` is written `641`, `5.68e-13` is written `0`).
 const DECIMALS: i32 = 9;
 
-/// `x` at the written precision; −0 becomes 0.
+/// Decimals written for joint angles: 1e-12°, because a joint error is multiplied by the arm's lever
+/// (1e-9° × 1 m would already be 1.7e-8 mm, above the solver's tolerance).
+const JOINT_DECIMALS: i32 = 12;
+
+/// `x` at the written precision of mm and degrees; −0 becomes 0.
 fn meaningful(x: f64) -> f64 {
+    rounded(x, DECIMALS)
+}
+
+fn rounded(x: f64, decimals: i32) -> f64 {
     if !x.is_finite() {
         return x;
     }
-    let scale = 10f64.powi(DECIMALS);
+    let scale = 10f64.powi(decimals);
     (x * scale).round() / scale + 0.0
+}
+
+fn join_joints(values: &[f64]) -> String {
+    values.iter().map(|&v| format!("{}", rounded(v, JOINT_DECIMALS))).collect::<Vec<_>>().join(",")
 }
 
 fn euler_deg(r: &TargetResult, reached: bool) -> [f64; 3] {
@@ -66,7 +78,7 @@ pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool)
             join(&euler_deg(r, false)),
             join(&euler_deg(r, true)),
             join(&r.orientation_deviation_deg),
-            join(&r.joints_deg),
+            join_joints(&r.joints_deg),
             r.status
         )?;
     }
@@ -83,7 +95,7 @@ pub fn write_joint_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> 
     let joints: Vec<String> = (1..=n).map(|i| format!("A{i}")).collect();
     writeln!(out, "time_min,label,{},status", joints.join(","))?;
     for r in &run.rows {
-        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join(&r.joints_deg), r.status)?;
+        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join_joints(&r.joints_deg), r.status)?;
     }
     Ok(())
 }
@@ -102,7 +114,8 @@ pub fn write_long_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
     for r in &run.rows {
         let head = format!("{},{},{:?}", meaningful(r.time_min), r.label, r.status);
         let mut row = |quantity: &str, component: &str, value: f64, unit: &str| {
-            writeln!(out, "{head},{quantity},{component},{},{unit}", meaningful(value))
+            let decimals = if quantity == "joint" { JOINT_DECIMALS } else { DECIMALS };
+            writeln!(out, "{head},{quantity},{component},{},{unit}", rounded(value, decimals))
         };
         let xyz = ["x", "y", "z"];
         let wxyz = ["w", "x", "y", "z"];
@@ -177,7 +190,7 @@ pub fn write_results_json(out: &mut impl Write, run: &RunOutput) -> io::Result<(
                 reached_mm: ok.then(|| m3([reached.x, reached.y, reached.z])),
                 deviation_mm: ok.then(|| m3(r.position_deviation_mm)),
                 orientation_deviation_deg: ok.then(|| m3(r.orientation_deviation_deg)),
-                joints_deg: ok.then(|| r.joints_deg.iter().map(|&v| meaningful(v)).collect()),
+                joints_deg: ok.then(|| r.joints_deg.iter().map(|&v| rounded(v, JOINT_DECIMALS)).collect()),
                 uncompensated_error_mm: ok.then(|| meaningful(r.uncompensated_error_mm)),
             }
         })

@@ -19,7 +19,9 @@ pub use deviation::{
 };
 pub use measurements::{parse_measurements, read_measurements, write_measurements};
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
-pub use robot::{LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml};
+pub use robot::{
+    JointRatings, LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml,
+};
 pub use targets::{DEFAULT_ORIENTATION_DEG, Target, parse_targets, read_targets};
 pub use units::Orientation;
 pub use write::{write_atomic, write_atomic_with};

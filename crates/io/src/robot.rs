@@ -34,9 +34,11 @@ pub struct Robot {
     pub chain: Chain,
     /// Mass and centre of mass of the link moved by each joint, when known.
     pub masses: Vec<Option<LinkMass>>,
+    /// Rated speed and effort of each joint, when known (rad/s, N·m; mm/s, N for prismatic joints).
+    pub ratings: Vec<JointRatings>,
 }
 
-pub use thermokin_chain::LinkMass;
+pub use thermokin_chain::{JointRatings, LinkMass};
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -104,6 +106,10 @@ struct JointSpec {
     error: Option<[f64; 6]>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
+    /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
+    max_velocity: Option<f64>,
+    /// Rated torque (N·m) or force (N).
+    max_effort: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -150,7 +156,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
     let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
     let base = row(path, text, file.base.as_ref(), "base")?;
     let tool = row(path, text, file.tool.as_ref(), "tool")?;
-    let (chain, masses) = match file.convention {
+    let (chain, masses, ratings) = match file.convention {
         Convention::Extended => {
             if !file.dh.is_empty() {
                 return Err(IoError::input(
@@ -165,6 +171,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             }
             let mut joints = Vec::with_capacity(file.joint.len());
             let mut masses = Vec::with_capacity(file.joint.len());
+            let mut ratings = Vec::with_capacity(file.joint.len());
             let mut names = std::collections::HashSet::new();
             for (i, spanned) in file.joint.iter().enumerate() {
                 let line = at(spanned.span());
@@ -190,6 +197,18 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                     finite(path, line, &field("error"), &e)?;
                     joint.error = ErrorParams::from_mm_deg(e);
                 }
+                let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, IoError> {
+                    match v {
+                        Some(x) if !(x.is_finite() && x > 0.0) => {
+                            Err(IoError::input(path, line, field(key), format!("must be positive, got {x}")))
+                        }
+                        other => Ok(other),
+                    }
+                };
+                ratings.push(JointRatings {
+                    velocity: positive("max_velocity", spec.max_velocity)?.map(to_internal),
+                    effort: positive("max_effort", spec.max_effort)?,
+                });
                 joints.push(joint);
                 masses.push(match (spec.mass_kg, spec.com_mm) {
                     (None, None) => None,
@@ -213,7 +232,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             }
             let chain =
                 Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
-            (chain, masses)
+            (chain, masses, ratings)
         }
         conv @ (Convention::Dh | Convention::Mdh) => {
             if !file.joint.is_empty() {
@@ -264,10 +283,10 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             let table = DhTable { convention, rows, base: base.nominal(), tool: tool.nominal() };
             let n = table.dof();
             let chain = table.to_extended().map_err(|e| IoError::input(path, None, "dh", e.to_string()))?;
-            (chain, vec![None; n])
+            (chain, vec![None; n], vec![JointRatings::default(); n])
         }
     };
-    Ok(Robot { name, chain, masses })
+    Ok(Robot { name, chain, masses, ratings })
 }
 
 /// The key named in a serde message such as "unknown field `foo`, expected …".
@@ -378,7 +397,7 @@ pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoE
         };
         IoError::input(path, None, field, message)
     })?;
-    Ok(Robot { name: imported.name, chain: imported.chain, masses: imported.masses })
+    Ok(Robot { name: imported.name, chain: imported.chain, masses: imported.masses, ratings: imported.ratings })
 }
 
 /// Decimals of lengths (mm) and angles (degrees) in a written robot file: 1e-12 keeps FK exact to far
@@ -451,6 +470,14 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         }
         if !j.error.is_zero() {
             s.push_str(&format!("error = {}\n", fmt6(j.error.to_mm_deg())));
+        }
+        if let Some(r) = robot.ratings.get(i) {
+            if let Some(v) = r.velocity {
+                s.push_str(&format!("max_velocity = {}\n", num(to_file(v))));
+            }
+            if let Some(e) = r.effort {
+                s.push_str(&format!("max_effort = {}\n", num(e)));
+            }
         }
         if let Some(Some(m)) = robot.masses.get(i) {
             s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
