@@ -229,9 +229,13 @@ pub struct CompensateArgs {
     /// Zone in the controller's terms: ABB zonedata (fine, z10), KUKA fine or C_PTP, UR blend radius m (0).
     #[arg(long, value_name = "ZONE")]
     pub zone: Option<String>,
-    /// ABB tooldata of the MoveAbsJ instructions.
+    /// ABB tooldata of the motion instructions.
     #[arg(long, value_name = "NAME", default_value = "tool0")]
     pub tooldata: String,
+    /// ABB: MoveJ to robtargets (the nominal robot's pose at the compensated joints, with confdata, so
+    /// the controller's own IK lands on them) instead of MoveAbsJ to jointtargets.
+    #[arg(long)]
+    pub robtargets: bool,
     /// Write SVG plots (deviation vs time; nominal vs deformed structure) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,

@@ -7,8 +7,8 @@ use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    Controller, Cycle, ProgramSettings, RunOutput, RunSettings, compensate_static, compensate_transient, programs,
-    write_joint_csv, write_long_csv, write_results_csv, write_results_json,
+    AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, compensate_static, compensate_transient,
+    programs, write_joint_csv, write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Params, Target, Workspace, solve};
@@ -193,7 +193,7 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
         write_atomic_with(p, |w| write_joint_csv(w, run)).map_err(Failure::internal)?;
     }
     if let Some(p) = &a.program {
-        for (path, text) in robot_programs(a, p, run)? {
+        for (path, text) in robot_programs(a, p, &loaded.robot.chain, run)? {
             write_atomic(&path, text.as_bytes()).map_err(Failure::internal)?;
         }
     }
@@ -214,7 +214,12 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
 }
 
 /// The program files of `--program`: one, or one per time step of a transient run.
-fn robot_programs(a: &CompensateArgs, path: &Path, run: &RunOutput) -> Result<Vec<(PathBuf, String)>, Failure> {
+fn robot_programs(
+    a: &CompensateArgs,
+    path: &Path,
+    nominal: &Chain,
+    run: &RunOutput,
+) -> Result<Vec<(PathBuf, String)>, Failure> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let controller = match (a.controller, ext.as_deref()) {
         (Some(ControllerArg::Abb), _) | (None, Some("mod" | "modx" | "prg")) => Controller::Abb,
@@ -240,7 +245,9 @@ fn robot_programs(a: &CompensateArgs, path: &Path, run: &RunOutput) -> Result<Ve
     settings.tool.clone_from(&a.tooldata);
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("program");
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or(controller.extension());
-    Ok(programs(run, &settings)
+    settings.abb_targets = if a.robtargets { AbbTargets::Robtarget } else { AbbTargets::Joint };
+    Ok(programs(run, nominal, &settings)
+        .map_err(Failure::input)?
         .into_iter()
         .map(|p| (path.with_file_name(format!("{stem}{}.{ext}", p.suffix)), p.text))
         .collect())

@@ -16,7 +16,7 @@ mod program;
 mod run;
 
 pub use export::{write_joint_csv, write_long_csv, write_results_csv, write_results_json};
-pub use program::{Controller, Program, ProgramSettings, programs};
+pub use program::{AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, programs};
 pub use run::{
     Axes, Cycle, ProgramTarget, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error_deg, pose_from_xyz_deg,

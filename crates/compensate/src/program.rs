@@ -2,11 +2,15 @@
 //! (`MoveAbsJ` to `jointtarget`s), KUKA KRL (`PTP` to `E6AXIS`) and Universal Robots URScript (`movej`).
 //! This is the post-processing the paper's conclusion (a) says is manual today.
 //!
-//! Joint targets, not Cartesian ones: a Cartesian target would be solved again by the controller on its
-//! *nominal* model, undoing the compensation. A transient run gives one program per model update (one
+//! Joint targets by default: a Cartesian target is solved again by the controller on its *nominal* model.
+//! ABB `robtarget`s are offered for users whose programs must stay Cartesian: each is the pose the
+//! *nominal* robot reaches with the compensated joints (so the controller's own IK lands on them), with
+//! the configuration data that pins that branch. A transient run gives one program per model update (one
 //! block of the program per minute in the paper's cycle), each loading the joints valid for that time,
 //! instead of one module with every target of every minute. Targets that were not reached become
 //! comments, never motions.
+
+use thermokin_chain::{Chain, JointKind};
 
 use crate::run::{RunOutput, TargetResult};
 
@@ -33,6 +37,16 @@ impl Controller {
     }
 }
 
+/// What an ABB program moves to.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AbbTargets {
+    /// `MoveAbsJ` to `jointtarget`s: the compensated joints themselves.
+    #[default]
+    Joint,
+    /// `MoveJ` to `robtarget`s: FK of the compensated joints on the nominal robot, with `confdata`.
+    Robtarget,
+}
+
 /// Settings of a program, each in the controller's own terms.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ProgramSettings {
@@ -47,6 +61,8 @@ pub struct ProgramSettings {
     pub zone: String,
     /// ABB `tooldata` (`tool0`); unused by the others (joint motions).
     pub tool: String,
+    /// ABB: joint targets or robtargets.
+    pub abb_targets: AbbTargets,
 }
 
 impl ProgramSettings {
@@ -63,6 +79,7 @@ impl ProgramSettings {
             speed: speed.into(),
             zone: zone.into(),
             tool: "tool0".into(),
+            abb_targets: AbbTargets::Joint,
         }
     }
 }
@@ -93,8 +110,22 @@ fn minutes(t: f64) -> String {
     text.replace('.', "p").replace('-', "m")
 }
 
-/// The programs of a run: one for a static run, one per time step for a transient one.
-pub fn programs(run: &RunOutput, settings: &ProgramSettings) -> Vec<Program> {
+/// Why a program cannot be written.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ProgramError {
+    /// ABB robtargets need a six-joint arm whose last three axes meet in one point (a spherical wrist):
+    /// that is what `confdata`'s definition assumes.
+    #[error("robtargets need a six-joint robot with a spherical wrist (joint axes 4, 5, 6 meeting at one point)")]
+    NotSphericalWrist,
+}
+
+/// The programs of a run: one for a static run, one per time step for a transient one. `nominal` is the
+/// robot as the controller knows it (for ABB robtargets; the joint programs do not use it).
+pub fn programs(run: &RunOutput, nominal: &Chain, settings: &ProgramSettings) -> Result<Vec<Program>, ProgramError> {
+    if settings.controller == Controller::Abb && settings.abb_targets == AbbTargets::Robtarget {
+        check_spherical_wrist(nominal)?;
+    }
     let transient = run.rows.iter().any(|r| r.time_min != 0.0);
     let mut blocks: Vec<(f64, Vec<&TargetResult>)> = Vec::new();
     for r in &run.rows {
@@ -103,7 +134,7 @@ pub fn programs(run: &RunOutput, settings: &ProgramSettings) -> Vec<Program> {
             _ => blocks.push((r.time_min, vec![r])),
         }
     }
-    blocks
+    let out = blocks
         .into_iter()
         .map(|(t, rows)| {
             let suffix = if transient { format!("_t{}", minutes(t)) } else { String::new() };
@@ -115,13 +146,14 @@ pub fn programs(run: &RunOutput, settings: &ProgramSettings) -> Vec<Program> {
                 rows.iter().filter(|r| !r.status_is_converged()).count()
             );
             let text = match settings.controller {
-                Controller::Abb => abb(&name, &header, &rows, settings),
+                Controller::Abb => abb(&name, &header, &rows, nominal, settings),
                 Controller::Kuka => kuka(&name, &header, &rows, settings),
                 Controller::UniversalRobots => ur(&name, &header, &rows, settings),
             };
             Program { suffix, text }
         })
-        .collect()
+        .collect::<Vec<_>>();
+    Ok(out)
 }
 
 impl TargetResult {
@@ -136,24 +168,100 @@ fn axes(values: &[f64], decimals: usize) -> Vec<String> {
     values.iter().map(|v| format!("{:.*}", decimals, v + 0.0)).collect()
 }
 
-fn abb(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -> String {
+fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
     let module = identifier(name, 32);
     let mut out = format!("MODULE {module}\n  ! {header}\n");
     let mut moves = String::new();
     for r in rows {
-        let target = identifier(&format!("jt_{}", r.label), 32);
-        if r.status_is_converged() {
+        let robtarget = s.abb_targets == AbbTargets::Robtarget;
+        let target = identifier(&format!("{}_{}", if robtarget { "p" } else { "jt" }, r.label), 32);
+        let q = internal(nominal, &r.joints_deg);
+        let pose = if robtarget { nominal.tool_pose(&q).ok() } else { None };
+        if !r.status_is_converged() {
+            out.push_str(&format!("  ! {target}: not reached ({:?})\n", r.status));
+            moves.push_str(&format!("    ! skipped {}\n", r.label));
+        } else if let Some(base_from_tcp) = pose {
+            let p = base_from_tcp.translation.vector;
+            let w = base_from_tcp.rotation;
+            let sign = if w.w < 0.0 { -1.0 } else { 1.0 };
+            let quat = [w.w, w.i, w.j, w.k].map(|v| format!("{:.9}", sign * v + 0.0));
+            let [cf1, cf4, cf6, cfx] = confdata(nominal, &q);
+            out.push_str(&format!(
+                "  CONST robtarget {target}:=[[{:.6},{:.6},{:.6}],[{}],[{cf1},{cf4},{cf6},{cfx}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n",
+                p.x + 0.0,
+                p.y + 0.0,
+                p.z + 0.0,
+                quat.join(",")
+            ));
+            moves.push_str(&format!("    MoveJ {target}, {}, {}, {};\n", s.speed, s.zone, s.tool));
+        } else {
             let mut a = axes(&r.joints_deg, 6);
             a.resize(6, "0".into());
             out.push_str(&format!("  CONST jointtarget {target}:=[[{}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n", a.join(",")));
             moves.push_str(&format!("    MoveAbsJ {target}\\NoEOffs, {}, {}, {};\n", s.speed, s.zone, s.tool));
-        } else {
-            out.push_str(&format!("  ! {target}: not reached ({:?})\n", r.status));
-            moves.push_str(&format!("    ! skipped {}\n", r.label));
         }
     }
-    out.push_str(&format!("  PROC main()\n{moves}  ENDPROC\nENDMODULE\n"));
+    let conf = if s.abb_targets == AbbTargets::Robtarget { "    ConfJ \\On;\n" } else { "" };
+    out.push_str(&format!("  PROC main()\n{conf}{moves}  ENDPROC\nENDMODULE\n"));
     out
+}
+
+/// Joint values of a result (degrees, mm) back in the chain's radians (mm).
+fn internal(chain: &Chain, joints_deg: &[f64]) -> Vec<f64> {
+    chain
+        .joints()
+        .iter()
+        .zip(joints_deg)
+        .map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_radians() } else { v })
+        .collect()
+}
+
+/// The wrist centre of a six-joint arm: joint 5's origin, where axes 4, 5 and 6 meet.
+fn check_spherical_wrist(chain: &Chain) -> Result<(), ProgramError> {
+    if chain.dof() != 6 || chain.joints().iter().any(|j| j.kind != JointKind::Revolute) {
+        return Err(ProgramError::NotSphericalWrist);
+    }
+    // Axes 4 and 6 must pass through joint 5's origin at any configuration; checked at two.
+    for q in [[0.0; 6], [0.3, -0.4, 0.5, 0.7, -0.9, 1.1]] {
+        let Ok(frames) = chain.joint_frames(&q) else { return Err(ProgramError::NotSphericalWrist) };
+        let wrist = frames[4].translation.vector;
+        for k in [3usize, 5] {
+            let origin = frames[k].translation.vector;
+            let axis = frames[k].rotation * chain.joints()[k].axis.into_inner();
+            let off = (wrist - origin) - axis * axis.dot(&(wrist - origin));
+            // 1e-6 mm: a real spherical wrist is exact; an offset wrist misses by millimetres.
+            if off.norm() > 1e-6 {
+                return Err(ProgramError::NotSphericalWrist);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// ABB `confdata` [cf1, cf4, cf6, cfx] of joint values `q` (radians) on a six-joint arm with a spherical
+/// wrist, from ABB's definition for serial six-axis robots: cf1, cf4, cf6 are the quadrants of axes 1, 4
+/// and 6 (`floor(q / 90°)`: 0 for [0°, 90°), −1 for [−90°, 0), …); cfx numbers the arm configuration,
+/// `4·(wrist centre behind axis 1) + 2·(wrist centre behind the lower arm) + (axis 5 negative)`, where
+/// "behind axis 1" is the wrist centre on the negative side of the arm's forward direction (joint 1's X
+/// after its turn) and "behind the lower arm" on the rear side of the line from joint 2 to joint 3.
+pub fn confdata(chain: &Chain, q: &[f64]) -> [i64; 4] {
+    let quadrant = |v: f64| (v / std::f64::consts::FRAC_PI_2).floor() as i64;
+    let Ok(frames) = chain.joint_frames(q) else { return [0; 4] };
+    // The arm plane: joint 1's frame after its turn; forward is its X, up its Z (the base's, for an arm
+    // whose joint 1 turns about the vertical).
+    let arm = frames[0];
+    let local = |p: nalgebra::Vector3<f64>| arm.inverse_transform_point(&nalgebra::Point3::from(p)).coords;
+    let wrist = local(frames[4].translation.vector);
+    let shoulder = local(frames[1].translation.vector);
+    let elbow = local(frames[2].translation.vector);
+    let behind_axis1 = wrist.x < 0.0;
+    let lower_arm = elbow - shoulder;
+    // Forward normal of the lower arm in the X-Z plane: (uz, −ux) is +X for a vertical lower arm.
+    let forward = nalgebra::Vector3::new(lower_arm.z, 0.0, -lower_arm.x);
+    let behind_lower_arm = forward.dot(&(wrist - shoulder)) < 0.0;
+    let axis5_negative = q[4] < 0.0;
+    let cfx = 4 * i64::from(behind_axis1) + 2 * i64::from(behind_lower_arm) + i64::from(axis5_negative);
+    [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
 }
 
 fn kuka(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -> String {

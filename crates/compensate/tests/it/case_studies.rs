@@ -3,8 +3,8 @@
 
 use nalgebra::Isometry3;
 use thermokin_compensate::{
-    Controller, Cycle, ProgramSettings, ProgramTarget, RunSettings, compensate_static, compensate_transient, programs,
-    write_results_csv,
+    AbbTargets, Controller, Cycle, ProgramSettings, ProgramTarget, RunSettings, compensate_static,
+    compensate_transient, confdata, programs, write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Status};
@@ -95,7 +95,7 @@ fn unreachable_targets_are_records_and_the_run_goes_on() {
     assert_eq!(run.rows[2].status, Status::Unreachable);
     assert!(run.rows.iter().enumerate().all(|(i, row)| i == 2 || row.status == Status::Converged));
     // The RAPID module never moves to a failed target.
-    let rapid = programs(&run, &ProgramSettings::new(Controller::Abb)).remove(0).text;
+    let rapid = programs(&run, &r.chain, &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
     assert!(rapid.contains("! jt_FAR: not reached (Unreachable)"));
     assert!(!rapid.contains("MoveAbsJ jt_FAR"));
     assert_eq!(rapid.matches("MoveAbsJ").count(), 5);
@@ -138,7 +138,7 @@ fn rapid_module_is_well_formed() {
     let mut prog = program();
     prog.truncate(3);
     let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
-    let m = programs(&run, &ProgramSettings::new(Controller::Abb)).remove(0).text;
+    let m = programs(&run, &r.chain, &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
     assert!(m.starts_with("MODULE thermokin_compensated\n"));
     assert!(m.trim_end().ends_with("ENDMODULE"));
     let line = m.lines().find(|l| l.contains("CONST jointtarget jt_P1:=")).unwrap();
@@ -166,7 +166,7 @@ fn programs_for_abb_kuka_and_ur_parse_back_to_the_same_joints() {
         run.rows.iter().filter(|r| r.status == Status::Converged).map(|r| &r.joints_deg).collect();
     assert_eq!(reached.len(), 10);
     let parsed = |controller: Controller, settings: ProgramSettings| -> Vec<Vec<f64>> {
-        let text = programs(&run, &settings).remove(0).text;
+        let text = programs(&run, &r.chain, &settings).unwrap().remove(0).text;
         match controller {
             Controller::Abb => text
                 .lines()
@@ -199,7 +199,7 @@ fn programs_for_abb_kuka_and_ur_parse_back_to_the_same_joints() {
             // Six decimals of degrees (nine of radians for UR): 1e-6° after the round trip.
             assert!(b.iter().zip(q.iter()).all(|(x, y)| (x - y).abs() <= 1e-6), "{controller:?}: {b:?} vs {q:?}");
         }
-        let text = programs(&run, &settings).remove(0).text;
+        let text = programs(&run, &r.chain, &settings).unwrap().remove(0).text;
         assert!(text.contains("FAR"), "{controller:?}: the failed target is named in a comment");
         assert!(text.contains(&settings.zone), "{controller:?}: zone flag honoured");
     }
@@ -214,8 +214,57 @@ fn a_transient_run_gives_one_program_per_time_step() {
     let cycle = Cycle { duration_min: 3.0, step_min: 1.0 };
     let run =
         compensate_transient(&r.chain, &table(), &profile, cycle, &prog, &settings(coppelia()), |_, _| {}).unwrap();
-    let out = programs(&run, &ProgramSettings::new(Controller::Kuka));
+    let out = programs(&run, &r.chain, &ProgramSettings::new(Controller::Kuka)).unwrap();
     let suffixes: Vec<&str> = out.iter().map(|p| p.suffix.as_str()).collect();
     assert_eq!(suffixes, ["_t0", "_t1", "_t2", "_t3"]);
     assert!(out.iter().all(|p| p.text.matches("PTP {E6AXIS").count() == 4));
+}
+
+/// ABB robtargets: FK of the compensated joints on the nominal robot, with confdata. Read back and solved
+/// by an IK on the nominal robot (what the controller does) from 300 seeded random seeds, every solution
+/// whose configuration data match the written ones is the compensated joint vector: the robtarget and its
+/// confdata pin exactly the joints that were compensated.
+#[test]
+fn abb_robtargets_pin_the_compensated_joints() {
+    use rand::{Rng, SeedableRng};
+    let r = robot();
+    let mut prog = program();
+    prog.truncate(8);
+    let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
+    let mut s = ProgramSettings::new(Controller::Abb);
+    s.abb_targets = AbbTargets::Robtarget;
+    let text = programs(&run, &r.chain, &s).unwrap().remove(0).text;
+    assert!(text.contains("ConfJ \\On;") && text.contains("MoveJ p_P1, v100, fine, tool0;"));
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(140);
+    let mut ws = thermokin_ik::Workspace::new(6);
+    for (line, row) in text.lines().filter(|l| l.contains("CONST robtarget")).zip(&run.rows) {
+        let pos = numbers_between(line, ":=[[", "]");
+        let quat = numbers_between(line, "],[", "]");
+        let conf_start = line.find("],[").unwrap() + 3;
+        let conf: Vec<i64> = numbers_between(&line[conf_start..], "],[", "]").iter().map(|&v| v as i64).collect();
+        let rotation =
+            nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(quat[0], quat[1], quat[2], quat[3]));
+        let goal = Isometry3::from_parts(nalgebra::Translation3::new(pos[0], pos[1], pos[2]), rotation);
+        let mut matched = 0;
+        for k in 0..300 {
+            let seed: Vec<f64> =
+                r.chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect();
+            let params = thermokin_ik::Params { restarts: 0, ..thermokin_ik::Params::default() };
+            let sol =
+                thermokin_ik::solve(&r.chain, &thermokin_ik::Target::Pose(goal), &seed, &params, &mut ws, k).unwrap();
+            if !sol.converged() || confdata(&r.chain, &sol.q).to_vec() != conf {
+                continue;
+            }
+            matched += 1;
+            let deg: Vec<f64> = sol.q.iter().map(|v| v.to_degrees()).collect();
+            // The robtarget is written to 1e-6 mm and 1e-9 in the quaternion: joints agree to 1e-5°.
+            assert!(
+                deg.iter().zip(&row.joints_deg).all(|(a, b)| (a - b).abs() < 1e-5),
+                "{}: {deg:?} vs {:?}",
+                row.label,
+                row.joints_deg
+            );
+        }
+        assert!(matched > 0, "{}: no IK solution with the written confdata {conf:?}", row.label);
+    }
 }
