@@ -174,12 +174,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("thermokin-urdf", &["thermokin-chain"]),
     ("thermokin-diagnose", &["thermokin-chain"]),
     ("thermokin-compensate", &["thermokin-chain", "thermokin-deform", "thermokin-ik"]),
-    ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf", "thermokin-diagnose"]),
-    // The paper crate reads the authors' rows through io, which still drags urdf and diagnose along.
-    (
-        "thermokin-paper",
-        &["thermokin-chain", "thermokin-deform", "thermokin-io", "thermokin-urdf", "thermokin-diagnose"],
-    ),
+    // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
+    // deform) and knows no identification, IK or compensation.
+    ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf"]),
+    // The paper crate reads the authors' rows through io.
+    ("thermokin-paper", &["thermokin-chain", "thermokin-deform", "thermokin-io", "thermokin-urdf"]),
 ];
 
 /// File-format and CLI crates, allowed only where named.
@@ -216,5 +215,80 @@ fn deps() -> Result<()> {
         Ok(())
     } else {
         bail!("dependency direction broken:\n  {}", bad.join("\n  "))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used, clippy::panic)]
+
+    use std::collections::BTreeSet;
+
+    /// ARCHITECTURE.md's layer table (between the `layers` markers) as crate → allowed crates.
+    fn documented_layers() -> Vec<(String, BTreeSet<String>)> {
+        let text = std::fs::read_to_string(super::workspace_root().join("ARCHITECTURE.md")).unwrap();
+        let start = text.find("<!-- layers:begin -->").unwrap();
+        let end = text.find("<!-- layers:end -->").unwrap();
+        text[start..end]
+            .lines()
+            .filter(|l| l.starts_with("| `"))
+            .map(|l| {
+                let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+                let name = cells[1].trim_matches('`').to_string();
+                let allowed = cells[2]
+                    .split(',')
+                    .map(|c| c.trim().trim_matches('`').to_string())
+                    .filter(|c| c.starts_with("thermokin"))
+                    .collect();
+                (name, allowed)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_documented_layers_are_the_checked_ones() {
+        let documented = documented_layers();
+        let checked: Vec<(String, BTreeSet<String>)> = super::ALLOWED
+            .iter()
+            .map(|(k, allowed)| (k.to_string(), allowed.iter().map(|a| a.to_string()).collect()))
+            .collect();
+        let sorted = |mut v: Vec<(String, BTreeSet<String>)>| {
+            v.sort();
+            v
+        };
+        assert_eq!(
+            sorted(documented),
+            sorted(checked),
+            "ARCHITECTURE.md's layer table and `cargo xtask deps` disagree: update both"
+        );
+    }
+
+    #[test]
+    fn no_dangling_notes_reference_and_every_source_file_opens_with_a_doc_comment() {
+        let root = super::workspace_root();
+        let mut stack = vec![root.join("crates"), root.join("xtask/src")];
+        let mut checked = 0;
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else if path.extension().is_some_and(|e| e == "rs") {
+                    let text = std::fs::read_to_string(&path).unwrap();
+                    // The project's own notes live in docs/; a file outside the repository is no reference.
+                    assert!(
+                        !text.contains(concat!("NOTES", ".md")),
+                        "{} cites the shared notes file, which is not in the repository",
+                        path.display()
+                    );
+                    let is_source = path.components().any(|c| c.as_os_str() == "src");
+                    if is_source {
+                        assert!(text.starts_with("//!"), "{} does not open with a `//!` doc comment", path.display());
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 50, "{checked}");
     }
 }

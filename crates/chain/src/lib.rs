@@ -8,6 +8,7 @@ mod chain;
 mod dh;
 mod error_params;
 mod frame;
+mod measurements;
 mod so3;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
@@ -34,6 +35,7 @@ pub struct JointRatings {
 
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
+pub use measurements::{Dataset, Measurement};
 pub use so3::{rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.

@@ -3,7 +3,7 @@
 //! Paper section 4: the IRB 140 warms up for about 180 minutes before it stabilises; the authors grew the
 //! table linearly with time ("the maximum deformations … applied increasing linearly in each minute"), their
 //! ref. \[26\] found a cubic regression best, and their transient file keeps growing after minute 180
-//! (NOTES.md), hence linear with and without a plateau.
+//! (measured on the authors' transient file: docs/paper-reproduction.md), hence linear with and without a plateau.
 
 use serde::{Deserialize, Serialize};
 

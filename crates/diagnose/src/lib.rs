@@ -21,49 +21,9 @@ pub use fit::{FixedParameter, Observability};
 pub use model::{Base, DriftShape, Effect, EffectKind, Model, gravity_torques};
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 
-use nalgebra::Vector3;
 use thermokin_chain::ChainError;
-
-/// One measured pose.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Measurement {
-    /// Operating time, minutes (0 when the file has none).
-    pub time_min: f64,
-    /// Joint values, radians (mm for prismatic joints).
-    pub q: Vec<f64>,
-    /// Measured TCP position, mm.
-    pub position_mm: Vector3<f64>,
-    /// Temperatures, °C, in the order of [`Dataset::temperature_names`].
-    pub temps: Vec<f64>,
-}
-
-/// A set of measurements.
-#[derive(Clone, Debug, PartialEq, Default)]
-pub struct Dataset {
-    /// The measurements.
-    pub measurements: Vec<Measurement>,
-    /// Names of the temperature columns.
-    pub temperature_names: Vec<String>,
-}
-
-impl Dataset {
-    /// Number of measurements.
-    pub fn len(&self) -> usize {
-        self.measurements.len()
-    }
-    /// `true` when there are none.
-    pub fn is_empty(&self) -> bool {
-        self.measurements.is_empty()
-    }
-    /// The time span covered, minutes.
-    pub fn time_span(&self) -> f64 {
-        let (lo, hi) = self
-            .measurements
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.time_min), h.max(m.time_min)));
-        if lo.is_finite() { hi - lo } else { 0.0 }
-    }
-}
+/// Measurement data are plain values of the core, so that readers need not depend on this crate.
+pub use thermokin_chain::{Dataset, Measurement};
 
 /// Errors of identification and diagnosis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

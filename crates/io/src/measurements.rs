@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
-use thermokin_diagnose::{Dataset, Measurement};
+use thermokin_chain::{Dataset, Measurement};
 
 use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, parse_paper_results, read_text};

@@ -85,7 +85,7 @@ fn rokae_robot_b_additive_table() {
 #[test]
 fn paper_static_case_gap() {
     // Our model with the authors' deviation table (applied as their CoppeliaSim script did) leaves
-    // 0.45 mm RMS against their coordinates (NOTES.md: 0.25 mm per coordinate). What explains it?
+    // 0.45 mm RMS against their coordinates (0.26 mm per coordinate). What explains it?
     let path = authors("results-static-case-study.csv");
     let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
     let table = thermokin_io::read_deviation_table(&thermokin_testdata::workspace(

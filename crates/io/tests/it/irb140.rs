@@ -98,7 +98,7 @@ fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
     // The issue asks for ≤ 0.005 mm RMS with the nominal model. Measured with Table 9's 25.5 mm tool:
     // 0.0161 mm (3-D RMS; 0.0093 mm per coordinate), almost all of it a constant offset of
     // (+0.014, −0.001, +0.007) mm: every target has the tool's Z axis along world +X, so that is what a
-    // tool-point error looks like. NOTES.md's 0.0045 mm is the per-coordinate RMS with the freely fitted
+    // tool-point error looks like. The 0.0045 mm measured on the authors' data is the per-coordinate RMS with the freely fitted
     // 25.486 mm tool (reproduced below); about the mean the nominal model is within 0.003 mm. Every number
     // is pinned so that a change of the model shows; the gap is reported, not hidden.
     assert!((rms - 0.0161).abs() < 0.0005, "RMS {rms} mm changed");

@@ -1,0 +1,45 @@
+//! Measured poses: plain data, read from files by `thermokin-io` and fitted by `thermokin-diagnose`. They
+//! live in the core so that the readers sit below the algorithms that use them.
+
+use nalgebra::Vector3;
+
+/// One measured pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Measurement {
+    /// Operating time, minutes (0 when the file has none).
+    pub time_min: f64,
+    /// Joint values, radians (mm for prismatic joints).
+    pub q: Vec<f64>,
+    /// Measured TCP position, mm.
+    pub position_mm: Vector3<f64>,
+    /// Temperatures, °C, in the order of [`Dataset::temperature_names`].
+    pub temps: Vec<f64>,
+}
+
+/// A set of measurements.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Dataset {
+    /// The measurements.
+    pub measurements: Vec<Measurement>,
+    /// Names of the temperature columns.
+    pub temperature_names: Vec<String>,
+}
+
+impl Dataset {
+    /// Number of measurements.
+    pub fn len(&self) -> usize {
+        self.measurements.len()
+    }
+    /// `true` when there are none.
+    pub fn is_empty(&self) -> bool {
+        self.measurements.is_empty()
+    }
+    /// The time span covered, minutes.
+    pub fn time_span(&self) -> f64 {
+        let (lo, hi) = self
+            .measurements
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.time_min), h.max(m.time_min)));
+        if lo.is_finite() { hi - lo } else { 0.0 }
+    }
+}
