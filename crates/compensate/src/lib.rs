@@ -24,6 +24,7 @@ pub use run::{
 
 /// Errors of a compensation run (per-target failures are records, not errors).
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum CompensateError {
     /// The deformation model could not be built.
     #[error(transparent)]
@@ -31,7 +32,23 @@ pub enum CompensateError {
     /// The IK inputs were invalid.
     #[error(transparent)]
     Ik(#[from] thermokin_ik::IkError),
-    /// Bad run settings.
-    #[error("{0}")]
-    Settings(String),
+    /// A cycle setting out of its range.
+    #[error("{field} must be {expected}, got {value} min")]
+    Cycle {
+        /// `step` or `duration`.
+        field: &'static str,
+        /// What it must be.
+        expected: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A cycle of more steps than a run holds in memory.
+    #[error("{steps} steps is more than a million")]
+    TooManySteps {
+        /// Steps asked for.
+        steps: usize,
+    },
+    /// A robot program could not be written.
+    #[error(transparent)]
+    Program(#[from] crate::program::ProgramError),
 }

@@ -129,6 +129,22 @@ impl DeviationTable {
 
     /// The deformed chain: a new value, the nominal `chain` untouched. With [`TableSemantics::Canonical`]
     /// the table's parameters are added to the chain's own error parameters.
+    ///
+    /// ```
+    /// use nalgebra::Vector3;
+    /// use thermokin_chain::ErrorParams;
+    /// use thermokin_deform::{DeviationTable, TableSemantics};
+    ///
+    /// let nominal = thermokin_testdata::irb140_table9();
+    /// // 1 mm along X on joint 2's row (Table 7: the translation sits at the joint, in its parent's frame).
+    /// let mut rows = vec![ErrorParams::ZERO; 6];
+    /// rows[1] = ErrorParams::new(Vector3::new(1.0, 0.0, 0.0), Vector3::zeros());
+    /// let deformed = DeviationTable::from_joint_rows(rows).apply(&nominal, &TableSemantics::Canonical).unwrap();
+    /// let q = [0.0; 6];
+    /// let shift = deformed.tool_pose(&q).unwrap().translation.vector - nominal.tool_pose(&q).unwrap().translation.vector;
+    /// // Every joint frame is world-aligned at home, so the TCP moves by exactly that millimetre.
+    /// assert!((shift - Vector3::new(1.0, 0.0, 0.0)).norm() < 1e-12);
+    /// ```
     pub fn apply(&self, chain: &Chain, semantics: &TableSemantics) -> Result<Chain, DeformError> {
         if self.dof() != chain.dof() {
             return Err(DeformError::RowCount { rows: self.dof(), joints: chain.dof() });

@@ -368,6 +368,18 @@ fn breakdown(base: &Base, data: &Dataset, model: &Model, theta: &[f64], pre: &Pr
 }
 
 /// Runs the diagnosis of `data` against `base`. `holdout`, when given, replaces cross-validation.
+///
+/// ```
+/// use thermokin_diagnose::{Base, Config, Effect, EffectKind, HiddenEffect, SimulationConfig, diagnose, simulate};
+///
+/// let chain = thermokin_testdata::irb140_table9();
+/// let base = Base { chain, masses: vec![None; 6] };
+/// // A hidden zero offset of +0.05° on joint 2 (index 1), measured with 5 µm noise.
+/// let hidden = [HiddenEffect { effect: Effect::at(EffectKind::JointOffset, 1), values: vec![0.05f64.to_radians()] }];
+/// let data = simulate(&base, &hidden, &SimulationConfig { poses: 120, ..SimulationConfig::default() }).unwrap();
+/// let report = diagnose(&base, &data, None, &Config::default()).unwrap();
+/// assert_eq!(report.effects[0].label, "joint_offset[2]");
+/// ```
 pub fn diagnose(
     base: &Base,
     data: &Dataset,

@@ -19,17 +19,42 @@ pub use solver::{Backend, LimitPolicy, Params, Seeds, Solution, Status, Target, 
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum IkError {
-    /// A seed with the wrong number of joints or a non-finite value.
-    #[error("seed: {0}")]
-    BadSeed(String),
+    /// A seed with the wrong number of joint values.
+    #[error("seed: {got} values for {expected} joints")]
+    SeedLength {
+        /// Joints of the chain.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// A seed with a NaN or infinite value.
+    #[error("seed: joint {joint} is not finite")]
+    SeedNotFinite {
+        /// 1-based joint.
+        joint: usize,
+    },
+    /// A batch with a different number of seeds and targets.
+    #[error("{seeds} seeds for {targets} targets")]
+    SeedCount {
+        /// Seeds given.
+        seeds: usize,
+        /// Targets given.
+        targets: usize,
+    },
     /// A target with a non-finite value.
     #[error("target {index}: not finite")]
     BadTarget {
         /// 0-based target index.
         index: usize,
     },
-    /// Bad solver settings.
-    #[error("params: {0}")]
-    BadParams(String),
+    /// A solver setting out of its range.
+    #[error("params: {field} must be positive and finite, got {value}")]
+    BadParams {
+        /// The field of [`Params`].
+        field: &'static str,
+        /// Its value.
+        value: f64,
+    },
 }

@@ -670,21 +670,22 @@ fn classify(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> Statu
 
 fn validate(chain: &Chain, seed: &[f64], params: &Params) -> Result<(), IkError> {
     if seed.len() != chain.dof() {
-        return Err(IkError::BadSeed(format!("{} values for {} joints", seed.len(), chain.dof())));
+        return Err(IkError::SeedLength { expected: chain.dof(), got: seed.len() });
     }
-    if seed.iter().any(|v| !v.is_finite()) {
-        return Err(IkError::BadSeed("values must be finite".into()));
+    if let Some(i) = seed.iter().position(|v| !v.is_finite()) {
+        return Err(IkError::SeedNotFinite { joint: i + 1 });
     }
-    let ok = params.position_tolerance_mm > 0.0
-        && params.orientation_tolerance_deg > 0.0
-        && params.length_scale_mm > 0.0
-        && params.length_scale_mm.is_finite()
-        && params.initial_damping > 0.0
-        && params.max_step_rad > 0.0
-        && params.max_step_far_rad > 0.0
-        && params.max_iterations > 0;
-    if !ok {
-        return Err(IkError::BadParams("tolerances, length scale, damping and iterations must be positive".into()));
+    let positive = [
+        ("position_tolerance_mm", params.position_tolerance_mm),
+        ("orientation_tolerance_deg", params.orientation_tolerance_deg),
+        ("length_scale_mm", params.length_scale_mm),
+        ("initial_damping", params.initial_damping),
+        ("max_step_rad", params.max_step_rad),
+        ("max_step_far_rad", params.max_step_far_rad),
+        ("max_iterations", params.max_iterations as f64),
+    ];
+    if let Some((field, value)) = positive.into_iter().find(|(_, v)| !(v.is_finite() && *v > 0.0)) {
+        return Err(IkError::BadParams { field, value });
     }
     Ok(())
 }
@@ -717,7 +718,7 @@ pub fn solve_batch(
             .collect(),
         Seeds::PerTarget(per) => {
             if per.len() != targets.len() {
-                return Err(IkError::BadSeed(format!("{} seeds for {} targets", per.len(), targets.len())));
+                return Err(IkError::SeedCount { seeds: per.len(), targets: targets.len() });
             }
             targets
                 .par_iter()

@@ -93,6 +93,27 @@ fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
 }
 
 /// Imports a serial chain from URDF text. `source_name` is used in messages.
+///
+/// ```
+/// use thermokin_urdf::{ImportOptions, import_urdf};
+///
+/// let urdf = r#"<robot name="two_link">
+///   <link name="base"/> <link name="upper"/> <link name="tip"/>
+///   <joint name="shoulder" type="revolute">
+///     <parent link="base"/> <child link="upper"/> <origin xyz="0 0 0.3"/> <axis xyz="0 1 0"/>
+///     <limit lower="-1.5" upper="1.5" effort="50" velocity="2"/>
+///   </joint>
+///   <joint name="elbow" type="continuous">
+///     <parent link="upper"/> <child link="tip"/> <origin xyz="0.4 0 0"/> <axis xyz="0 1 0"/>
+///   </joint>
+/// </robot>"#;
+/// let robot = import_urdf(urdf, "two_link.urdf", &ImportOptions::default()).unwrap();
+/// assert_eq!(robot.chain.dof(), 2);
+/// // Metres became millimetres: at zero the tip is 400 mm out and 300 mm up.
+/// let tip = robot.chain.tool_pose(&[0.0, 0.0]).unwrap().translation.vector;
+/// assert!((tip - nalgebra::Vector3::new(400.0, 0.0, 300.0)).norm() < 1e-9);
+/// assert_eq!(robot.ratings[0].velocity, Some(2.0));
+/// ```
 pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Result<ImportedRobot, UrdfError> {
     let src = source_name.to_string();
     check_namespaces(text).map_err(|message| UrdfError::Parse { source_name: src.clone(), message })?;

@@ -180,8 +180,31 @@ fn batch_is_deterministic_across_thread_counts() {
         pool.install(|| solve_batch(&chain, &targets, Seeds::Same(&[0.0; 6]), &Params::default()).unwrap())
     };
     let one = run(1);
+    // The same under load: two busy threads compete for the cores. With no wall clock in the solver (the
+    // default `time_budget` is None) the answers cannot depend on how fast they are computed.
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let busy: Vec<_> = (0..2)
+        .map(|_| {
+            let stop = stop.clone();
+            std::thread::spawn(move || {
+                let mut x = 0u64;
+                while !stop.load(std::sync::atomic::Ordering::Relaxed) {
+                    x = x.wrapping_mul(6364136223846793005).wrapping_add(1);
+                }
+                x
+            })
+        })
+        .collect();
     let four = run(4);
+    let one_loaded = run(1);
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    for b in busy {
+        b.join().unwrap();
+    }
+    // Bit-identical: the full solutions, not just their statuses.
     assert_eq!(one, four);
+    assert_eq!(one, one_loaded);
+    assert_eq!(Params::default().time_budget, None);
 }
 
 #[test]
@@ -212,13 +235,22 @@ fn bad_inputs_are_errors() {
     let chain = irb140();
     let mut ws = Workspace::new(6);
     let t = Target::Position(nalgebra::Vector3::new(500.0, 0.0, 500.0));
-    assert!(matches!(solve(&chain, &t, &[0.0; 5], &Params::default(), &mut ws, 0), Err(IkError::BadSeed(_))));
-    assert!(matches!(solve(&chain, &t, &[f64::NAN; 6], &Params::default(), &mut ws, 0), Err(IkError::BadSeed(_))));
+    assert_eq!(
+        solve(&chain, &t, &[0.0; 5], &Params::default(), &mut ws, 0),
+        Err(IkError::SeedLength { expected: 6, got: 5 })
+    );
+    assert_eq!(
+        solve(&chain, &t, &[0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0], &Params::default(), &mut ws, 0),
+        Err(IkError::SeedNotFinite { joint: 3 })
+    );
     let nan = Target::Position(nalgebra::Vector3::new(f64::NAN, 0.0, 0.0));
     assert!(matches!(
         solve(&chain, &nan, &[0.0; 6], &Params::default(), &mut ws, 3),
         Err(IkError::BadTarget { index: 3 })
     ));
     let p = Params { length_scale_mm: -1.0, ..Params::default() };
-    assert!(matches!(solve(&chain, &t, &[0.0; 6], &p, &mut ws, 0), Err(IkError::BadParams(_))));
+    assert_eq!(
+        solve(&chain, &t, &[0.0; 6], &p, &mut ws, 0),
+        Err(IkError::BadParams { field: "length_scale_mm", value: -1.0 })
+    );
 }
