@@ -593,8 +593,20 @@ fn the_committed_reproduction_report_is_what_the_run_renders() {
     // not blessed fails here.
     let report = tmp("paper-reproduction.md");
     let plots = tmp("paper-img");
-    let o = thermokin(&["reproduce-paper", "--report", report.to_str().unwrap(), "--plot", plots.to_str().unwrap()]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    // The own-output drift check runs here too (inside `cargo test`): a missing or extra key is drift.
+    let json = tmp("paper-reproduction.json");
+    let o = thermokin(&[
+        "reproduce-paper",
+        "--report",
+        report.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+        "--check",
+        "fixtures/golden/paper-reproduction.json",
+    ]);
+    assert!(o.status.success(), "exit {:?}: {}{}", o.status.code(), stdout(&o), stderr(&o));
     let rendered = std::fs::read_to_string(&report).unwrap();
     let committed = std::fs::read_to_string(workspace("docs/paper-reproduction.md")).unwrap();
     if rendered != committed {

@@ -2,4 +2,5 @@
 //! replay checked on the 50 static rows, the candidate explanations judged.
 #![allow(clippy::unwrap_used, clippy::panic, missing_docs)] // Tests unwrap and panic to fail.
 
+mod print;
 mod scene;
