@@ -177,8 +177,18 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
     // deform) and knows no identification, IK or compensation.
     ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf"]),
-    // The paper crate reads the authors' rows through io.
-    ("thermokin-paper", &["thermokin-chain", "thermokin-deform", "thermokin-io", "thermokin-urdf"]),
+    // The paper crate reads the authors' rows through io and reruns the case studies.
+    (
+        "thermokin-paper",
+        &[
+            "thermokin-chain",
+            "thermokin-deform",
+            "thermokin-io",
+            "thermokin-urdf",
+            "thermokin-ik",
+            "thermokin-compensate",
+        ],
+    ),
 ];
 
 /// File-format and CLI crates, allowed only where named.

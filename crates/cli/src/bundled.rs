@@ -26,7 +26,6 @@ const FILES: &[(&str, &[u8])] = &[
     ("fixtures/paper/table12-targets.csv", include_bytes!("../../../fixtures/paper/table12-targets.csv")),
     ("fixtures/paper/table14-reached-static.csv", include_bytes!("../../../fixtures/paper/table14-reached-static.csv")),
     ("fixtures/paper/table16-joints-static.csv", include_bytes!("../../../fixtures/paper/table16-joints-static.csv")),
-    ("fixtures/paper/tables-13-15-17-18.toml", include_bytes!("../../../fixtures/paper/tables-13-15-17-18.toml")),
     (
         "fixtures/paper/authors/deformations-case-study.csv",
         include_bytes!("../../../fixtures/paper/authors/deformations-case-study.csv"),

@@ -1,162 +1,64 @@
-//! `thermokin reproduce-paper`: the paper's two case studies (section 4, Tables 10–18) rerun with our
-//! model and IK from the transcribed tables in `fixtures/paper/`, compared side by side with the printed
-//! results and with the authors' full files (bundled in `fixtures/paper/authors`).
+//! `thermokin reproduce-paper`: a thin caller of [`thermokin_paper::reproduce`] — it shows progress,
+//! draws the plots, writes the report and the measured numbers, and checks them against a golden file.
 
-use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use anyhow::{Context, anyhow};
-use nalgebra::Vector3;
-use serde::Deserialize;
-use serde_json::{Value, json};
-use thermokin_chain::Chain;
-use thermokin_compensate::{Cycle, RunOutput, RunSettings, Summary, compensate_static, compensate_transient};
-use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
-use thermokin_ik::Params;
-use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, read_robot, write_atomic};
+use thermokin_io::write_atomic;
+use thermokin_paper::{Inputs, brief, check, reproduce};
 
 use crate::args::ReproduceArgs;
-use crate::input::{program, progress_bar};
+use crate::input::progress_bar;
 use crate::{Failure, exit, plots};
 
-#[derive(Deserialize)]
-struct MinMax {
-    min: [f64; 3],
-    max: [f64; 3],
-}
-#[derive(Deserialize)]
-struct Case {
-    position_mm: MinMax,
-    orientation_deg: MinMax,
-}
-#[derive(Deserialize)]
-struct Printed {
-    #[serde(rename = "static")]
-    static_case: Case,
-    transient: Case,
-}
-
-/// A labelled row of numbers from a fixture CSV (`label,v1,…`).
-fn labelled_rows(path: &Path) -> Result<Vec<(String, Vec<f64>)>, Failure> {
-    let text = thermokin_io::read_text(path).map_err(Failure::input)?;
-    let mut out = Vec::new();
-    for (i, line) in text.lines().enumerate() {
-        let line = line.trim();
-        if line.is_empty() || line.starts_with('#') || line.starts_with(',') {
-            continue;
-        }
-        let mut cells = line.split(',');
-        let label = cells.next().unwrap_or_default().to_string();
-        let values = cells
-            .map(|c| {
-                c.trim().parse::<f64>().map_err(|_| anyhow!("{}:{}: `{c}` is not a number", path.display(), i + 1))
-            })
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(Failure::input)?;
-        out.push((label, values));
+fn paper(e: thermokin_paper::PaperError) -> Failure {
+    match e {
+        thermokin_paper::PaperError::Io(_) | thermokin_paper::PaperError::Fixture { .. } => Failure::input(e),
+        other => Failure::internal(other),
     }
-    Ok(out)
-}
-
-fn deg_to_rad(v: &[f64]) -> Vec<f64> {
-    v.iter().map(|d| d.to_radians()).collect()
-}
-
-/// RMS (3-D) and mean of FK(angles) − published coordinates.
-fn fk_residual(chain: &Chain, rows: &[(Vec<f64>, Vector3<f64>)]) -> Value {
-    let errs: Vec<Vector3<f64>> = rows
-        .iter()
-        .filter_map(|(q, p)| chain.tool_pose(&deg_to_rad(q)).ok().map(|pose| pose.translation.vector - p))
-        .collect();
-    let n = errs.len().max(1) as f64;
-    let rms = (errs.iter().map(Vector3::norm_squared).sum::<f64>() / n).sqrt();
-    let mean = errs.iter().sum::<Vector3<f64>>() / n;
-    let max = errs.iter().map(|e| e.norm()).fold(0.0, f64::max);
-    json!({"rows": errs.len(), "rms_mm": rms, "rms_per_coordinate_mm": rms / 3f64.sqrt(), "mean_mm": [mean.x, mean.y, mean.z], "max_mm": max})
-}
-
-fn summary_json(s: &Summary) -> Value {
-    serde_json::to_value(s).unwrap_or(Value::Null)
-}
-
-/// Everything measured; the JSON is also the golden file's format.
-struct Measured {
-    json: Value,
-    report: String,
 }
 
 pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
-    let started = std::time::Instant::now();
-    let robot = read_robot(&a.robot).map_err(Failure::input)?;
-    let chain = robot.chain.clone();
-    let scene = read_robot(&a.scene_robot).map_err(Failure::input)?.chain;
-    let f = |name: &str| a.fixtures.join(name);
-    let prog = program(&f("table12-targets.csv"))?;
-    let table = read_deviation_table(&f("deformations-case-study.toml")).map_err(Failure::input)?;
-    let printed: Printed = {
-        let p = f("tables-13-15-17-18.toml");
-        let text = thermokin_io::read_text(&p).map_err(Failure::input)?;
-        toml::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", p.display())))?
+    let started = Instant::now();
+    let inputs = Inputs {
+        fixtures: a.fixtures.clone(),
+        robot: a.robot.clone(),
+        scene_robot: a.scene_robot.clone(),
+        authors: a.authors.clone(),
     };
-    let table14 = labelled_rows(&f("table14-reached-static.csv"))?;
-    let table16 = labelled_rows(&f("table16-joints-static.csv"))?;
-    let coppelia = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; chain.dof()]));
-    // The authors' IK ran in CoppeliaSim from the robot's current pose; a seed with the wrist bent down
-    // (A5 = −45°) puts every target on the branch of their Table 16 (A5 < 0).
-    let start = deg_to_rad(&[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
-    let settings = RunSettings { semantics: coppelia.clone(), ik: Params::default(), start };
-
-    let static_run = compensate_static(&scene, &table, &prog, &settings).map_err(Failure::input)?;
-    let canonical_run = compensate_static(
-        &chain,
-        &table,
-        &prog,
-        &RunSettings { semantics: TableSemantics::Canonical, ..settings.clone() },
-    )
-    .map_err(Failure::input)?;
-    let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
     let bar = progress_bar(201, "transient case");
-    let transient_run = compensate_transient(&scene, &table, &profile, Cycle::PAPER, &prog, &settings, |done, _| {
+    let r = reproduce(&inputs, |done, _| {
         if started.elapsed().as_secs_f64() > 1.0 && bar.is_hidden() {
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
         }
         bar.set_position(done as u64);
     })
-    .map_err(Failure::input)?;
+    .map_err(paper)?;
     bar.finish_and_clear();
-
-    let deformed = table.apply(&scene, &coppelia).map_err(Failure::input)?;
-    let deformed_canonical = table.apply(&chain, &TableSemantics::Canonical).map_err(Failure::input)?;
-    let m = measure(
-        &a,
-        &chain,
-        &deformed,
-        &deformed_canonical,
-        &static_run,
-        &canonical_run,
-        &transient_run,
-        &printed,
-        &table14,
-        &table16,
-    )?;
 
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
-        plots::deviation_vs_time(&dir.join("transient-deviation.svg"), &transient_run).map_err(Failure::internal)?;
-        plots::structure(&dir.join("figure15-structure.svg"), &scene, &deformed, 10.0).map_err(Failure::internal)?;
+        plots::deviation_vs_time(&dir.join("transient-deviation.svg"), &r.transient_run).map_err(Failure::internal)?;
+        plots::structure(&dir.join("figure15-structure.svg"), &r.scene, &r.deformed, 10.0)
+            .map_err(Failure::internal)?;
     }
     if let Some(p) = &a.report {
-        write_atomic(p, m.report.as_bytes()).map_err(Failure::internal)?;
+        write_atomic(p, r.report.as_bytes()).map_err(Failure::internal)?;
     }
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&m.json).map_err(Failure::internal)?;
+        let text = serde_json::to_string_pretty(&r.json).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
     }
-    println!("{}", brief(&m.json));
+    println!("{}", brief(&r.json));
     println!("({:.2} s)", started.elapsed().as_secs_f64());
     let mut code = exit::OK;
     if let Some(golden) = &a.check {
-        let drift = check(golden, &m.json)?;
+        let text = std::fs::read_to_string(golden)
+            .with_context(|| format!("reading {}", golden.display()))
+            .map_err(Failure::input)?;
+        let g: serde_json::Value =
+            serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
+        let drift = check(&g, &r.json);
         if drift.is_empty() {
             println!("check: no drift against {}", golden.display());
         } else {
@@ -166,538 +68,8 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
             code = exit::DRIFT;
         }
     }
-    if static_run.summary.failures + transient_run.summary.failures > 0 {
+    if r.static_run.summary.failures + r.transient_run.summary.failures > 0 {
         code = code.max(exit::PARTIAL);
     }
     Ok(code)
-}
-
-fn brief(j: &Value) -> String {
-    let g = |path: &[&str]| -> String {
-        let mut v = j;
-        for k in path {
-            v = &v[*k];
-        }
-        match v.as_f64() {
-            Some(x) => format!("{x:.3e}"),
-            None => v.to_string(),
-        }
-    };
-    format!(
-        "static case (50 targets): largest compensated error {} mm, {}°; uncompensated {} mm\n\
-         transient case (10,050 solves): largest compensated error {} mm, {}°; uncompensated {} mm\n\
-         published Table 16 angles on our deformed model vs Table 14: RMS {} mm",
-        g(&["static", "max_position_error_mm"]),
-        g(&["static", "max_orientation_error_deg"]),
-        g(&["static", "max_uncompensated_error_mm"]),
-        g(&["transient", "max_position_error_mm"]),
-        g(&["transient", "max_orientation_error_deg"]),
-        g(&["transient", "max_uncompensated_error_mm"]),
-        g(&["table16_on_our_model_vs_table14", "rms_mm"]),
-    )
-}
-
-#[allow(clippy::too_many_arguments)]
-fn measure(
-    a: &ReproduceArgs,
-    chain: &Chain,
-    deformed: &Chain,
-    deformed_canonical: &Chain,
-    static_run: &RunOutput,
-    canonical_run: &RunOutput,
-    transient_run: &RunOutput,
-    printed: &Printed,
-    table14: &[(String, Vec<f64>)],
-    table16: &[(String, Vec<f64>)],
-) -> Result<Measured, Failure> {
-    let mut r = String::new();
-    let w = &mut r;
-    let _ = writeln!(w, "# Reproduction of the paper's case studies\n");
-    let _ = writeln!(
-        w,
-        "Generated by `cargo xtask bless-golden` (`cargo xtask reproduce-paper` renders the same into `target/`) \
-         from the transcribed Tables 10–18 in `fixtures/paper/`, the authors' own files in \
-         `fixtures/paper/authors/` and the bundled robots. Positions in mm, angles in degrees. The deviation \
-         table acts as the authors' CoppeliaSim script applied it (world shift and X-Y-Z Euler-angle addition \
-         of each joint object, at home; `--semantics coppeliasim`) on the scene's robot \
-         (`configs/irb140-scene.toml`: Table 9 with joint 6's object at the flange and the tool point \
-         identified on their minute-0 rows — see the section on the scene below), which is what their \
-         published numbers come from; the canonical reading of Table 7 on Table 9 (`configs/irb140.toml`) is \
-         shown for comparison. Orientation errors are rotation vectors, not differences of Euler triplets \
-         (degenerate at RY = 90°).\n"
-    );
-    // Tables 13 and 15 side by side.
-    let s = &static_run.summary;
-    let c = &canonical_run.summary;
-    let _ = writeln!(w, "## Static case: Tables 13 and 15 (min / max per axis)\n");
-    let _ = writeln!(
-        w,
-        "| quantity | published (Tables 15, 13) | ours, CoppeliaSim semantics | ours, canonical semantics |"
-    );
-    let _ = writeln!(w, "|---|---|---|---|");
-    let fmt3 = |v: &[f64; 3]| format!("{:.4e}, {:.4e}, {:.4e}", v[0], v[1], v[2]);
-    let _ = writeln!(
-        w,
-        "| ΔX, ΔY, ΔZ min | {} | {} | {} |",
-        fmt3(&printed.static_case.position_mm.min),
-        fmt3(&s.position_mm.min),
-        fmt3(&c.position_mm.min)
-    );
-    let _ = writeln!(
-        w,
-        "| ΔX, ΔY, ΔZ max | {} | {} | {} |",
-        fmt3(&printed.static_case.position_mm.max),
-        fmt3(&s.position_mm.max),
-        fmt3(&c.position_mm.max)
-    );
-    let _ = writeln!(
-        w,
-        "| Δθ min | {} | {} | {} |",
-        fmt3(&printed.static_case.orientation_deg.min),
-        fmt3(&s.orientation_deg.min),
-        fmt3(&c.orientation_deg.min)
-    );
-    let _ = writeln!(
-        w,
-        "| Δθ max | {} | {} | {} |",
-        fmt3(&printed.static_case.orientation_deg.max),
-        fmt3(&s.orientation_deg.max),
-        fmt3(&c.orientation_deg.max)
-    );
-    let _ = writeln!(
-        w,
-        "| largest error | 0.0099 mm, 0.02° | {:.2e} mm, {:.2e}° | {:.2e} mm, {:.2e}° |",
-        s.max_position_error_mm, s.max_orientation_error_deg, c.max_position_error_mm, c.max_orientation_error_deg
-    );
-    let _ = writeln!(
-        w,
-        "| uncompensated program, largest error | (\"even 20 mm\") | {:.3} mm | {:.3} mm |",
-        s.max_uncompensated_error_mm, c.max_uncompensated_error_mm
-    );
-    let _ = writeln!(w, "| failed targets | 0 | {} | {} |\n", s.failures, c.failures);
-
-    // Table 16 vs ours, and Table 14 vs FK of the published angles.
-    let _ = writeln!(w, "## Static case: Table 16 (joint angles) and Table 14 (coordinates reached)\n");
-    let _ = writeln!(
-        w,
-        "`FK(T16)` is the FK of the published joint angles on our deformed model; its gap to Table 14 is the part of the authors' model ours does not explain.\n"
-    );
-    let _ = writeln!(
-        w,
-        "| target | A1..A6 published (Table 16) | A1..A6 ours | max Δ [°] | Table 14 X, Y, Z | FK(T16) − Table 14 [mm] |"
-    );
-    let _ = writeln!(w, "|---|---|---|---|---|---|");
-    let mut joint_diff = [0.0f64; 6];
-    let mut t16_rows = Vec::new();
-    for (label, q_pub) in table16 {
-        let Some(ours) = static_run.rows.iter().find(|r| &r.label == label) else { continue };
-        let Some((_, p14)) = table14.iter().find(|(l, _)| l == label) else { continue };
-        let d: Vec<f64> = q_pub.iter().zip(&ours.joints_deg).map(|(a, b)| b - a).collect();
-        for (k, v) in d.iter().enumerate() {
-            joint_diff[k] = joint_diff[k].max(v.abs());
-        }
-        let p14 = Vector3::new(p14[0], p14[1], p14[2]);
-        let fk = deformed.tool_pose(&deg_to_rad(q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
-        t16_rows.push((q_pub.clone(), p14));
-        let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
-        let _ = writeln!(
-            w,
-            "| {label} | {} | {} | {:.4} | {:.3}, {:.3}, {:.3} | {:+.3}, {:+.3}, {:+.3} |",
-            list(q_pub),
-            list(&ours.joints_deg),
-            d.iter().fold(0.0f64, |m, v| m.max(v.abs())),
-            p14.x,
-            p14.y,
-            p14.z,
-            fk.x,
-            fk.y,
-            fk.z
-        );
-    }
-    let t16_residual = fk_residual(deformed, &t16_rows);
-    let t16_residual_canonical = fk_residual(deformed_canonical, &t16_rows);
-    let _ = writeln!(
-        w,
-        "\nFK of the 25 printed Table 16 angles on our deformed model vs Table 14: RMS {:.4} mm (3-D; {:.4} mm per coordinate), mean {} mm; with the canonical reading of the table instead: RMS {:.2} mm. Largest joint difference ours − published per joint: {} °.\n",
-        t16_residual["rms_mm"].as_f64().unwrap_or(f64::NAN),
-        t16_residual["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-        fmt_vec(&t16_residual["mean_mm"]),
-        t16_residual_canonical["rms_mm"].as_f64().unwrap_or(f64::NAN),
-        joint_diff.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(", ")
-    );
-
-    // Table 14 in full: the published coordinates against the programmed ones and ours.
-    let _ = writeln!(w, "### Table 14 in full: coordinates reached (static case)\n");
-    let _ = writeln!(
-        w,
-        "| target | programmed (Table 12) | published reached (Table 14) | published − programmed | ours reached | ours − programmed |"
-    );
-    let _ = writeln!(w, "|---|---|---|---|---|---|");
-    for (label, p14) in table14 {
-        let Some(ours) = static_run.rows.iter().find(|r| &r.label == label) else { continue };
-        let prog = ours.programmed.translation.vector;
-        let reached = ours.reached.translation.vector;
-        let d_pub = Vector3::new(p14[0], p14[1], p14[2]) - prog;
-        let d_ours = reached - prog;
-        let _ = writeln!(
-            w,
-            "| {label} | {:.0}, {:.0}, {:.0} | {:.3}, {:.3}, {:.3} | {:+.3}, {:+.3}, {:+.3} | {:.3}, {:.3}, {:.3} | {:+.1e}, {:+.1e}, {:+.1e} |",
-            prog.x,
-            prog.y,
-            prog.z,
-            p14[0],
-            p14[1],
-            p14[2],
-            d_pub.x,
-            d_pub.y,
-            d_pub.z,
-            reached.x,
-            reached.y,
-            reached.z,
-            d_ours.x,
-            d_ours.y,
-            d_ours.z
-        );
-    }
-    let _ = writeln!(w);
-
-    // Transient.
-    let t = &transient_run.summary;
-    let _ = writeln!(w, "## Transient case: Tables 17 and 18 (200 minutes, every minute, 10,050 solves)\n");
-    let _ = writeln!(
-        w,
-        "The table grows linearly, t/180 of the case-study table at minute t, without a plateau (what the authors' file does). Each target is re-solved every minute from its previous solution.\n"
-    );
-    let _ = writeln!(w, "| quantity | published (Tables 17, 18) | ours |");
-    let _ = writeln!(w, "|---|---|---|");
-    let _ =
-        writeln!(w, "| ΔX, ΔY, ΔZ min | {} | {} |", fmt3(&printed.transient.position_mm.min), fmt3(&t.position_mm.min));
-    let _ =
-        writeln!(w, "| ΔX, ΔY, ΔZ max | {} | {} |", fmt3(&printed.transient.position_mm.max), fmt3(&t.position_mm.max));
-    let _ =
-        writeln!(w, "| Δθ min | {} | {} |", fmt3(&printed.transient.orientation_deg.min), fmt3(&t.orientation_deg.min));
-    let _ =
-        writeln!(w, "| Δθ max | {} | {} |", fmt3(&printed.transient.orientation_deg.max), fmt3(&t.orientation_deg.max));
-    let _ = writeln!(
-        w,
-        "| largest error | 0.199 mm, 0.07° | {:.2e} mm, {:.2e}° |",
-        t.max_position_error_mm, t.max_orientation_error_deg
-    );
-    let _ = writeln!(w, "| uncompensated program, largest error | – | {:.3} mm |", t.max_uncompensated_error_mm);
-    let _ = writeln!(w, "| solves, failed | 10,050, 0 | {}, {} |\n", t.solves, t.failures);
-
-    let mut j = json!({
-        "static": summary_json(s),
-        "static_canonical": summary_json(c),
-        "transient": summary_json(t),
-        "table16_max_joint_diff_deg": joint_diff,
-        "table16_on_our_model_vs_table14": t16_residual,
-        "table16_on_canonical_model_vs_table14": t16_residual_canonical,
-    });
-
-    // The authors' full files, when present.
-    let static_file = a.authors.join("results-static-case-study.csv");
-    let transient_file = a.authors.join("results-transient-case-study.csv");
-    if static_file.exists() && transient_file.exists() {
-        let authors_static = read_paper_results(&static_file).map_err(Failure::input)?;
-        let rows: Vec<(Vec<f64>, Vector3<f64>)> =
-            authors_static.iter().map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
-        let res = fk_residual(deformed, &rows);
-        let joint = max_joint_diff(&authors_static, static_run);
-        let _ = writeln!(w, "## The authors' full files (`fixtures/paper/authors`)\n");
-        let _ = writeln!(
-            w,
-            "- Static, all 50 rows: FK of their angles on our deformed model vs their coordinates: RMS {:.4} mm (3-D), {:.4} mm per coordinate, mean {} mm. Our angles vs theirs: largest difference {:.4}°.",
-            res["rms_mm"].as_f64().unwrap_or(f64::NAN),
-            res["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-            fmt_vec(&res["mean_mm"]),
-            joint
-        );
-        let authors_transient = read_paper_results(&transient_file).map_err(Failure::input)?;
-        let minute0: Vec<(Vec<f64>, Vector3<f64>)> = authors_transient
-            .iter()
-            .filter(|r| r.time_min == 0.0)
-            .map(|r| (r.joints_deg.clone(), r.reached_mm))
-            .collect();
-        let nominal_res = fk_residual(chain, &minute0);
-        let tjoint = max_joint_diff(&authors_transient, transient_run);
-        let _ = writeln!(
-            w,
-            "- Transient, minute 0 (nominal robot): FK of their angles on our nominal model vs their coordinates: RMS {:.4} mm (3-D), {:.4} mm per coordinate, mean {} mm (a tool-point offset along the tool axis: see ARCHITECTURE.md's notes).",
-            nominal_res["rms_mm"].as_f64().unwrap_or(f64::NAN),
-            nominal_res["rms_per_coordinate_mm"].as_f64().unwrap_or(f64::NAN),
-            fmt_vec(&nominal_res["mean_mm"])
-        );
-        let _ = writeln!(
-            w,
-            "- Transient, all {} rows: our angles vs theirs, largest difference {:.3}°. Their increments were applied wherever the robot stood each minute, so their deformed state is path-dependent; ours is the table scaled by t/180 and applied at home.\n",
-            authors_transient.len(),
-            tjoint
-        );
-        j["authors_static_on_our_model"] = res;
-        j["authors_static_max_joint_diff_deg"] = json!(joint);
-        j["authors_transient_minute0_on_nominal"] = nominal_res;
-        j["authors_transient_rows"] = json!(authors_transient.len());
-        j["authors_transient_max_joint_diff_deg"] = json!(tjoint);
-        scene_section(w, &mut j, chain, &a.authors, &authors_static, &authors_transient)?;
-        print_section(w, &mut j, deformed, &authors_static, &authors_transient, static_run, transient_run)?;
-    } else {
-        let _ = writeln!(
-            w,
-            "The authors' full files were not found at `{}`; only the printed tables were compared.\n",
-            a.authors.display()
-        );
-    }
-    let _ = writeln!(
-        w,
-        "## Plots\n\n![deviation per minute](img/transient-deviation.svg)\n\n![Figure 15](img/figure15-structure.svg)\n"
-    );
-    Ok(Measured { json: j, report: r })
-}
-
-/// The authors' scene replayed: the static gap explained, the candidates judged, the transient file's
-/// state (see `thermokin_paper::scene`).
-fn scene_section(
-    w: &mut String,
-    j: &mut Value,
-    table9: &Chain,
-    authors: &Path,
-    authors_static: &[PaperResultRow],
-    authors_transient: &[PaperResultRow],
-) -> Result<(), Failure> {
-    let table = read_deviation_table(&authors.join("deformations-case-study.csv")).map_err(Failure::input)?;
-    let minute0: Vec<&PaperResultRow> = authors_transient.iter().filter(|r| r.time_min == 0.0).collect();
-    let paper = |e: thermokin_paper::PaperError| Failure::internal(anyhow!(e));
-    let (floor, hypotheses) =
-        thermokin_paper::static_hypotheses(table9, &table, &minute0, authors_static).map_err(paper)?;
-    let tool_point = thermokin_paper::identify_tool_point(table9, &minute0).map_err(paper)?;
-    let _ = writeln!(w, "## The authors' scene replayed (`configs/irb140-scene.toml`, `--semantics coppeliasim`)\n");
-    let _ = writeln!(
-        w,
-        "Their script (Appendix A, Figure A5) rotates each joint *object* about its own origin. Where a revolute joint's object sits along its axis is invisible in nominal FK but is the pivot of that edit. With joint 6's object at the flange (on its axis, where the tool point is), the 1° edits of row 6 turn the tool without moving the tool point; at Table 9's point they move it by the 25.5 mm lever × tan 1° = 0.445 mm — the gap above.\n"
-    );
-    let _ = writeln!(
-        w,
-        "Tool point identified on the 50 minute-0 rows of their transient file (nominal robot, closed-form least squares): ({:.6}, {:.6}, {:.6}) mm in joint 6's frame. The nominal scene then leaves {:.4} mm RMS (worst {:.4} mm, {}) and {:.4}° on those rows: the floor. Every candidate below is judged on the 50 static rows, which the identification never saw: kept when its position RMS and worst orientation are both within twice the floor.\n",
-        tool_point.x,
-        tool_point.y,
-        tool_point.z,
-        floor.rms_mm,
-        floor.worst_mm,
-        floor.worst_row,
-        floor.worst_orientation_deg
-    );
-    let _ = writeln!(
-        w,
-        "| candidate | static RMS, mm | worst row, mm | worst orientation, ° | verdict |\n|---|---|---|---|---|"
-    );
-    for h in &hypotheses {
-        let _ = writeln!(
-            w,
-            "| {} | {:.4} | {:.4} | {:.4} | {:?} |",
-            h.name, h.residuals.rms_mm, h.residuals.worst_mm, h.residuals.worst_orientation_deg, h.verdict
-        );
-    }
-    let kept = hypotheses.iter().find(|h| h.verdict == thermokin_paper::Verdict::Kept);
-    if let Some(k) = kept {
-        let goal_met = k.residuals.worst_mm <= 0.005;
-        let _ = writeln!(
-            w,
-            "\n**Static goal (≤ 0.005 mm in all 50 rows):** {}. RMS {:.4} mm; worst row {:.4} mm ({}). The nominal scene already leaves {:.4} mm worst on minute 0, where no deformation acts: what is left is the scene's geometry beyond Table 9 (and the files' rounding), which 50 rows of one tool orientation cannot identify further.\n",
-            if goal_met { "met" } else { "not met by the worst row" },
-            k.residuals.rms_mm,
-            k.residuals.worst_mm,
-            k.residuals.worst_row,
-            floor.worst_mm
-        );
-        j["scene_static_rms_mm"] = json!(k.residuals.rms_mm);
-        j["scene_static_worst_mm"] = json!(k.residuals.worst_mm);
-    }
-    j["scene_minute0_floor_rms_mm"] = json!(floor.rms_mm);
-    let scene = thermokin_paper::scene_chain(table9, tool_point).map_err(paper)?;
-    let candidates = thermokin_paper::transient_candidates(&scene, &table, authors_transient).map_err(paper)?;
-    let _ = writeln!(
-        w,
-        "**Transient file: not reproduced yet.** Their script adds table/180 to every joint object each minute wherever the robot stands (path-dependent); the replays tried so far, on the scene's robot:\n\n| candidate | minute 1 RMS, mm | minute 180 RMS, mm | all 10,050 rows RMS, mm |\n|---|---|---|---|"
-    );
-    for c in &candidates {
-        let _ =
-            writeln!(w, "| {} | {:.4} | {:.4} | {:.4} |", c.name, c.minute1.rms_mm, c.minute180.rms_mm, c.all.rms_mm);
-    }
-    let _ = writeln!(
-        w,
-        "\nNeither reaches the file, already at minute 1 (one increment). What their scene did between two minutes is still open; Tables 17–18 are therefore compared with our own compensation only.\n"
-    );
-    Ok(())
-}
-
-/// Tables 13, 15, 17 and 18 figure by figure: as printed, from the authors' files, from their angles on
-/// the replayed scene (static positions), and ours (see `thermokin_paper::print`).
-fn print_section(
-    w: &mut String,
-    j: &mut Value,
-    replayed: &Chain,
-    authors_static: &[PaperResultRow],
-    authors_transient: &[PaperResultRow],
-    static_run: &RunOutput,
-    transient_run: &RunOutput,
-) -> Result<(), Failure> {
-    use thermokin_paper::print::{
-        TABLE_13, TABLE_15, TABLE_17, TABLE_18, compare, file_orientation_deviation, file_position_deviation,
-        replayed_position_deviation,
-    };
-    let paper = |e: thermokin_paper::PaperError| Failure::internal(anyhow!(e));
-    let _ = writeln!(
-        w,
-        "## Tables 13, 15, 17 and 18 against print\n\nEach printed figure (min / max per axis) beside the same figure computed from the authors' own file, from their published angles evaluated on the replayed scene (static positions: their solver's residual recomputed by our model), and from our compensation. A figure agrees with print when it is within one unit of the last printed digit (the print truncates). Our orientation deviations are rotation vectors, theirs differences of Euler angles (degenerate at RY = 90°); ours are shown for scale.\n\n| table | figure | printed | authors' file | their angles, replayed | ours | file agrees |\n|---|---|---|---|---|---|---|"
-    );
-    let axis = ["X", "Y", "Z"];
-    let largest = |t: &thermokin_paper::print::PrintedMinMax| {
-        t.min.iter().chain(&t.max).map(|p| thermokin_paper::print::printed_value(p).0.abs()).fold(0.0, f64::max)
-    };
-    let (replay_lo, replay_hi) = replayed_position_deviation(replayed, authors_static).map_err(paper)?;
-    let cases = [
-        (
-            TABLE_15,
-            file_position_deviation(authors_static),
-            Some((replay_lo, replay_hi)),
-            &static_run.summary.position_mm,
-        ),
-        (TABLE_13, file_orientation_deviation(authors_static), None, &static_run.summary.orientation_deg),
-        (TABLE_17, file_position_deviation(authors_transient), None, &transient_run.summary.position_mm),
-        (TABLE_18, file_orientation_deviation(authors_transient), None, &transient_run.summary.orientation_deg),
-    ];
-    let mut disagreements = Vec::new();
-    for (printed, (lo, hi), replay, ours) in cases {
-        let figures = compare(&printed, lo, hi);
-        for f in &figures {
-            let replayed = replay.map_or("—".to_string(), |(rl, rh)| {
-                format!("{:.4}", if f.bound == "min" { rl[f.axis] } else { rh[f.axis] })
-            });
-            let our = if f.bound == "min" { ours.min[f.axis] } else { ours.max[f.axis] };
-            let _ = writeln!(
-                w,
-                "| {} | {} Δ{} | {} | {:.7} | {} | {:.1e} | {} |",
-                f.table,
-                f.bound,
-                axis[f.axis],
-                f.printed,
-                f.computed,
-                replayed,
-                our,
-                if f.agrees() { "yes" } else { "**no**" }
-            );
-            if !f.agrees() {
-                disagreements.push(format!(
-                    "Table {} {} Δ{}: printed {}, file {}",
-                    f.table, f.bound, axis[f.axis], f.printed, f.computed
-                ));
-            }
-        }
-    }
-    let _ = writeln!(
-        w,
-        "\nPrint vs the authors' files: {}. Their static angles on the replayed scene give Table 15 to within the replay's own accuracy (see the scene section). Largest residual position deviation, printed vs ours: static {:.4} mm vs {:.1e} mm ({:.0e}× smaller), transient {:.3} mm vs {:.1e} mm ({:.0e}× smaller) — our IK runs to the model's rounding on the same deformed model, theirs stops once the rounded tip is within 0.1 mm per axis of the target (Appendix A, Figure A7).\n",
-        if disagreements.is_empty() {
-            "every figure agrees".to_string()
-        } else {
-            format!("every figure agrees but {}", disagreements.join("; "))
-        },
-        largest(&TABLE_15),
-        static_run.summary.max_position_error_mm,
-        largest(&TABLE_15) / static_run.summary.max_position_error_mm,
-        largest(&TABLE_17),
-        transient_run.summary.max_position_error_mm,
-        largest(&TABLE_17) / transient_run.summary.max_position_error_mm,
-    );
-    j["print_disagreements"] = json!(disagreements);
-    Ok(())
-}
-
-/// `(x, y, z)` with three decimals from a JSON array.
-fn fmt_vec(v: &Value) -> String {
-    let parts: Vec<String> = v
-        .as_array()
-        .map_or_else(Vec::new, |a| a.iter().map(|x| format!("{:+.3}", x.as_f64().unwrap_or(f64::NAN))).collect());
-    format!("({})", parts.join(", "))
-}
-
-fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
-    authors
-        .iter()
-        .filter_map(|a| {
-            ours.rows
-                .iter()
-                .find(|o| o.label == a.label && o.time_min == a.time_min)
-                .map(|o| a.joints_deg.iter().zip(&o.joints_deg).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max))
-        })
-        .fold(0.0, f64::max)
-}
-
-/// Compares the measured numbers with the golden file. Keys ending in `_error_mm` or `_error_deg` under
-/// `static`/`transient` are bounds: ≤ 1e-6 (the compensation must stay exact); every other number must
-/// match the golden value within 1e-6 (absolute, mm or degrees) — the runs are deterministic, so any
-/// larger change is a change of the model. A key present in only one of the two is drift.
-fn check(golden: &PathBuf, measured: &Value) -> Result<Vec<String>, Failure> {
-    let text = std::fs::read_to_string(golden)
-        .with_context(|| format!("reading {}", golden.display()))
-        .map_err(Failure::input)?;
-    let g: Value = serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
-    let mut drift = Vec::new();
-    for case in ["static", "static_canonical", "transient"] {
-        for key in ["max_position_error_mm", "max_orientation_error_deg"] {
-            let v = measured[case][key].as_f64().unwrap_or(f64::INFINITY);
-            if v > 1e-6 {
-                drift.push(format!("{case}.{key} = {v:.3e} exceeds the 1e-6 bound"));
-            }
-        }
-        if measured[case]["failures"] != json!(0) {
-            drift.push(format!("{case}: {} failed targets", measured[case]["failures"]));
-        }
-    }
-    compare("", &g, measured, &mut drift);
-    Ok(drift)
-}
-
-fn compare(path: &str, g: &Value, m: &Value, drift: &mut Vec<String>) {
-    match (g, m) {
-        (Value::Object(go), Value::Object(mo)) => {
-            // A key on one side only is drift too: a number that disappeared, or one that was never blessed.
-            for k in mo.keys().filter(|k| !go.contains_key(*k)) {
-                drift.push(format!("{path}.{k}: measured but not in the golden file (bless it)"));
-            }
-            for (k, gv) in go {
-                let Some(mv) = mo.get(k) else {
-                    drift.push(format!("{path}.{k}: in the golden file but no longer measured"));
-                    continue;
-                };
-                {
-                    // The min/max of compensated deviations are rounding noise (~1e-10); bounded above.
-                    if matches!(
-                        k.as_str(),
-                        "position_mm" | "orientation_deg" | "max_position_error_mm" | "max_orientation_error_deg"
-                    ) {
-                        continue;
-                    }
-                    compare(&format!("{path}.{k}"), gv, mv, drift);
-                }
-            }
-        }
-        (Value::Array(ga), Value::Array(ma)) => {
-            if ga.len() != ma.len() {
-                drift.push(format!("{path}: {} values, golden {}", ma.len(), ga.len()));
-            }
-            for (i, (gv, mv)) in ga.iter().zip(ma).enumerate() {
-                compare(&format!("{path}[{i}]"), gv, mv, drift);
-            }
-        }
-        (Value::Number(gn), Value::Number(mn)) => {
-            let (a, b) = (gn.as_f64().unwrap_or(f64::NAN), mn.as_f64().unwrap_or(f64::NAN));
-            if (a - b).abs() > 1e-6 || a.is_nan() != b.is_nan() {
-                drift.push(format!("{path} = {b}, golden {a}"));
-            }
-        }
-        (gv, mv) if gv != mv => drift.push(format!("{path} = {mv}, golden {gv}")),
-        _ => {}
-    }
 }

@@ -1,7 +1,7 @@
 //! `thermokin-paper`: the paper's case studies as values, compared with the authors' own files.
 //!
 //! This crate holds what is specific to reproducing *the paper* rather than to compensating a user's
-//! robot. Today: [`scene`], the authors' CoppeliaSim scene identified from their files and replayed —
+//! robot: [`reproduce`], both case studies rerun and compared side by side; [`scene`], the authors' CoppeliaSim scene identified from their files and replayed —
 //! why FK of their published static angles sat 0.45 mm from their published coordinates, and which
 //! explanations the data confirm or reject; and [`print`], the printed result tables as data, compared
 //! with the authors' files and with their angles on the replayed scene.
@@ -10,7 +10,10 @@
 //! is transcribed from our own earlier output.
 
 pub mod print;
+mod reproduce;
 pub mod scene;
+
+pub use reproduce::{Inputs, Reproduction, brief, check, reproduce};
 
 pub use scene::{
     Hypothesis, Residuals, TransientCandidate, Verdict, identify_tool_point, residuals, scene_chain, static_hypotheses,
@@ -27,6 +30,22 @@ pub enum PaperError {
     /// The deformation could not be applied.
     #[error(transparent)]
     Deform(#[from] thermokin_deform::DeformError),
+    /// A file could not be read.
+    #[error(transparent)]
+    Io(#[from] thermokin_io::IoError),
+    /// A compensation run could not be set up.
+    #[error(transparent)]
+    Compensate(#[from] thermokin_compensate::CompensateError),
+    /// A transcribed fixture is malformed.
+    #[error("{path}:{line}: {message}", path = path.display())]
+    Fixture {
+        /// The file.
+        path: std::path::PathBuf,
+        /// 1-based line.
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
     /// The authors' rows do not fit the robot.
     #[error("{what}: expected {expected} rows or joints, got {got}")]
     Shape {
