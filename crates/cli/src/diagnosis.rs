@@ -27,9 +27,10 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     }
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
-    let data = read_measurements(&a.measurements, chain.dof()).map_err(Failure::input)?;
+    let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
+    let data = read_measurements(&a.measurements, &kinds).map_err(Failure::input)?;
     let holdout = match &a.holdout {
-        Some(p) => Some(read_measurements(p, chain.dof()).map_err(Failure::input)?),
+        Some(p) => Some(read_measurements(p, &kinds).map_err(Failure::input)?),
         None => None,
     };
     let config = Config {
@@ -278,7 +279,8 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         ..SimulationConfig::default()
     };
     let data = thermokin_diagnose::simulate(&base, &hidden, &config).map_err(Failure::input)?;
-    write_atomic_with(&a.out, |w| write_measurements(w, &data)).map_err(Failure::internal)?;
+    let kinds: Vec<_> = base.chain.joints().iter().map(|j| j.kind).collect();
+    write_atomic_with(&a.out, |w| write_measurements(w, &data, &kinds)).map_err(Failure::internal)?;
     for h in &hidden {
         let shown: Vec<String> = h
             .values

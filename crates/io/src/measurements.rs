@@ -5,26 +5,29 @@
 use std::path::Path;
 
 use nalgebra::Vector3;
-use thermokin_chain::{Dataset, Measurement};
+use thermokin_chain::{Dataset, JointKind, Measurement};
 
 use crate::csvtext::{column, expect_fields, number, records};
+use crate::units::{joint_value_in, joint_value_out};
 use crate::{IoError, parse_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
-pub fn read_measurements(path: &Path, dof: usize) -> Result<Dataset, IoError> {
+pub fn read_measurements(path: &Path, kinds: &[JointKind]) -> Result<Dataset, IoError> {
     let text = read_text(path)?;
-    parse_measurements(path, &text, dof)
+    parse_measurements(path, &text, kinds)
 }
 
-/// Parses a measurement set's text for a robot with `dof` joints.
-pub fn parse_measurements(path: &Path, text: &str, dof: usize) -> Result<Dataset, IoError> {
+/// Parses a measurement set's text for a robot whose joints are of `kinds` (one per joint): joint columns
+/// are degrees for revolute joints and mm for prismatic ones.
+pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Result<Dataset, IoError> {
+    let dof = kinds.len();
     if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
         let rows = parse_paper_results(path, text)?;
         let measurements = rows
             .into_iter()
             .map(|r| Measurement {
                 time_min: r.time_min,
-                q: r.joints_deg.iter().map(|d| d.to_radians()).collect(),
+                q: r.joints_deg.iter().zip(kinds).map(|(&v, &k)| joint_value_in(k, v)).collect(),
                 position_mm: r.reached_mm,
                 temps: Vec::new(),
             })
@@ -63,7 +66,10 @@ pub fn parse_measurements(path: &Path, text: &str, dof: usize) -> Result<Dataset
         let q = q_cols
             .iter()
             .enumerate()
-            .map(|(k, &c)| number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(f64::to_radians))
+            .map(|(k, &c)| {
+                let kind = kinds.get(k).copied().unwrap_or(JointKind::Revolute);
+                number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(|v| joint_value_in(kind, v))
+            })
             .collect::<Result<Vec<_>, _>>()?;
         let p = Vector3::new(
             number(path, r.line, "x", &r.cells[p_cols[0]])?,
@@ -97,14 +103,19 @@ pub fn parse_measurements(path: &Path, text: &str, dof: usize) -> Result<Dataset
     Ok(Dataset { measurements, temperature_names: temp_cols.into_iter().map(|(_, n)| n).collect() })
 }
 
-/// Writes a measurement set in the format [`read_measurements`] reads (degrees, mm).
-pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset) -> std::io::Result<()> {
+/// Writes a measurement set in the format [`read_measurements`] reads (degrees or mm per joint kind, mm).
+pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: &[JointKind]) -> std::io::Result<()> {
     let n = data.measurements.first().map_or(0, |m| m.q.len());
     let qs: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
     let temps: Vec<String> = data.temperature_names.iter().map(|t| format!(",temp_{t}")).collect();
     writeln!(out, "time_min,{},x,y,z{}", qs.join(","), temps.concat())?;
     for m in &data.measurements {
-        let q: Vec<String> = m.q.iter().map(|v| format!("{:?}", v.to_degrees())).collect();
+        let q: Vec<String> = m
+            .q
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| format!("{:?}", joint_value_out(kinds.get(k).copied().unwrap_or(JointKind::Revolute), v)))
+            .collect();
         let t: Vec<String> = m.temps.iter().map(|v| format!(",{v:?}")).collect();
         writeln!(
             out,

@@ -129,6 +129,17 @@ pub fn quaternion_wxyz(rotation: &UnitQuaternion<f64>) -> [f64; 4] {
     [s * q.w + 0.0, s * q.i + 0.0, s * q.j + 0.0, s * q.k + 0.0]
 }
 
+/// One joint value from a file or flag (degrees for a revolute joint, mm for a prismatic one) in the
+/// library's radians or mm.
+pub fn joint_value_in(kind: JointKind, value: f64) -> f64 {
+    if kind == JointKind::Revolute { value.to_radians() } else { value }
+}
+
+/// One joint value of the library (radians, mm) for a file or a terminal (degrees, mm).
+pub fn joint_value_out(kind: JointKind, value: f64) -> f64 {
+    if kind == JointKind::Revolute { value.to_degrees() } else { value }
+}
+
 /// Joint values from a file or flag (degrees for revolute joints, mm for prismatic ones) to the library's
 /// radians and mm. `None` when the count does not match the chain.
 pub fn joints_to_internal(chain: &Chain, values: &[f64]) -> Option<Vec<f64>> {

@@ -136,7 +136,11 @@ pub fn replayed_position_deviation(
 ) -> Result<([f64; 3], [f64; 3]), PaperError> {
     let mut deviations = Vec::with_capacity(rows.len());
     for r in rows {
-        let q: Vec<f64> = r.joints_deg.iter().map(|d| d.to_radians()).collect();
+        let q = thermokin_io::units::joints_to_internal(replayed, &r.joints_deg).ok_or(PaperError::Shape {
+            what: "joint angles of a row",
+            expected: replayed.dof(),
+            got: r.joints_deg.len(),
+        })?;
         deviations.push(r.programmed_mm - replayed.tool_pose(&q)?.translation.vector);
     }
     Ok(min_max(deviations.into_iter()))

@@ -101,15 +101,17 @@ fn labelled_rows(path: &Path) -> Result<Vec<(String, Vec<f64>)>, PaperError> {
     Ok(out)
 }
 
-fn deg_to_rad(v: &[f64]) -> Vec<f64> {
-    v.iter().map(|d| d.to_radians()).collect()
+/// Joint values of the case studies' rows (degrees) in radians, through the unit boundary; every joint of
+/// the IRB 140 is revolute, so a row of the wrong length yields an empty vector and FK refuses it.
+fn deg_to_rad(chain: &Chain, v: &[f64]) -> Vec<f64> {
+    thermokin_io::units::joints_to_internal(chain, v).unwrap_or_default()
 }
 
 /// RMS (3-D) and mean of FK(angles) − published coordinates.
 fn fk_residual(chain: &Chain, rows: &[(Vec<f64>, Vector3<f64>)]) -> Value {
     let errs: Vec<Vector3<f64>> = rows
         .iter()
-        .filter_map(|(q, p)| chain.tool_pose(&deg_to_rad(q)).ok().map(|pose| pose.translation.vector - p))
+        .filter_map(|(q, p)| chain.tool_pose(&deg_to_rad(chain, q)).ok().map(|pose| pose.translation.vector - p))
         .collect();
     let n = errs.len().max(1) as f64;
     let rms = (errs.iter().map(Vector3::norm_squared).sum::<f64>() / n).sqrt();
@@ -166,7 +168,7 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
     let coppelia = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; chain.dof()]));
     // The authors' IK ran in CoppeliaSim from the robot's current pose; a seed with the wrist bent down
     // (A5 = −45°) puts every target on the branch of their Table 16 (A5 < 0).
-    let start = deg_to_rad(&[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
+    let start = deg_to_rad(&scene, &[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
     let settings = RunSettings { semantics: coppelia.clone(), ik: Params::default(), start };
 
     let static_run = compensate_static(&scene, &table, &prog, &settings)?;
@@ -322,7 +324,8 @@ fn measure(
             joint_diff[k] = joint_diff[k].max(v.abs());
         }
         let p14 = Vector3::new(p14[0], p14[1], p14[2]);
-        let fk = deformed.tool_pose(&deg_to_rad(q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
+        let fk =
+            deformed.tool_pose(&deg_to_rad(deformed, q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
         t16_rows.push((q_pub.clone(), p14));
         let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
         let _ = writeln!(

@@ -56,12 +56,11 @@ fn joints_rad(chain: &Chain, row: &PaperResultRow) -> Result<Vec<f64>, PaperErro
             got: row.joints_deg.len(),
         });
     }
-    Ok(chain
-        .joints()
-        .iter()
-        .zip(&row.joints_deg)
-        .map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_radians() } else { v })
-        .collect())
+    thermokin_io::units::joints_to_internal(chain, &row.joints_deg).ok_or(PaperError::Shape {
+        what: "joint angles of a row",
+        expected: chain.dof(),
+        got: row.joints_deg.len(),
+    })
 }
 
 /// FK of each row's published angles on `chain` against the row's published position and orientation.

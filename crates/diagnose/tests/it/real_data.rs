@@ -94,7 +94,7 @@ fn paper_static_case_gap() {
     .unwrap();
     let semantics = thermokin_deform::TableSemantics::CoppeliaSim(thermokin_deform::CoppeliaSimEdits::at(vec![0.0; 6]));
     let chain = table.apply(&robot.chain, &semantics).unwrap();
-    let data = thermokin_io::read_measurements(&path, 6).unwrap();
+    let data = thermokin_io::read_measurements(&path, &[thermokin_io::JointKind::Revolute; 6]).unwrap();
     assert_eq!(data.len(), 50);
     let report = diagnose(&Base { chain, masses: robot.masses }, &data, None, &Config::default()).unwrap();
     for row in &report.additive {

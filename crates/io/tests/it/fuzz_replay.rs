@@ -33,7 +33,9 @@ fn every_corpus_replays_without_a_panic() {
         ("targets_csv", replay("targets_csv", |t| drop(thermokin_io::parse_targets(p("fuzz.csv"), t)))),
         (
             "measurements_csv",
-            replay("measurements_csv", |t| drop(thermokin_io::parse_measurements(p("fuzz.csv"), t, 6))),
+            replay("measurements_csv", |t| {
+                drop(thermokin_io::parse_measurements(p("fuzz.csv"), t, &[thermokin_io::JointKind::Revolute; 6]))
+            }),
         ),
         ("temperature_log", replay("temperature_log", |t| drop(thermokin_io::parse_temperature_log(p("fuzz.csv"), t)))),
         ("paper_results", replay("paper_results", |t| drop(thermokin_io::parse_paper_results(p("fuzz.csv"), t)))),

@@ -83,3 +83,22 @@ fn robot_toml_round_trip_keeps_fk_names_limits_and_masses() {
         assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
     }
 }
+
+#[test]
+fn measurements_convert_per_joint_kind() {
+    // A revolute joint in degrees and a prismatic one in millimetres: only the first becomes radians.
+    use thermokin_io::JointKind;
+    let kinds = [JointKind::Revolute, JointKind::Prismatic];
+    let text = "time_min,q1,q2,x,y,z\n0,90,250,1,2,3\n5,-45,10.5,4,5,6\n";
+    let data = thermokin_io::parse_measurements(std::path::Path::new("m.csv"), text, &kinds).unwrap();
+    assert!((data.measurements[0].q[0] - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+    assert_eq!(data.measurements[0].q[1], 250.0);
+    assert_eq!(data.measurements[1].q[1], 10.5);
+    // And back: the writer gives degrees and millimetres again, which read back to the same values.
+    let mut out = Vec::new();
+    thermokin_io::write_measurements(&mut out, &data, &kinds).unwrap();
+    let again =
+        thermokin_io::parse_measurements(std::path::Path::new("m.csv"), std::str::from_utf8(&out).unwrap(), &kinds)
+            .unwrap();
+    assert_eq!(again, data);
+}
