@@ -88,6 +88,30 @@ impl Effect {
         }
     }
 
+    /// Checks the effect against a robot of `dof` joints: a per-joint kind (offset, link deviation,
+    /// compliance, thermal drift) needs a joint in `0..dof`, a whole-robot kind none. An effect that fails
+    /// this would index past the chain.
+    pub fn validate(&self, dof: usize) -> Result<(), DiagnoseError> {
+        let per_joint = matches!(
+            self.kind,
+            EffectKind::JointOffset
+                | EffectKind::LinkDeviation
+                | EffectKind::JointCompliance
+                | EffectKind::ThermalDrift(_)
+        );
+        match (per_joint, self.joint) {
+            (true, Some(j)) if j < dof => Ok(()),
+            (false, None) => Ok(()),
+            (true, Some(j)) => {
+                Err(DiagnoseError::Input(format!("{}: joint {} is not in 1..={dof}", self.kind_name(), j + 1)))
+            }
+            (true, None) => Err(DiagnoseError::Input(format!("{} needs a joint", self.kind_name()))),
+            (false, Some(_)) => {
+                Err(DiagnoseError::Input(format!("{} acts on the whole robot, not a joint", self.kind_name())))
+            }
+        }
+    }
+
     /// `joint_offset[3]`, `thermal_drift[2] (exponential)`, `base_frame`.
     pub fn label(&self) -> String {
         let shape = match self.kind {

@@ -58,6 +58,9 @@ pub fn simulate(base: &Base, hidden: &[HiddenEffect], config: &SimulationConfig)
         let time_min = if config.poses > 1 { config.minutes * k as f64 / (config.poses - 1) as f64 } else { 0.0 };
         data.measurements.push(Measurement { time_min, q, position_mm: Vector3::zeros(), temps: Vec::new() });
     }
+    for h in hidden {
+        h.effect.validate(base.chain.dof())?;
+    }
     let effects: Vec<Effect> = hidden.iter().map(|h| h.effect).collect();
     let model = Model::new(effects, Isometry3::identity());
     let mut theta = model.initial();

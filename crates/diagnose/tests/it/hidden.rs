@@ -109,3 +109,18 @@ fn finds_an_exponential_thermal_drift() {
         Some(3),
     );
 }
+
+#[test]
+fn an_effect_on_a_joint_the_robot_lacks_is_an_error_not_a_panic() {
+    use thermokin_diagnose::{Base, Effect, EffectKind, HiddenEffect, SimulationConfig, simulate};
+    let base = Base { chain: thermokin_testdata::irb140_table9(), masses: vec![None; 6] };
+    for effect in [
+        Effect::at(EffectKind::JointOffset, 8),
+        Effect::global(EffectKind::LinkDeviation),
+        Effect::at(EffectKind::BaseFrame, 1),
+    ] {
+        let hidden = [HiddenEffect { effect, values: vec![0.0; effect.len()] }];
+        let r = simulate(&base, &hidden, &SimulationConfig { poses: 10, ..SimulationConfig::default() });
+        assert!(r.is_err(), "{effect:?} was accepted");
+    }
+}
