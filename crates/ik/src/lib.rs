@@ -13,9 +13,15 @@
 //! move with [`Params::max_distance_from_seed`] so that a solution on another branch is reported as a
 //! failure rather than silently accepted.
 
-mod solver;
+mod batch;
+mod lm;
+mod params;
+mod solve;
 
-pub use solver::{Backend, LimitPolicy, Params, Seeds, Solution, Status, Target, Workspace, solve, solve_batch};
+pub use batch::{Seeds, solve_batch};
+pub use lm::Workspace;
+pub use params::{Backend, LimitPolicy, Params, Solution, Status, Target};
+pub use solve::solve;
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
