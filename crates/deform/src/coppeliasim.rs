@@ -43,11 +43,7 @@ impl CoppeliaSimEdits {
             return Err(DeformError::RowCount { rows: table.dof(), joints: n });
         }
         if self.at.len() != n || self.spin.len() != n {
-            return Err(DeformError::BadProfile(format!(
-                "CoppeliaSim edits need {n} joint values and spins, got {} and {}",
-                self.at.len(),
-                self.spin.len()
-            )));
+            return Err(DeformError::EditsShape { joints: n, at: self.at.len(), spin: self.spin.len() });
         }
         let post = chain.joint_frames(&self.at)?;
         let motions: Vec<Isometry3<f64>> =

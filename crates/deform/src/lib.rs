@@ -16,6 +16,7 @@ use thermokin_chain::{Chain, ChainError};
 
 /// Errors of the deformation model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DeformError {
     /// A table with a different number of joint rows than the chain has joints.
     #[error("the deviation table has {rows} joint rows but the robot has {joints} joints")]
@@ -26,8 +27,23 @@ pub enum DeformError {
         joints: usize,
     },
     /// A profile parameter out of its domain.
-    #[error("profile: {0}")]
-    BadProfile(String),
+    #[error("profile: {message}")]
+    BadProfile {
+        /// The profile's field (`tau_min`, `log.times_min`, …).
+        field: &'static str,
+        /// What is wrong.
+        message: String,
+    },
+    /// CoppeliaSim edits whose per-joint lists do not match the chain.
+    #[error("CoppeliaSim edits need {joints} joint values and spins, got {at} and {spin}")]
+    EditsShape {
+        /// Joints of the chain.
+        joints: usize,
+        /// Joint values given.
+        at: usize,
+        /// Spins given.
+        spin: usize,
+    },
     /// A time outside what the profile can answer (negative or not finite, beyond a temperature log).
     #[error("time {time_min} min: {reason}")]
     BadTime {

@@ -112,56 +112,62 @@ impl TimeProfile {
     /// Checks the profile's own parameters (and, for a temperature profile, its log and sensor names
     /// against `dof` joints).
     pub fn validate(&self, dof: usize) -> Result<(), DeformError> {
-        let bad = |s: String| Err(DeformError::BadProfile(s));
+        let bad = |field: &'static str, message: String| Err(DeformError::BadProfile { field, message });
         match self {
             TimeProfile::Static => Ok(()),
             TimeProfile::Linear { stabilization_min, .. } => {
                 if !(stabilization_min.is_finite() && *stabilization_min > 0.0) {
-                    return bad(format!("the stabilization time must be positive, got {stabilization_min} min"));
+                    return bad(
+                        "stabilization_min",
+                        format!("the stabilization time must be positive, got {stabilization_min} min"),
+                    );
                 }
                 Ok(())
             }
             TimeProfile::Exponential { tau_min } => {
                 if !(tau_min.is_finite() && *tau_min > 0.0) {
-                    return bad(format!("the time constant must be positive, got {tau_min} min"));
+                    return bad("tau_min", format!("the time constant must be positive, got {tau_min} min"));
                 }
                 Ok(())
             }
             TimeProfile::Cubic { coefficients } => {
                 if coefficients.iter().any(|c| !c.is_finite()) {
-                    return bad("cubic coefficients must be finite".into());
+                    return bad("coefficients", "cubic coefficients must be finite".into());
                 }
                 Ok(())
             }
             TimeProfile::Temperature { log, sensors, reference_c } => {
                 if !sensors.is_empty() && sensors.len() != dof {
-                    return bad(format!("{} sensors named for {dof} joints", sensors.len()));
+                    return bad("sensors", format!("{} sensors named for {dof} joints", sensors.len()));
                 }
                 if log.sensors.is_empty() {
-                    return bad("the temperature log has no sensor columns".into());
+                    return bad("log", "the temperature log has no sensor columns".into());
                 }
                 if log.times_min.len() < 2 {
-                    return bad("the temperature log needs at least two samples".into());
+                    return bad("log", "the temperature log needs at least two samples".into());
                 }
                 if log.times_min.windows(2).any(|w| w[1] <= w[0]) || log.times_min.iter().any(|t| !t.is_finite()) {
-                    return bad("temperature log times must be finite and strictly increasing".into());
+                    return bad("log.times_min", "temperature log times must be finite and strictly increasing".into());
                 }
                 for (name, series) in &log.sensors {
                     if series.len() != log.times_min.len() || series.iter().any(|x| !x.is_finite()) {
-                        return bad(format!("sensor `{name}`: every sample must be a finite temperature"));
+                        return bad(
+                            "log.sensors",
+                            format!("sensor `{name}`: every sample must be a finite temperature"),
+                        );
                     }
                 }
                 for s in sensors {
                     match log.series(s) {
-                        None => return bad(format!("sensor `{s}` is not in the temperature log")),
+                        None => return bad("sensors", format!("sensor `{s}` is not in the temperature log")),
                         Some(v) if v.len() != log.times_min.len() || v.iter().any(|x| !x.is_finite()) => {
-                            return bad(format!("sensor `{s}`: every sample must be a finite temperature"));
+                            return bad("sensors", format!("sensor `{s}`: every sample must be a finite temperature"));
                         }
                         Some(_) => {}
                     }
                 }
                 if reference_c.is_some_and(|r| !r.is_finite()) {
-                    return bad("the reference temperature must be finite".into());
+                    return bad("reference_c", "the reference temperature must be finite".into());
                 }
                 Ok(())
             }

@@ -71,7 +71,7 @@ fn bad_profiles_and_times() {
         TimeProfile::Temperature { log: log(), sensors: vec!["a".into()], reference_c: None },
     ];
     for p in bad {
-        assert!(matches!(p.row_factors(10.0, 3), Err(DeformError::BadProfile(_))), "{p:?}");
+        assert!(matches!(p.row_factors(10.0, 3), Err(DeformError::BadProfile { .. })), "{p:?}");
     }
     for t in [-1.0, f64::NAN, f64::INFINITY] {
         assert!(matches!(TimeProfile::Static.row_factors(t, 3), Err(DeformError::BadTime { .. })));
