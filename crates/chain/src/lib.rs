@@ -36,7 +36,7 @@ pub struct JointRatings {
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use measurements::{Dataset, Measurement};
-pub use so3::{rotation_angle, rotation_log};
+pub use so3::{quaternion_wxyz, rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

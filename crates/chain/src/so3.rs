@@ -54,6 +54,14 @@ pub fn rotation_log(r: &Matrix3<f64>) -> Vector3<f64> {
     u * angle
 }
 
+/// The components `w, x, y, z` of a rotation's unit quaternion, with `w ≥ 0` (of the two quaternions that
+/// describe it) and no negative zeros: the one form every writer prints.
+pub fn quaternion_wxyz(rotation: &UnitQuaternion<f64>) -> [f64; 4] {
+    let q = rotation.quaternion();
+    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+    [s * q.w + 0.0, s * q.i + 0.0, s * q.j + 0.0, s * q.k + 0.0]
+}
+
 /// The angle (radians, in [0, π]) of the rotation taking `a` to `b`: `2·atan2(|v|, |w|)` of the quaternion
 /// `a⁻¹ b`.
 ///

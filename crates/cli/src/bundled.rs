@@ -75,8 +75,13 @@ fn content_hash() -> u64 {
     h
 }
 
+/// The cache folder; the hash reads every bundled byte (~1.6 MB), so it is computed once per process.
 fn cache_root() -> PathBuf {
-    std::env::temp_dir().join(format!("thermokin-{}-{:016x}", env!("CARGO_PKG_VERSION"), content_hash()))
+    static ROOT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    ROOT.get_or_init(|| {
+        std::env::temp_dir().join(format!("thermokin-{}-{:016x}", env!("CARGO_PKG_VERSION"), content_hash()))
+    })
+    .clone()
 }
 
 /// Writes one bundled file into the cache (atomically, once) and returns its path there.

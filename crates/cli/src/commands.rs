@@ -12,7 +12,7 @@ use thermokin_compensate::{
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Params, Target, Workspace, solve};
-use thermokin_io::units::{quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
+use thermokin_io::units::{joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
@@ -20,7 +20,7 @@ use std::path::{Path, PathBuf};
 use crate::args::{
     Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
 };
-use crate::input::{Loaded, joints, joints_out, load, pose, program, progress_bar, working_chain};
+use crate::input::{Loaded, joints, load, pose, program, progress_bar, working_chain};
 use crate::{Failure, exit, plots, reproduce};
 
 /// Runs a parsed command line; returns the exit status.
@@ -43,14 +43,14 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
 fn pose_json(pose: &Isometry3<f64>) -> serde_json::Value {
     let m = pose.rotation.to_rotation_matrix().into_inner();
     let p = pose.translation.vector;
-    let r9 = |x: f64| rounded(x, 10);
-    let r12 = |x: f64| rounded(x, 13);
+    let mm_deg = |x: f64| rounded(x, 10);
+    let unitless = |x: f64| rounded(x, 13);
     json!({
-        "position_mm": [r9(p.x), r9(p.y), r9(p.z)],
-        "rotation": [[r12(m[(0, 0)]), r12(m[(0, 1)]), r12(m[(0, 2)])], [r12(m[(1, 0)]), r12(m[(1, 1)]), r12(m[(1, 2)])], [r12(m[(2, 0)]), r12(m[(2, 1)]), r12(m[(2, 2)])]],
-        "xyz_euler_deg": xyz_euler_deg(&pose.rotation).map(r9),
-        "ros_rpy_deg": ros_rpy_deg(&pose.rotation).map(r9),
-        "quaternion_wxyz": quaternion_wxyz(&pose.rotation).map(r12),
+        "position_mm": [mm_deg(p.x), mm_deg(p.y), mm_deg(p.z)],
+        "rotation": [[unitless(m[(0, 0)]), unitless(m[(0, 1)]), unitless(m[(0, 2)])], [unitless(m[(1, 0)]), unitless(m[(1, 1)]), unitless(m[(1, 2)])], [unitless(m[(2, 0)]), unitless(m[(2, 1)]), unitless(m[(2, 2)])]],
+        "xyz_euler_deg": xyz_euler_deg(&pose.rotation).map(mm_deg),
+        "ros_rpy_deg": ros_rpy_deg(&pose.rotation).map(mm_deg),
+        "quaternion_wxyz": quaternion_wxyz(&pose.rotation).map(unitless),
     })
 }
 
@@ -72,7 +72,8 @@ fn print_pose(pose: &Isometry3<f64>) {
 fn outside_limits(chain: &Chain, q: &[f64]) -> Vec<String> {
     let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
     let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
-    let (lo, hi, v) = (joints_out(chain, &lower), joints_out(chain, &upper), joints_out(chain, q));
+    let (lo, hi, v) =
+        (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
     chain
         .joints()
         .iter()
@@ -126,7 +127,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     let params = Params { restarts: a.restarts, ..Params::default() };
     let mut ws = Workspace::new(chain.dof());
     let s = solve(&chain, &target, &seed, &params, &mut ws, 0).map_err(Failure::input)?;
-    let deg = joints_out(&chain, &s.q);
+    let deg = joints_to_external(&chain, &s.q);
     if a.json {
         println!(
             "{}",

@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Translation3, Vector3};
 use thermokin_chain::{Chain, FixedRow};
 use thermokin_compensate::ProgramTarget;
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
-use thermokin_io::units::{joints_to_external, joints_to_internal, rotation_from_matrix};
+use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
 use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_with, read_targets};
 
 use crate::Failure;
@@ -74,11 +74,6 @@ pub fn joints(chain: &Chain, flag: &str, text: &str) -> Result<Vec<f64>, Failure
     joints_to_internal(chain, &values).ok_or_else(|| {
         Failure::input(anyhow!("--{flag}: {} values for a robot with {} joints", values.len(), chain.dof()))
     })
-}
-
-/// Joint values for printing: degrees (mm for prismatic joints).
-pub fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
-    joints_to_external(chain, q)
 }
 
 /// A pose flag: `x,y,z` (mm) followed by the orientation in `convention` (three angles in degrees, or a

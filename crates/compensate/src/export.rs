@@ -5,7 +5,7 @@
 use std::io::{self, Write};
 
 use serde::Serialize;
-use thermokin_chain::xyz_angles_for_output;
+use thermokin_chain::{quaternion_wxyz, xyz_angles_for_output};
 
 use crate::run::{RunOutput, Summary, TargetResult};
 
@@ -119,24 +119,20 @@ pub fn write_long_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
         };
         let xyz = ["x", "y", "z"];
         let wxyz = ["w", "x", "y", "z"];
-        let quaternion = |q: &nalgebra::UnitQuaternion<f64>| {
-            let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-            [s * q.w, s * q.i, s * q.j, s * q.k]
-        };
         let p = r.programmed.translation.vector;
         for (c, v) in xyz.iter().zip(p.iter()) {
             row("programmed_position", c, *v, "mm")?;
         }
-        for (c, v) in wxyz.iter().zip(quaternion(&r.programmed.rotation)) {
+        for (c, v) in wxyz.iter().zip(quaternion_wxyz(&r.programmed.rotation)) {
             row("programmed_orientation", c, v, "1")?;
         }
-        if r.status != thermokin_ik::Status::Converged {
+        if !r.converged() {
             continue;
         }
         for (c, v) in xyz.iter().zip(r.reached.translation.vector.iter()) {
             row("reached_position", c, *v, "mm")?;
         }
-        for (c, v) in wxyz.iter().zip(quaternion(&r.reached.rotation)) {
+        for (c, v) in wxyz.iter().zip(quaternion_wxyz(&r.reached.rotation)) {
             row("reached_orientation", c, v, "1")?;
         }
         for (c, v) in xyz.iter().zip(r.position_deviation_mm) {
@@ -176,9 +172,7 @@ pub fn write_results_json(out: &mut impl Write, run: &RunOutput) -> io::Result<(
         .rows
         .iter()
         .map(|r| {
-            let ok = r.status == thermokin_ik::Status::Converged;
-            let q = r.programmed.rotation;
-            let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+            let ok = r.converged();
             let p = r.programmed.translation.vector;
             let reached = r.reached.translation.vector;
             JsonRow {
@@ -186,7 +180,7 @@ pub fn write_results_json(out: &mut impl Write, run: &RunOutput) -> io::Result<(
                 label: &r.label,
                 status: format!("{:?}", r.status),
                 programmed_mm: m3([p.x, p.y, p.z]),
-                programmed_quaternion_wxyz: [s * q.w, s * q.i, s * q.j, s * q.k].map(meaningful),
+                programmed_quaternion_wxyz: quaternion_wxyz(&r.programmed.rotation).map(meaningful),
                 reached_mm: ok.then(|| m3([reached.x, reached.y, reached.z])),
                 deviation_mm: ok.then(|| m3(r.position_deviation_mm)),
                 orientation_deviation_deg: ok.then(|| m3(r.orientation_deviation_deg)),

@@ -10,7 +10,7 @@
 //! instead of one module with every target of every minute. Targets that were not reached become
 //! comments, never motions.
 
-use thermokin_chain::{Chain, JointKind};
+use thermokin_chain::{Chain, JointKind, quaternion_wxyz};
 
 use crate::run::{RunOutput, TargetResult};
 
@@ -143,7 +143,7 @@ pub fn programs(run: &RunOutput, nominal: &Chain, settings: &ProgramSettings) ->
                 "thermokin: joints compensated on the deformed model{}; {} targets, {} not reached (comments)",
                 if transient { format!(" valid at {t} min") } else { String::new() },
                 rows.len(),
-                rows.iter().filter(|r| !r.status_is_converged()).count()
+                rows.iter().filter(|r| !r.converged()).count()
             );
             let text = match settings.controller {
                 Controller::Abb => abb(&name, &header, &rows, nominal, settings),
@@ -154,12 +154,6 @@ pub fn programs(run: &RunOutput, nominal: &Chain, settings: &ProgramSettings) ->
         })
         .collect::<Vec<_>>();
     Ok(out)
-}
-
-impl TargetResult {
-    fn status_is_converged(&self) -> bool {
-        self.status == thermokin_ik::Status::Converged
-    }
 }
 
 /// Joint values written with 6 decimals: 1e-6° is below every controller's resolution (ABB and KUKA
@@ -177,14 +171,12 @@ fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pr
         let target = identifier(&format!("{}_{}", if robtarget { "p" } else { "jt" }, r.label), 32);
         let q = internal(nominal, &r.joints_deg);
         let pose = if robtarget { nominal.tool_pose(&q).ok() } else { None };
-        if !r.status_is_converged() {
+        if !r.converged() {
             out.push_str(&format!("  ! {target}: not reached ({:?})\n", r.status));
             moves.push_str(&format!("    ! skipped {}\n", r.label));
         } else if let Some(base_from_tcp) = pose {
             let p = base_from_tcp.translation.vector;
-            let w = base_from_tcp.rotation;
-            let sign = if w.w < 0.0 { -1.0 } else { 1.0 };
-            let quat = [w.w, w.i, w.j, w.k].map(|v| format!("{:.9}", sign * v + 0.0));
+            let quat = quaternion_wxyz(&base_from_tcp.rotation).map(|v| format!("{v:.9}"));
             let [cf1, cf4, cf6, cfx] = confdata(nominal, &q);
             out.push_str(&format!(
                 "  CONST robtarget {target}:=[[{:.6},{:.6},{:.6}],[{}],[{cf1},{cf4},{cf6},{cfx}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n",
@@ -269,7 +261,7 @@ fn kuka(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -
     let approx = if s.zone.eq_ignore_ascii_case("fine") { String::new() } else { format!(" {}", s.zone) };
     let mut out = format!("DEF {program}( )\n; {header}\nBAS(#INITMOV, 0)\nBAS(#VEL_PTP, {})\n", s.speed);
     for r in rows {
-        if r.status_is_converged() {
+        if r.converged() {
             let a = axes(&r.joints_deg, 6);
             let named: Vec<String> = a.iter().enumerate().take(6).map(|(i, v)| format!("A{} {v}", i + 1)).collect();
             out.push_str(&format!("PTP {{E6AXIS: {}}}{approx} ; {}\n", named.join(", "), r.label));
@@ -285,7 +277,7 @@ fn ur(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -> 
     let program = identifier(name, 64);
     let mut out = format!("def {program}():\n  # {header}\n");
     for r in rows {
-        if r.status_is_converged() {
+        if r.converged() {
             let radians: Vec<f64> = r.joints_deg.iter().map(|d| d.to_radians()).collect();
             out.push_str(&format!(
                 "  movej([{}], a=1.4, v={}, r={})  # {}\n",

@@ -97,6 +97,13 @@ pub struct TargetResult {
     pub iterations: usize,
 }
 
+impl TargetResult {
+    /// `true` when the IK reached the target (its status is `Converged`, which the solver verified).
+    pub fn converged(&self) -> bool {
+        self.status == Status::Converged
+    }
+}
+
 /// Min and max per axis.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Axes {
@@ -152,14 +159,14 @@ pub struct RunOutput {
 
 impl RunOutput {
     fn new(rows: Vec<TargetResult>) -> Self {
-        let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.status == Status::Converged).collect();
+        let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.converged()).collect();
         let transient = rows.iter().any(|r| r.time_min != 0.0);
         let summary = Summary {
             solves: rows.len(),
             failures: rows.len() - ok.len(),
             failed: rows
                 .iter()
-                .filter(|r| r.status != Status::Converged)
+                .filter(|r| !r.converged())
                 .map(|r| {
                     let at = if transient { format!(" @ {} min", r.time_min) } else { String::new() };
                     format!("{}{at} ({:?})", r.label, r.status)

@@ -82,9 +82,8 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
         }
         orientation = Some((convention, names, cols.into_iter().flatten().collect()));
     }
-    let rot: Vec<Option<usize>> =
-        orientation.as_ref().map_or_else(Vec::new, |(_, _, c)| c.iter().map(|&i| Some(i)).collect());
-    let label_col = (0..header.cells.len()).find(|i| !pos.contains(i) && !rot.contains(&Some(*i)));
+    let orientation_cols: &[usize] = orientation.as_ref().map_or(&[], |(_, _, c)| c.as_slice());
+    let label_col = (0..header.cells.len()).find(|i| !pos.contains(i) && !orientation_cols.contains(i));
     let mut out = Vec::with_capacity(rows.len());
     for r in rows {
         expect_fields(path, r, header.cells.len())?;

@@ -13,8 +13,7 @@ use thermokin_chain::{Chain, JointKind, xyz_rotation};
 #[non_exhaustive]
 pub enum Orientation {
     /// X-Y-Z Euler angles in degrees, `R = Rx(rx)·Ry(ry)·Rz(rz)`: the paper's and CoppeliaSim's
-    /// convention (and ABB's `OrientZYX` read right to left). `(0, 90, 0)` points the tool's Z axis along
-    /// world +X.
+    /// convention. `(0, 90, 0)` points the tool's Z axis along world +X.
     #[default]
     XyzEuler,
     /// ROS / URDF roll, pitch, yaw in degrees about the fixed X, Y, Z axes: `R = Rz(yaw)·Ry(pitch)·Rx(roll)`.
@@ -122,12 +121,7 @@ pub fn ros_rpy_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     [tidy_deg(roll.to_degrees()), tidy_deg(pitch.to_degrees()), tidy_deg(yaw.to_degrees())]
 }
 
-/// The quaternion `w, x, y, z` with `w ≥ 0` (of the two that describe a rotation).
-pub fn quaternion_wxyz(rotation: &UnitQuaternion<f64>) -> [f64; 4] {
-    let q = rotation.quaternion();
-    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-    [s * q.w + 0.0, s * q.i + 0.0, s * q.j + 0.0, s * q.k + 0.0]
-}
+pub use thermokin_chain::quaternion_wxyz;
 
 /// One joint value from a file or flag (degrees for a revolute joint, mm for a prismatic one) in the
 /// library's radians or mm.
