@@ -172,7 +172,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("thermokin-deform", &["thermokin-chain"]),
     ("thermokin-ik", &["thermokin-chain"]),
     ("thermokin-urdf", &["thermokin-chain"]),
-    ("thermokin-diagnose", &["thermokin-chain"]),
+    ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform"]),
     ("thermokin-compensate", &["thermokin-chain", "thermokin-deform", "thermokin-ik"]),
     // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
     // deform) and knows no identification, IK or compensation.

@@ -9,33 +9,14 @@ mod dh;
 mod error_params;
 mod frame;
 mod measurements;
+mod robot;
 mod so3;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
-/// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
-/// one link: what gravity compliance needs. Description data carried beside the chain.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LinkMass {
-    /// Mass, kg.
-    pub mass_kg: f64,
-    /// Centre of mass, mm, in the frame of the joint that moves the link.
-    pub com_mm: nalgebra::Vector3<f64>,
-}
-
-/// Rated maximum speed and effort of a joint — what URDF's `<limit velocity effort>` and a controller's
-/// axis data carry: rad/s and N·m for a revolute joint, mm/s and N for a prismatic one. Description data
-/// carried beside the chain, like [`LinkMass`]; `None` where the robot's description does not say.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct JointRatings {
-    /// Largest joint speed.
-    pub velocity: Option<f64>,
-    /// Largest joint torque or force.
-    pub effort: Option<f64>,
-}
-
 pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use measurements::{Dataset, Measurement};
+pub use robot::{JointRatings, LinkMass, Robot, Target};
 pub use so3::{quaternion_wxyz, rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.
@@ -84,6 +65,24 @@ pub enum ChainError {
         lower: f64,
         /// Upper bound.
         upper: f64,
+    },
+    /// Per-joint description data (masses, ratings) whose length is not the chain's joint count.
+    #[error("{field}: expected one entry per joint ({expected}), got {got}")]
+    DescriptionLength {
+        /// `masses` or `ratings`.
+        field: &'static str,
+        /// Number of joints of the chain.
+        expected: usize,
+        /// Number given.
+        got: usize,
+    },
+    /// A replacement chain with another number of joints than the robot's.
+    #[error("the new chain has {got} joints, the robot {expected}")]
+    JointCountChanged {
+        /// Joints of the robot.
+        expected: usize,
+        /// Joints of the new chain.
+        got: usize,
     },
     /// No modified-DH table reproduces this chain.
     #[error("no modified-DH table exists: joint {joint}: {reason}")]

@@ -11,7 +11,7 @@ use thermokin_compensate::{
     programs, write_joint_csv, write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
-use thermokin_ik::{Params, Target, Workspace, solve};
+use thermokin_ik::{Goal, Params, Workspace, solve};
 use thermokin_io::units::{joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
@@ -110,7 +110,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
         if v.len() < 3 {
             return Err(Failure::input(anyhow!("--pose: --position-only needs at least x,y,z")));
         }
-        Target::Position(Vector3::new(v[0], v[1], v[2]))
+        Goal::Position(Vector3::new(v[0], v[1], v[2]))
     } else {
         let v = parse_list("pose", &a.pose).ok();
         if v.as_ref().is_some_and(|v| v.len() == 3) {
@@ -118,7 +118,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
                 "--pose: 3 values need --position-only (or give x,y,z and an orientation)"
             )));
         }
-        Target::Pose(pose(&a.pose, "pose", a.robot.orientation)?)
+        Goal::Pose(pose(&a.pose, "pose", a.robot.orientation)?)
     };
     let seed = match &a.seed {
         Some(s) => joints(&chain, "seed", s)?,
@@ -151,7 +151,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     if a.robot.time.is_some() {
         return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
     }
-    let chain = &loaded.robot.chain;
+    let chain = loaded.robot.chain();
     let prog = program(&a.targets)?;
     let start = match &a.seed {
         Some(s) => joints(chain, "seed", s)?,
@@ -194,7 +194,7 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
         write_atomic_with(p, |w| write_joint_csv(w, run)).map_err(Failure::internal)?;
     }
     if let Some(p) = &a.program {
-        for (path, text) in robot_programs(a, p, &loaded.robot.chain, run)? {
+        for (path, text) in robot_programs(a, p, loaded.robot.chain(), run)? {
             write_atomic(&path, text.as_bytes()).map_err(Failure::internal)?;
         }
     }
@@ -206,8 +206,8 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
             plots::deviation_vs_time(&dir.join("deviation-vs-time.svg"), run).map_err(Failure::internal)?;
         }
         if let Some(table) = &loaded.table {
-            let deformed = table.apply(&loaded.robot.chain, &loaded.semantics).map_err(Failure::input)?;
-            plots::structure(&dir.join("structure.svg"), &loaded.robot.chain, &deformed, 20.0)
+            let deformed = table.apply(loaded.robot.chain(), &loaded.semantics).map_err(Failure::input)?;
+            plots::structure(&dir.join("structure.svg"), loaded.robot.chain(), &deformed, 20.0)
                 .map_err(Failure::internal)?;
         }
     }
@@ -299,18 +299,15 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
         UrdfCommand::Import { file, base, tip, out } => {
             let robot = read_robot_with(&file, &RobotOptions { base, tip }).map_err(Failure::input)?;
             write_atomic(&out, robot_to_toml(&robot).as_bytes()).map_err(Failure::internal)?;
-            println!("{}: {} joints → {}", robot.name, robot.chain.dof(), out.display());
+            println!("{}: {} joints → {}", robot.name(), robot.chain().dof(), out.display());
         }
         UrdfCommand::Export { robot, out } => {
             let loaded = load(&robot)?;
             let chain = working_chain(&robot, &loaded)?;
-            let options = thermokin_urdf::ExportOptions {
-                masses: loaded.robot.masses.clone(),
-                ratings: loaded.robot.ratings.clone(),
-            };
-            let xml = thermokin_urdf::export_urdf_with(&chain, &loaded.robot.name, &options);
+            let working = loaded.robot.with_chain(chain).map_err(Failure::input)?;
+            let xml = thermokin_urdf::export_robot(&working);
             write_atomic(&out, xml.as_bytes()).map_err(Failure::internal)?;
-            println!("{}: {} joints → {}", loaded.robot.name, chain.dof(), out.display());
+            println!("{}: {} joints → {}", working.name(), working.chain().dof(), out.display());
         }
     }
     Ok(exit::OK)

@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{
-    Base, Config, DriftShape, Effect, EffectKind, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode,
+    Config, DriftShape, Effect, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
 };
 use thermokin_io::{read_measurements, write_atomic, write_atomic_with, write_measurements};
 
@@ -39,8 +39,8 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
         ..Config::default()
     };
-    let base = Base { chain, masses: loaded.robot.masses.clone() };
-    let report = thermokin_diagnose::diagnose(&base, &data, holdout.as_ref(), &config).map_err(Failure::input)?;
+    let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
+    let report = thermokin_diagnose::diagnose(&robot, &data, holdout.as_ref(), &config).map_err(Failure::input)?;
     print_report(&report);
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
@@ -188,36 +188,20 @@ fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
 
 /// Parses `KIND[:JOINT][=VALUES]` into a hidden effect (report units → internal), with a seeded random
 /// effect of typical size when no values are given.
-fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<HiddenEffect> {
+fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Result<HiddenEffect> {
     let (head, values) = match spec.split_once('=') {
         Some((h, v)) => (h, Some(crate::args::parse_list("effect", v)?)),
         None => (spec, None),
     };
-    let (kind, joint) = match head.split_once(':') {
+    let (name, joint) = match head.split_once(':') {
         Some((k, j)) => {
             let j: usize = j.parse().map_err(|_| anyhow!("--effect {spec}: joint `{j}` is not a number"))?;
-            anyhow::ensure!((1..=dof).contains(&j), "--effect {spec}: joint {j} is not in 1..={dof}");
+            anyhow::ensure!(j >= 1, "--effect {spec}: joints are numbered from 1");
             (k, Some(j - 1))
         }
         None => (head, None),
     };
-    let kind = match kind {
-        "base_frame" => EffectKind::BaseFrame,
-        "tool_frame" => EffectKind::ToolFrame,
-        "joint_offset" => EffectKind::JointOffset,
-        "link_deviation" => EffectKind::LinkDeviation,
-        "joint_compliance" => EffectKind::JointCompliance,
-        "thermal_drift" => EffectKind::ThermalDrift(DriftShape::Linear),
-        "thermal_drift_exp" => EffectKind::ThermalDrift(DriftShape::Exponential),
-        other => anyhow::bail!("--effect {spec}: unknown effect `{other}`"),
-    };
-    let global = matches!(kind, EffectKind::BaseFrame | EffectKind::ToolFrame);
-    anyhow::ensure!(
-        global == joint.is_none(),
-        "--effect {spec}: {}",
-        if global { "takes no joint" } else { "needs a joint" }
-    );
-    let effect = Effect { kind, joint };
+    let effect = Effect::named(robot, name, joint).map_err(|e| anyhow!("--effect {spec}: {e}"))?;
     let report_units: Vec<f64> = match values {
         Some(v) => {
             anyhow::ensure!(
@@ -229,31 +213,19 @@ fn parse_effect(spec: &str, dof: usize, rng: &mut ChaCha8Rng) -> anyhow::Result<
             v
         }
         None => (0..effect.len())
-            .map(|k| match (kind, k) {
-                (EffectKind::JointOffset, _) => {
+            .map(|k| match (effect, k) {
+                (Effect::JointOffset(_), _) => {
                     rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }
-                (EffectKind::JointCompliance, _) => rng.random_range(5e-4..1.5e-3),
-                (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
-                (EffectKind::ToolFrame, _) | (_, 0..=2) => rng.random_range(-0.4..0.4),
+                (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
+                (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
+                (Effect::ToolFrame, _) | (_, 0..=2) => rng.random_range(-0.4..0.4),
                 _ => rng.random_range(-0.02..0.02),
             })
             .collect(),
     };
-    let values =
-        report_units.iter().enumerate().map(|(k, &v)| if is_angle(kind, k) { v.to_radians() } else { v }).collect();
+    let values = report_units.iter().enumerate().map(|(k, &v)| effect.from_report_units(k, v)).collect();
     Ok(HiddenEffect { effect, values })
-}
-
-/// Whether value `k` of an effect is an angle (degrees in reports and flags, radians inside; compliance
-/// in degrees per N·m).
-fn is_angle(kind: EffectKind, k: usize) -> bool {
-    match (kind, k) {
-        (EffectKind::JointOffset | EffectKind::JointCompliance, _) => true,
-        (EffectKind::ToolFrame, _) | (EffectKind::ThermalDrift(DriftShape::Exponential), 6) => false,
-        (_, 3..=5) => true,
-        _ => false,
-    }
 }
 
 pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
@@ -264,13 +236,13 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
+    let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     let hidden = a
         .effects
         .iter()
-        .map(|s| parse_effect(s, chain.dof(), &mut rng))
+        .map(|s| parse_effect(s, &robot, &mut rng))
         .collect::<anyhow::Result<Vec<_>>>()
         .map_err(Failure::input)?;
-    let base = Base { chain, masses: loaded.robot.masses.clone() };
     let config = SimulationConfig {
         poses: a.poses,
         minutes: a.minutes,
@@ -278,19 +250,21 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         seed: a.seed,
         ..SimulationConfig::default()
     };
-    let data = thermokin_diagnose::simulate(&base, &hidden, &config).map_err(Failure::input)?;
-    let kinds: Vec<_> = base.chain.joints().iter().map(|j| j.kind).collect();
+    let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(Failure::input)?;
+    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
     write_atomic_with(&a.out, |w| write_measurements(w, &data, &kinds)).map_err(Failure::internal)?;
     for h in &hidden {
         let shown: Vec<String> = h
             .values
             .iter()
             .enumerate()
-            .map(
-                |(k, &v)| {
-                    if is_angle(h.effect.kind, k) { format!("{:.6}°", v.to_degrees()) } else { format!("{v:.6}") }
-                },
-            )
+            .map(|(k, &v)| {
+                if h.effect.is_angle(k) {
+                    format!("{:.6}°", h.effect.to_report_units(k, v))
+                } else {
+                    format!("{v:.6}")
+                }
+            })
             .collect();
         println!("hidden {}: {} (mm, degrees, minutes)", h.effect.label(), shown.join(", "));
     }

@@ -8,7 +8,7 @@ use anyhow::anyhow;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use thermokin_chain::{Chain, FixedRow};
-use thermokin_compensate::ProgramTarget;
+use thermokin_compensate::Target;
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
 use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
 use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_with, read_targets};
@@ -29,23 +29,25 @@ pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
     let mut robot = read_robot_with(&args.robot, &options).map_err(Failure::input)?;
     if let Some(text) = &args.tool_pose {
         let flange_from_tool = pose(text, "tool-pose", args.orientation)?;
-        robot.chain = robot.chain.with_tool(FixedRow::from_isometry(&flange_from_tool)).map_err(Failure::input)?;
+        let chain = robot.chain().with_tool(FixedRow::from_isometry(&flange_from_tool)).map_err(Failure::input)?;
+        robot = robot.with_chain(chain).map_err(Failure::input)?;
     }
     if let Some(text) = &args.base_pose {
         let world_from_base = pose(text, "base-pose", args.orientation)?;
-        robot.chain = robot.chain.with_base(FixedRow::from_isometry(&world_from_base)).map_err(Failure::input)?;
+        let chain = robot.chain().with_base(FixedRow::from_isometry(&world_from_base)).map_err(Failure::input)?;
+        robot = robot.with_chain(chain).map_err(Failure::input)?;
     }
     let table = match &args.deformation {
-        Some(p) => Some(read_deviation_table_for(p, robot.chain.dof()).map_err(Failure::input)?),
+        Some(p) => Some(read_deviation_table_for(p, robot.chain().dof()).map_err(Failure::input)?),
         None => None,
     };
     if table.is_none() && (args.profile.is_some() || args.time.is_some()) {
         return Err(Failure::input(anyhow!("--profile and --time need --deformation")));
     }
     if let Some(p) = &args.profile {
-        p.validate(robot.chain.dof()).map_err(Failure::input)?;
+        p.validate(robot.chain().dof()).map_err(Failure::input)?;
     }
-    let semantics = semantics(args.semantics, robot.chain.dof());
+    let semantics = semantics(args.semantics, robot.chain().dof());
     Ok(Loaded { robot, table, semantics })
 }
 
@@ -58,14 +60,14 @@ pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
 
 /// The chain fk/ik work on: nominal, or deformed by the table at `--time` under `--profile`.
 pub fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
-    let Some(table) = &loaded.table else { return Ok(loaded.robot.chain.clone()) };
+    let Some(table) = &loaded.table else { return Ok(loaded.robot.chain().clone()) };
     let table = match (&args.profile, args.time) {
         (Some(p), Some(t)) => p.table_at(table, t).map_err(Failure::input)?,
         (Some(_), None) => return Err(Failure::input(anyhow!("--profile needs --time (minutes)"))),
         (None, Some(_)) => return Err(Failure::input(anyhow!("--time needs --profile"))),
         (None, None) => table.clone(),
     };
-    table.apply(&loaded.robot.chain, &loaded.semantics).map_err(Failure::input)
+    table.apply(loaded.robot.chain(), &loaded.semantics).map_err(Failure::input)
 }
 
 /// A flag's joint list (degrees, mm for prismatic joints) in the library's radians and mm.
@@ -134,12 +136,8 @@ fn pose_json(text: &str, flag: &str) -> Result<Isometry3<f64>, Failure> {
 }
 
 /// Reads a targets file into a program.
-pub fn program(path: &Path) -> Result<Vec<ProgramTarget>, Failure> {
-    Ok(read_targets(path)
-        .map_err(Failure::input)?
-        .into_iter()
-        .map(|t| ProgramTarget { pose: t.pose(), label: t.label })
-        .collect())
+pub fn program(path: &Path) -> Result<Vec<Target>, Failure> {
+    read_targets(path).map_err(Failure::input)
 }
 
 /// A progress bar that shows itself only when a run lasts more than a second.

@@ -18,9 +18,10 @@ mod run;
 pub use export::{write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use program::{AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, programs};
 pub use run::{
-    Axes, Cycle, ProgramTarget, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
+    Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error_deg, pose_from_xyz_deg,
 };
+pub use thermokin_chain::Target;
 
 /// Errors of a compensation run (per-target failures are records, not errors).
 #[derive(Debug, thiserror::Error)]

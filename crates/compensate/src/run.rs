@@ -2,20 +2,11 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, rotation_log, xyz_rotation};
+use thermokin_chain::{Chain, Target, rotation_log, xyz_rotation};
 use thermokin_deform::{DeviationTable, TableSemantics, TimeProfile};
-use thermokin_ik::{Params, Seeds, Solution, Status, Target, solve_batch};
+use thermokin_ik::{Goal, Params, Seeds, Solution, Status, solve_batch};
 
 use crate::CompensateError;
-
-/// One programmed target.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ProgramTarget {
-    /// Label (`P1`, …).
-    pub label: String,
-    /// Programmed TCP pose in the base frame (mm).
-    pub pose: Isometry3<f64>,
-}
 
 /// A pose from a position (mm) and CoppeliaSim X-Y-Z Euler angles (degrees).
 pub fn pose_from_xyz_deg(position_mm: Vector3<f64>, rotation_xyz_deg: Vector3<f64>) -> Isometry3<f64> {
@@ -185,8 +176,8 @@ impl RunOutput {
     }
 }
 
-fn to_targets(program: &[ProgramTarget]) -> Vec<Target> {
-    program.iter().map(|t| Target::Pose(t.pose)).collect()
+fn to_goals(program: &[Target]) -> Vec<Goal> {
+    program.iter().map(|t| Goal::Pose(t.pose)).collect()
 }
 
 fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
@@ -204,7 +195,7 @@ fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
 fn record(
     deformed: &Chain,
     time_min: f64,
-    target: &ProgramTarget,
+    target: &Target,
     solution: &Solution,
     nominal_q: &[f64],
 ) -> Result<TargetResult, CompensateError> {
@@ -230,10 +221,10 @@ fn record(
 /// program, and the seeds of the compensated one.
 fn nominal_program(
     chain: &Chain,
-    program: &[ProgramTarget],
+    program: &[Target],
     settings: &RunSettings,
 ) -> Result<Vec<Solution>, CompensateError> {
-    Ok(solve_batch(chain, &to_targets(program), Seeds::ChainPrevious(&settings.start), &settings.ik)?)
+    Ok(solve_batch(chain, &to_goals(program), Seeds::ChainPrevious(&settings.start), &settings.ik)?)
 }
 
 /// Static case: one deformed state (the full table), every target solved on it.
@@ -241,7 +232,7 @@ fn nominal_program(
 /// ```
 /// use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 /// use thermokin_chain::ErrorParams;
-/// use thermokin_compensate::{ProgramTarget, RunSettings, compensate_static};
+/// use thermokin_compensate::{Target, RunSettings, compensate_static};
 /// use thermokin_deform::{DeviationTable, TableSemantics};
 ///
 /// let robot = thermokin_testdata::irb140_table9();
@@ -249,7 +240,7 @@ fn nominal_program(
 /// let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6]);
 /// // Table 12's first target: tool Z along world +X, i.e. X-Y-Z Euler (0, 90°, 0).
 /// let tool_along_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
-/// let program = vec![ProgramTarget { label: "P1".into(), pose: Isometry3::from_parts(Translation3::new(641.0, 21.0, 473.0), tool_along_x) }];
+/// let program = vec![Target::new("P1", Isometry3::from_parts(Translation3::new(641.0, 21.0, 473.0), tool_along_x))];
 /// let settings = RunSettings {
 ///     semantics: TableSemantics::Canonical,
 ///     ik: thermokin_ik::Params::default(),
@@ -265,13 +256,13 @@ fn nominal_program(
 pub fn compensate_static(
     chain: &Chain,
     table: &DeviationTable,
-    program: &[ProgramTarget],
+    program: &[Target],
     settings: &RunSettings,
 ) -> Result<RunOutput, CompensateError> {
     let deformed = table.apply(chain, &settings.semantics)?;
     let nominal = nominal_program(chain, program, settings)?;
     let seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
-    let solutions = solve_batch(&deformed, &to_targets(program), Seeds::PerTarget(&seeds), &settings.ik)?;
+    let solutions = solve_batch(&deformed, &to_goals(program), Seeds::PerTarget(&seeds), &settings.ik)?;
     let rows = program
         .iter()
         .zip(&solutions)
@@ -289,19 +280,19 @@ pub fn compensate_transient(
     table: &DeviationTable,
     profile: &TimeProfile,
     cycle: Cycle,
-    program: &[ProgramTarget],
+    program: &[Target],
     settings: &RunSettings,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<RunOutput, CompensateError> {
     profile.validate(chain.dof())?;
     let times = cycle.times()?;
-    let targets = to_targets(program);
+    let goals = to_goals(program);
     let nominal = nominal_program(chain, program, settings)?;
     let mut seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
     let mut rows = Vec::with_capacity(times.len() * program.len());
     for (k, &t) in times.iter().enumerate() {
         let deformed = profile.table_at(table, t)?.apply(chain, &settings.semantics)?;
-        let solutions = solve_batch(&deformed, &targets, Seeds::PerTarget(&seeds), &settings.ik)?;
+        let solutions = solve_batch(&deformed, &goals, Seeds::PerTarget(&seeds), &settings.ik)?;
         for ((target, s), n) in program.iter().zip(&solutions).zip(&nominal) {
             rows.push(record(&deformed, t, target, s, &n.q)?);
         }

@@ -174,6 +174,34 @@ impl TimeProfile {
         }
     }
 
+    /// The one factor of a profile driven by time alone, at operating time `t` (minutes): the growth law
+    /// that [`TimeProfile::row_factors`] applies to every row, and that the diagnosis's thermal drift
+    /// fits. `None` for [`TimeProfile::Temperature`], whose factors come from its log, row by row.
+    pub fn time_factor(&self, t: f64) -> Option<f64> {
+        match self {
+            TimeProfile::Static => Some(1.0),
+            TimeProfile::Linear { stabilization_min, after } => {
+                let f = t / stabilization_min;
+                Some(match after {
+                    AfterStabilization::Plateau => f.min(1.0),
+                    AfterStabilization::KeepGrowing => f,
+                })
+            }
+            TimeProfile::Exponential { tau_min } => Some(-(-t / tau_min).exp_m1()),
+            TimeProfile::Cubic { coefficients: [c1, c2, c3] } => Some(t * (c1 + t * (c2 + t * c3))),
+            TimeProfile::Temperature { .. } => None,
+        }
+    }
+
+    /// `∂f/∂τ` of an exponential profile at `t`: `−e^(−t/τ) · t / τ²` (what a fit of τ needs); `None`
+    /// for the other profiles, which have no τ.
+    pub fn time_factor_dtau(&self, t: f64) -> Option<f64> {
+        match self {
+            TimeProfile::Exponential { tau_min } => Some(-(-t / tau_min).exp() * t / (tau_min * tau_min)),
+            _ => None,
+        }
+    }
+
     /// The scale factor of each row at operating time `t` (minutes).
     pub fn row_factors(&self, t: f64, dof: usize) -> Result<RowFactors, DeformError> {
         if !(t.is_finite() && t >= 0.0) {
@@ -182,16 +210,10 @@ impl TimeProfile {
         self.validate(dof)?;
         let uniform = |f: f64| RowFactors { base: f, joints: vec![f; dof], tool: f };
         Ok(match self {
-            TimeProfile::Static => uniform(1.0),
-            TimeProfile::Linear { stabilization_min, after } => {
-                let f = t / stabilization_min;
-                uniform(match after {
-                    AfterStabilization::Plateau => f.min(1.0),
-                    AfterStabilization::KeepGrowing => f,
-                })
-            }
-            TimeProfile::Exponential { tau_min } => uniform(-(-t / tau_min).exp_m1()),
-            TimeProfile::Cubic { coefficients: [c1, c2, c3] } => uniform(t * (c1 + t * (c2 + t * c3))),
+            TimeProfile::Static
+            | TimeProfile::Linear { .. }
+            | TimeProfile::Exponential { .. }
+            | TimeProfile::Cubic { .. } => uniform(self.time_factor(t).unwrap_or(1.0)),
             TimeProfile::Temperature { log, sensors, reference_c } => {
                 let mut joints = Vec::with_capacity(dof);
                 let mean: Vec<f64> = (0..log.times_min.len())

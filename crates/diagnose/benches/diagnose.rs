@@ -2,18 +2,16 @@
 #![allow(missing_docs, clippy::unwrap_used)] // criterion_group! makes an undocumented fn; benches unwrap.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use thermokin_diagnose::{
-    Base, Config, DriftShape, Effect, EffectKind, HiddenEffect, SimulationConfig, diagnose, simulate,
-};
+use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
 
 fn benches(c: &mut Criterion) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-    let r = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap();
-    let base = Base { chain: r.chain, masses: r.masses };
+    let base = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap();
+    let joint = |j| JointIndex::of(&base, j).unwrap();
     let hidden = [
-        HiddenEffect { effect: Effect::at(EffectKind::JointOffset, 2), values: vec![0.05f64.to_radians()] },
+        HiddenEffect { effect: Effect::JointOffset(joint(2)), values: vec![0.05f64.to_radians()] },
         HiddenEffect {
-            effect: Effect::at(EffectKind::ThermalDrift(DriftShape::Linear), 1),
+            effect: Effect::ThermalDrift(joint(1), DriftShape::Linear),
             values: vec![0.0, 0.0, -0.4, 0.0, 0.0, 0.0],
         },
     ];

@@ -8,7 +8,9 @@ use faer::{Accum, Mat, Par};
 use nalgebra::{Isometry3, Matrix3, Matrix3xX, Vector3};
 use serde::Serialize;
 
-use crate::model::{Base, EffectKind, Model};
+use thermokin_chain::Robot;
+
+use crate::model::Model;
 use crate::{Dataset, DiagnoseError};
 
 /// A parameter the data cannot identify, fixed at its starting value.
@@ -58,7 +60,7 @@ pub struct Fit {
 
 /// Residual rows `measured − predicted` (3 per measurement) and the Jacobian of `predicted`.
 pub(crate) fn residuals(
-    base: &Base,
+    robot: &Robot,
     model: &Model,
     theta: &[f64],
     data: &Dataset,
@@ -67,16 +69,16 @@ pub(crate) fn residuals(
     with_jacobian: bool,
 ) -> Result<(Vec<f64>, Mat<f64>), DiagnoseError> {
     let mut r = Vec::with_capacity(rows.len() * 3);
-    let mut jac = if with_jacobian { Mat::zeros(rows.len() * 3, model.len) } else { Mat::zeros(0, 0) };
-    let mut block = Matrix3xX::zeros(model.len);
+    let mut jac = if with_jacobian { Mat::zeros(rows.len() * 3, model.len()) } else { Mat::zeros(0, 0) };
+    let mut block = Matrix3xX::zeros(model.len());
     let mut cache = None;
     for (k, &i) in rows.iter().enumerate() {
         let m = &data.measurements[i];
-        let p = model.predict(base, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block), &mut cache)?;
+        let p = model.predict(robot, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;
         r.extend_from_slice(&[d.x, d.y, d.z]);
         if with_jacobian {
-            for c in 0..model.len {
+            for c in 0..model.len() {
                 for a in 0..3 {
                     jac[(3 * k + a, c)] = block[(a, c)];
                 }
@@ -180,7 +182,7 @@ pub(crate) fn observability(jac: &Mat<f64>, free: &[bool]) -> Option<Observabili
 
 /// Levenberg–Marquardt identification of `model` on the given rows.
 pub(crate) fn fit(
-    base: &Base,
+    robot: &Robot,
     model: &Model,
     data: &Dataset,
     rows: &[usize],
@@ -188,10 +190,10 @@ pub(crate) fn fit(
 ) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
     let mut theta = model.initial();
-    let (mut r, mut jac) = residuals(base, model, &theta, data, rows, pre, true)?;
+    let (mut r, mut jac) = residuals(robot, model, &theta, data, rows, pre, true)?;
     let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut cost = ssr(&r);
-    let mut free = vec![false; model.len];
+    let mut free = vec![false; model.len()];
     let mut fixed = Vec::new();
     let mut cols: Vec<usize> = Vec::new();
     let mut scale: Vec<f64> = Vec::new();
@@ -199,13 +201,13 @@ pub(crate) fn fit(
     // Two passes: a parameter that acts only through another (an exponential drift's τ through its
     // amplitude, zero at the start) becomes identifiable once the first pass has moved the other.
     for _pass in 0..2 {
-        let (f, fx) = identifiable(&jac, &names, &vec![true; model.len]);
+        let (f, fx) = identifiable(&jac, &names, &vec![true; model.len()]);
         if f == free {
             break;
         }
         free = f;
         fixed = fx;
-        cols = (0..model.len).filter(|&c| free[c]).collect();
+        cols = (0..model.len()).filter(|&c| free[c]).collect();
         let p = cols.len();
         scale = vec![1.0; p];
         let mut lambda = 1e-3;
@@ -244,7 +246,7 @@ pub(crate) fn fit(
                     trial[c] += step[(k, 0)] / scale[k];
                 }
                 // Residuals first; the Jacobian only for an accepted step.
-                let (rt, _) = residuals(base, model, &trial, data, rows, pre, false)?;
+                let (rt, _) = residuals(robot, model, &trial, data, rows, pre, false)?;
                 let ct = ssr(&rt);
                 if ct < cost {
                     let rel = (cost - ct) / cost.max(1e-300);
@@ -256,7 +258,7 @@ pub(crate) fn fit(
                     // by ~1e-5 of their uncertainty.
                     improved = rel > 1e-9;
                     if improved {
-                        jac = residuals(base, model, &theta, data, rows, pre, true)?.1;
+                        jac = residuals(robot, model, &theta, data, rows, pre, true)?.1;
                     }
                     break;
                 }
@@ -272,7 +274,7 @@ pub(crate) fn fit(
     let m = (rows.len() * 3) as f64;
     let dof = (m - p as f64).max(1.0);
     let sigma2 = cost / dof;
-    let mut std = vec![f64::NAN; model.len];
+    let mut std = vec![f64::NAN; model.len()];
     if p > 0
         && let Ok(llt) = last_a.llt(faer::Side::Lower)
     {
@@ -310,22 +312,21 @@ pub(crate) fn kabsch(a: &[Vector3<f64>], b: &[Vector3<f64>]) -> Isometry3<f64> {
 
 /// The starting registration of a tracker-frame model: Kabsch between the nominal predictions and the
 /// measurements.
-pub(crate) fn initial_registration(base: &Base, data: &Dataset, rows: &[usize]) -> Isometry3<f64> {
-    let model = Model::new(vec![], Isometry3::identity());
-    let pre = (vec![vec![0.0; base.chain.dof()]; data.measurements.len()], vec![0.0; data.measurements.len()]);
+pub(crate) fn initial_registration(
+    robot: &Robot,
+    data: &Dataset,
+    rows: &[usize],
+) -> Result<Isometry3<f64>, DiagnoseError> {
+    let model = Model::new(robot, vec![])?;
+    let pre = (vec![vec![0.0; robot.chain().dof()]; data.measurements.len()], vec![0.0; data.measurements.len()]);
     let mut a = Vec::new();
     let mut b = Vec::new();
     for &i in rows {
         let m = &data.measurements[i];
-        if let Ok(p) = model.predict(base, &[], m, pre.1[i], &pre.0[i], None, &mut None) {
+        if let Ok(p) = model.predict(robot, &[], m, pre.1[i], &pre.0[i], None, &mut None) {
             a.push(p);
             b.push(m.position_mm);
         }
     }
-    kabsch(&a, &b)
-}
-
-/// `true` when the model has a registration block.
-pub(crate) fn has_registration(model: &Model) -> bool {
-    model.effects.iter().any(|e| e.kind == EffectKind::Registration)
+    Ok(kabsch(&a, &b))
 }

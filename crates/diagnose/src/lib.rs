@@ -2,36 +2,92 @@
 //! robot disagree, which unmodelled effect causes it, and how far the gap shrinks once that effect is
 //! added, always judged on held-out data.
 //!
-//! Effects are parameter blocks on top of a chain ([`EffectKind`]). Identification is Levenberg–Marquardt
+//! Effects are parameter blocks on top of a robot ([`Effect`], each carrying its joint). Identification is Levenberg–Marquardt
 //! on faer with the analytic parameter Jacobian and column scaling; parameters the data cannot identify
 //! are detected and fixed with a reason. The diagnosis climbs a ladder of candidate effects, each judged
 //! by k-fold cross-validation (grouped in time, and forward-chained for time-dependent candidates) or an
 //! explicit hold-out set, preferring the smaller block when two explain the data alike.
 
-mod diagnose;
 mod fit;
+mod ladder;
 mod model;
+mod report;
 mod simulate;
+mod validation;
 
-pub use diagnose::{
-    Breakdown, Config, EffectReport, FrameMode, Identifiability, ParameterValue, Report, Stats, TableRow, ToolMode,
-    diagnose,
-};
 pub use fit::{FixedParameter, Observability};
-pub use model::{Base, DriftShape, Effect, EffectKind, Model, gravity_torques};
+pub use ladder::{Config, FrameMode, ToolMode, diagnose};
+pub use model::{DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques};
+pub use report::{Breakdown, EffectReport, Identifiability, ParameterValue, Report, Stats, TableRow};
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 
 use thermokin_chain::ChainError;
 /// Measurement data are plain values of the core, so that readers need not depend on this crate.
-pub use thermokin_chain::{Dataset, Measurement};
+pub use thermokin_chain::{Dataset, Measurement, Robot};
 
 /// Errors of identification and diagnosis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
 pub enum DiagnoseError {
     /// The model could not be evaluated.
     #[error(transparent)]
     Chain(#[from] ChainError),
-    /// Too few measurements or inconsistent inputs.
-    #[error("{0}")]
-    Input(String),
+    /// An effect names a joint the robot does not have.
+    #[error("joint {joint} is not in 1..={dof}")]
+    NoSuchJoint {
+        /// 1-based joint number.
+        joint: usize,
+        /// Joints of the robot.
+        dof: usize,
+    },
+    /// A per-joint effect given without its joint.
+    #[error("{effect} needs a joint")]
+    JointNeeded {
+        /// The effect's name.
+        effect: String,
+    },
+    /// A whole-robot effect given a joint.
+    #[error("{effect} acts on the whole robot and takes no joint")]
+    NoJointTaken {
+        /// The effect's name.
+        effect: String,
+    },
+    /// A name that is not in the catalogue.
+    #[error("unknown effect `{name}` (known: {})", model::EFFECT_NAMES.join(", "))]
+    UnknownEffect {
+        /// The name given.
+        name: String,
+    },
+    /// An effect given the wrong number of parameter values.
+    #[error("{effect}: {got} values for {expected} parameters")]
+    ParameterCount {
+        /// The effect's label.
+        effect: String,
+        /// Its number of parameters.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+    /// Too few measurements for the validation asked for.
+    #[error("{count} measurements are too few for {folds}-fold cross-validation (at least {needed})")]
+    TooFewMeasurements {
+        /// Measurements given.
+        count: usize,
+        /// Folds asked for.
+        folds: usize,
+        /// Measurements needed.
+        needed: usize,
+    },
+    /// A measurement with another number of joint values than the robot has joints.
+    #[error("{set} measurement {measurement}: {got} joint values for {expected} joints")]
+    JointCount {
+        /// `training` or `hold-out`.
+        set: &'static str,
+        /// 1-based measurement number.
+        measurement: usize,
+        /// Values given.
+        got: usize,
+        /// Joints of the robot.
+        expected: usize,
+    },
 }

@@ -3,69 +3,156 @@
 
 use nalgebra::{Isometry3, Matrix3xX, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass};
+use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, Robot};
+use thermokin_deform::{AfterStabilization, TimeProfile};
 
 use crate::{Dataset, DiagnoseError, Measurement};
 
-/// How a thermal drift grows.
+/// How a thermal drift grows with time — a family of [`TimeProfile`]s of `thermokin-deform`, whose law
+/// ([`TimeProfile::time_factor`]) the fit evaluates. The six amplitudes of a drift are its deviation at
+/// the reference time [`LINEAR_DRIFT_REFERENCE_MIN`] for every shape: `δ · f(t) / f(180)`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
 pub enum DriftShape {
-    /// `δ · t / 180 min`.
+    /// [`TimeProfile::Linear`] without a plateau: `δ · t / 180 min`.
     Linear,
-    /// `δ · (1 − e^(−t/τ)) / (1 − e^(−180/τ))` with τ fitted: δ is the deviation at 180 minutes.
+    /// [`TimeProfile::Exponential`] with τ fitted: `δ · (1 − e^(−t/τ)) / (1 − e^(−180/τ))`. The
+    /// normalisation at 180 minutes lets a very slow exponential tend to the linear drift instead of
+    /// trading a huge amplitude against a huge τ.
     Exponential,
-    /// `δ · (T(t) − T(0))` per kelvin of the mean logged temperature rise.
+    /// The law of [`TimeProfile::Temperature`] with no sensor named: `δ · (T(t) − T(0))` per kelvin of
+    /// the mean logged temperature rise.
     Temperature,
 }
 
-/// A kind of effect: a block of parameters that can be added to the model.
+impl DriftShape {
+    /// The deform profile of this shape (for a use of the identified drift outside the diagnosis: it
+    /// scales a table of the deviation at 180 minutes to `(t / 180)` or `(1 − e^(−t/τ)) / (1 − e^(−180/τ))`
+    /// only after that table is divided by `f(180)`; see [`DriftShape::reference_factor`]). `None` for the
+    /// temperature shape, whose factor is the logged rise and needs the log.
+    pub fn profile(self, tau_min: f64) -> Option<TimeProfile> {
+        match self {
+            DriftShape::Linear => Some(TimeProfile::Linear {
+                stabilization_min: LINEAR_DRIFT_REFERENCE_MIN,
+                after: AfterStabilization::KeepGrowing,
+            }),
+            DriftShape::Exponential => Some(TimeProfile::Exponential { tau_min }),
+            DriftShape::Temperature => None,
+        }
+    }
+
+    /// `f(180)` of the profile: the amplitudes a fitted drift reports (the deviation at 180 minutes)
+    /// divided by this are the table that [`DriftShape::profile`] scales.
+    pub fn reference_factor(self, tau_min: f64) -> f64 {
+        self.profile(tau_min).and_then(|p| p.time_factor(LINEAR_DRIFT_REFERENCE_MIN)).unwrap_or(1.0)
+    }
+}
+
+/// A joint an effect acts on: a 0-based index checked against the robot — [`JointIndex::of`] is the only
+/// way to make one, so that an effect cannot name a joint the robot lacks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
-pub enum EffectKind {
-    /// The tracker registration (tracker frame): always estimated, never reported as an effect.
+pub struct JointIndex(usize);
+
+impl JointIndex {
+    /// Joint `index` (0-based) of `robot`.
+    pub fn of(robot: &Robot, index: usize) -> Result<Self, DiagnoseError> {
+        let dof = robot.chain().dof();
+        if index < dof { Ok(Self(index)) } else { Err(DiagnoseError::NoSuchJoint { joint: index + 1, dof }) }
+    }
+
+    /// The 0-based index.
+    pub fn index(self) -> usize {
+        self.0
+    }
+
+    /// The 1-based joint number of reports and flags.
+    pub fn number(self) -> usize {
+        self.0 + 1
+    }
+}
+
+/// An effect: a block of parameters that can be added to the model, carrying its joint where it has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Effect {
+    /// The tracker registration (tracker frame): always estimated, never reported as an effect (6).
     Registration,
-    /// An unknown tool point: always estimated, never reported as an effect.
+    /// An unknown tool point: always estimated, never reported as an effect (3).
     ToolPoint,
     /// A base misalignment (6).
     BaseFrame,
     /// A tool-point error (3: positions carry no tool orientation).
     ToolFrame,
     /// A joint's zero offset (1).
-    JointOffset,
+    JointOffset(JointIndex),
     /// The paper's six error parameters of a joint (6).
-    LinkDeviation,
+    LinkDeviation(JointIndex),
     /// Gravity compliance of a joint: Δq = k · τ_gravity(q) (1).
-    JointCompliance,
+    JointCompliance(JointIndex),
     /// A link deviation growing with operating time or temperature (6, +1 for τ).
-    ThermalDrift(DriftShape),
+    ThermalDrift(JointIndex, DriftShape),
 }
 
-/// An effect: a kind, on a joint where it has one (0-based).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct Effect {
-    /// The kind.
-    pub kind: EffectKind,
-    /// The joint (0-based) for per-joint kinds.
-    pub joint: Option<usize>,
-}
+/// The effect names of reports and flags, in catalogue order.
+pub const EFFECT_NAMES: [&str; 7] = [
+    "base_frame",
+    "tool_frame",
+    "joint_offset",
+    "link_deviation",
+    "joint_compliance",
+    "thermal_drift",
+    "thermal_drift_exp",
+];
 
 impl Effect {
-    /// A whole-robot effect.
-    pub fn global(kind: EffectKind) -> Self {
-        Self { kind, joint: None }
+    /// The effect named `name` (one of [`EFFECT_NAMES`]) on joint `joint` (0-based) of `robot`, where it
+    /// takes one: `Effect::named(&robot, "joint_offset", Some(1))`.
+    pub fn named(robot: &Robot, name: &str, joint: Option<usize>) -> Result<Self, DiagnoseError> {
+        let on = |j: Option<usize>| -> Result<JointIndex, DiagnoseError> {
+            JointIndex::of(robot, j.ok_or(DiagnoseError::JointNeeded { effect: name.to_string() })?)
+        };
+        let global = |e: Effect| match joint {
+            None => Ok(e),
+            Some(_) => Err(DiagnoseError::NoJointTaken { effect: name.to_string() }),
+        };
+        match name {
+            "base_frame" => global(Effect::BaseFrame),
+            "tool_frame" => global(Effect::ToolFrame),
+            "joint_offset" => Ok(Effect::JointOffset(on(joint)?)),
+            "link_deviation" => Ok(Effect::LinkDeviation(on(joint)?)),
+            "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
+            "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
+            "thermal_drift_exp" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Exponential)),
+            _ => Err(DiagnoseError::UnknownEffect { name: name.to_string() }),
+        }
     }
-    /// A per-joint effect.
-    pub fn at(kind: EffectKind, joint: usize) -> Self {
-        Self { kind, joint: Some(joint) }
+
+    /// The joint the effect acts on, if it acts on one.
+    pub fn joint(&self) -> Option<JointIndex> {
+        match *self {
+            Effect::JointOffset(j)
+            | Effect::LinkDeviation(j)
+            | Effect::JointCompliance(j)
+            | Effect::ThermalDrift(j, _) => Some(j),
+            Effect::Registration | Effect::ToolPoint | Effect::BaseFrame | Effect::ToolFrame => None,
+        }
+    }
+
+    /// Checks the effect against a robot of `dof` joints (a [`JointIndex`] of another robot would index
+    /// past this one's chain).
+    pub fn validate(&self, dof: usize) -> Result<(), DiagnoseError> {
+        match self.joint() {
+            Some(j) if j.index() >= dof => Err(DiagnoseError::NoSuchJoint { joint: j.number(), dof }),
+            _ => Ok(()),
+        }
     }
 
     /// Number of parameters.
     pub fn len(&self) -> usize {
-        match self.kind {
-            EffectKind::Registration | EffectKind::BaseFrame | EffectKind::LinkDeviation => 6,
-            EffectKind::ThermalDrift(DriftShape::Exponential) => 7,
-            EffectKind::ThermalDrift(_) => 6,
-            EffectKind::ToolPoint | EffectKind::ToolFrame => 3,
-            EffectKind::JointOffset | EffectKind::JointCompliance => 1,
+        match self {
+            Effect::Registration | Effect::BaseFrame | Effect::LinkDeviation(_) => 6,
+            Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
+            Effect::ThermalDrift(..) => 6,
+            Effect::ToolPoint | Effect::ToolFrame => 3,
+            Effect::JointOffset(_) | Effect::JointCompliance(_) => 1,
         }
     }
 
@@ -76,93 +163,81 @@ impl Effect {
 
     /// The name used in reports: `joint_offset` etc.
     pub fn kind_name(&self) -> &'static str {
-        match self.kind {
-            EffectKind::Registration => "registration",
-            EffectKind::ToolPoint => "tool_point",
-            EffectKind::BaseFrame => "base_frame",
-            EffectKind::ToolFrame => "tool_frame",
-            EffectKind::JointOffset => "joint_offset",
-            EffectKind::LinkDeviation => "link_deviation",
-            EffectKind::JointCompliance => "joint_compliance",
-            EffectKind::ThermalDrift(_) => "thermal_drift",
-        }
-    }
-
-    /// Checks the effect against a robot of `dof` joints: a per-joint kind (offset, link deviation,
-    /// compliance, thermal drift) needs a joint in `0..dof`, a whole-robot kind none. An effect that fails
-    /// this would index past the chain.
-    pub fn validate(&self, dof: usize) -> Result<(), DiagnoseError> {
-        let per_joint = matches!(
-            self.kind,
-            EffectKind::JointOffset
-                | EffectKind::LinkDeviation
-                | EffectKind::JointCompliance
-                | EffectKind::ThermalDrift(_)
-        );
-        match (per_joint, self.joint) {
-            (true, Some(j)) if j < dof => Ok(()),
-            (false, None) => Ok(()),
-            (true, Some(j)) => {
-                Err(DiagnoseError::Input(format!("{}: joint {} is not in 1..={dof}", self.kind_name(), j + 1)))
-            }
-            (true, None) => Err(DiagnoseError::Input(format!("{} needs a joint", self.kind_name()))),
-            (false, Some(_)) => {
-                Err(DiagnoseError::Input(format!("{} acts on the whole robot, not a joint", self.kind_name())))
-            }
+        match self {
+            Effect::Registration => "registration",
+            Effect::ToolPoint => "tool_point",
+            Effect::BaseFrame => "base_frame",
+            Effect::ToolFrame => "tool_frame",
+            Effect::JointOffset(_) => "joint_offset",
+            Effect::LinkDeviation(_) => "link_deviation",
+            Effect::JointCompliance(_) => "joint_compliance",
+            Effect::ThermalDrift(..) => "thermal_drift",
         }
     }
 
     /// `joint_offset[3]`, `thermal_drift[2] (exponential)`, `base_frame`.
     pub fn label(&self) -> String {
-        let shape = match self.kind {
-            EffectKind::ThermalDrift(DriftShape::Linear) => " (linear)",
-            EffectKind::ThermalDrift(DriftShape::Exponential) => " (exponential)",
-            EffectKind::ThermalDrift(DriftShape::Temperature) => " (temperature)",
+        let shape = match self {
+            Effect::ThermalDrift(_, DriftShape::Linear) => " (linear)",
+            Effect::ThermalDrift(_, DriftShape::Exponential) => " (exponential)",
+            Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
             _ => "",
         };
-        match self.joint {
-            Some(j) => format!("{}[{}]{shape}", self.kind_name(), j + 1),
+        match self.joint() {
+            Some(j) => format!("{}[{}]{shape}", self.kind_name(), j.number()),
             None => format!("{}{shape}", self.kind_name()),
         }
     }
 
-    /// The names of this effect's parameters, with units.
+    /// The names of this effect's parameters, with their report units.
     pub fn parameter_names(&self) -> Vec<String> {
         let six = ["dx_mm", "dy_mm", "dz_mm", "rx_deg", "ry_deg", "rz_deg"];
-        let base = self.label();
-        match self.kind {
-            EffectKind::ToolPoint | EffectKind::ToolFrame => six[..3].iter().map(|n| format!("{base}.{n}")).collect(),
-            EffectKind::JointOffset => vec![format!("{base}.offset_deg")],
-            EffectKind::JointCompliance => vec![format!("{base}.k_deg_per_Nm")],
-            EffectKind::ThermalDrift(DriftShape::Exponential) => {
-                let mut v: Vec<String> = six.iter().map(|n| format!("{base}.{n}")).collect();
-                v.push(format!("{base}.tau_min"));
+        let prefix = self.label();
+        match self {
+            Effect::ToolPoint | Effect::ToolFrame => six[..3].iter().map(|n| format!("{prefix}.{n}")).collect(),
+            Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
+            Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
+            Effect::ThermalDrift(_, DriftShape::Exponential) => {
+                let mut v: Vec<String> = six.iter().map(|n| format!("{prefix}.{n}")).collect();
+                v.push(format!("{prefix}.tau_min"));
                 v
             }
-            _ => six.iter().map(|n| format!("{base}.{n}")).collect(),
+            _ => six.iter().map(|n| format!("{prefix}.{n}")).collect(),
         }
     }
 
     /// Time-dependent effects are judged with forward-chained cross-validation too.
     pub fn is_time_dependent(&self) -> bool {
-        matches!(self.kind, EffectKind::ThermalDrift(_))
+        matches!(self, Effect::ThermalDrift(..))
     }
 
     /// Reported to the user as a cause (not a nuisance block).
     pub fn is_reported(&self) -> bool {
-        !matches!(self.kind, EffectKind::Registration | EffectKind::ToolPoint)
+        !matches!(self, Effect::Registration | Effect::ToolPoint)
     }
 
-    /// Internal parameter units → report units (mm, degrees, minutes, degrees per N·m).
-    pub fn to_report_units(&self, k: usize, v: f64) -> f64 {
-        match self.kind {
-            EffectKind::JointOffset => v.to_degrees(),
-            EffectKind::JointCompliance => v.to_degrees(),
-            EffectKind::ToolPoint | EffectKind::ToolFrame => v,
-            EffectKind::ThermalDrift(DriftShape::Exponential) if k == 6 => v,
-            _ if k >= 3 => v.to_degrees(),
-            _ => v,
+    /// Whether parameter `k` is an angle: radians inside, degrees in reports and flags (a compliance is
+    /// radians per N·m inside, degrees per N·m outside). Lengths are millimetres and τ minutes on both
+    /// sides.
+    pub fn is_angle(&self, k: usize) -> bool {
+        match (self, k) {
+            (Effect::JointOffset(_) | Effect::JointCompliance(_), _) => true,
+            (Effect::ToolPoint | Effect::ToolFrame, _) => false,
+            (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,
+            (_, 3..=5) => true,
+            _ => false,
         }
+    }
+
+    /// Parameter `k` from internal units (mm, radians, minutes, radians per N·m) to report units (mm,
+    /// degrees, minutes, degrees per N·m).
+    pub fn to_report_units(&self, k: usize, v: f64) -> f64 {
+        if self.is_angle(k) { v.to_degrees() } else { v }
+    }
+
+    /// Parameter `k` from report units to internal units (the inverse of [`Effect::to_report_units`]).
+    pub fn from_report_units(&self, k: usize, v: f64) -> f64 {
+        if self.is_angle(k) { v.to_radians() } else { v }
     }
 }
 
@@ -174,45 +249,67 @@ const MAX_TAU_MIN: f64 = 1e4;
 /// Initial time constant of an exponential drift, minutes.
 const INITIAL_TAU_MIN: f64 = 60.0;
 
-/// The fixed parts of a model: the chain the effects act on, link masses, and the initial registration.
-#[derive(Clone, Debug)]
-pub struct Base {
-    /// The robot, known deviations included.
-    pub chain: Chain,
-    /// Link masses for gravity compliance.
-    pub masses: Vec<Option<LinkMass>>,
-}
-
-/// A model: the base plus a list of effects, and the parameter vector's layout.
+/// A model: a list of effects on top of a robot (its chain, known deviations included, and its link
+/// masses), and the parameter vector's layout. Built by [`Model::new`], which checks every effect against
+/// the robot; the layout is derived from the effects and cannot drift from them.
 #[derive(Clone, Debug)]
 pub struct Model {
-    /// Effects in parameter order.
-    pub effects: Vec<Effect>,
-    /// First parameter of each effect.
-    pub offsets: Vec<usize>,
-    /// Total parameters.
-    pub len: usize,
-    /// The tracker registration's starting pose (identity in the base frame).
-    pub registration: Isometry3<f64>,
+    effects: Vec<Effect>,
+    offsets: Vec<usize>,
+    len: usize,
+    registration: Isometry3<f64>,
 }
 
 impl Model {
-    /// A model with these effects.
-    pub fn new(effects: Vec<Effect>, registration: Isometry3<f64>) -> Self {
+    /// A model of `robot` with these effects (in parameter order).
+    pub fn new(robot: &Robot, effects: Vec<Effect>) -> Result<Self, DiagnoseError> {
+        let dof = robot.chain().dof();
         let mut offsets = Vec::with_capacity(effects.len());
         let mut len = 0;
         for e in &effects {
+            e.validate(dof)?;
             offsets.push(len);
             len += e.len();
         }
-        Self { effects, offsets, len, registration }
+        Ok(Self { effects, offsets, len, registration: Isometry3::identity() })
+    }
+
+    /// The same model with the tracker registration starting at `registration` (identity: the base frame).
+    pub fn with_registration(mut self, registration: Isometry3<f64>) -> Self {
+        self.registration = registration;
+        self
+    }
+
+    /// The effects, in parameter order.
+    pub fn effects(&self) -> &[Effect] {
+        &self.effects
+    }
+
+    /// The first parameter of each effect.
+    pub fn offsets(&self) -> &[usize] {
+        &self.offsets
+    }
+
+    /// The number of parameters.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// `true` when the model has no parameter.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether the model estimates a tracker registration.
+    pub fn has_registration(&self) -> bool {
+        self.effects.contains(&Effect::Registration)
     }
 
     /// The initial parameter vector (zeros, τ at its starting value).
     pub fn initial(&self) -> Vec<f64> {
         let mut theta = vec![0.0; self.len];
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
-            if e.kind == EffectKind::ThermalDrift(DriftShape::Exponential) {
+            if let Effect::ThermalDrift(_, DriftShape::Exponential) = e {
                 theta[o + 6] = INITIAL_TAU_MIN;
             }
         }
@@ -224,29 +321,27 @@ impl Model {
         self.effects.iter().flat_map(Effect::parameter_names).collect()
     }
 
+    /// The drift factor `s = f(t) / f(180)` of a shape at one measurement (`f` the law of the deform
+    /// profile, [`DriftShape::profile`]) and `ds/dτ` for the exponential.
     fn drift_factor(shape: DriftShape, m: &Measurement, temp_rise: f64, tau: f64) -> (f64, f64) {
-        match shape {
-            DriftShape::Linear => (m.time_min / LINEAR_DRIFT_REFERENCE_MIN, 0.0),
+        let tau = tau.clamp(1e-3, MAX_TAU_MIN);
+        let Some(profile) = shape.profile(tau) else { return (temp_rise, 0.0) };
+        let f = |t: f64| profile.time_factor(t).unwrap_or(0.0);
+        let (ft, fr) = (f(m.time_min), f(LINEAR_DRIFT_REFERENCE_MIN));
+        let ds = match shape {
             DriftShape::Exponential => {
-                // Normalised at the reference time: s(t) = A(t) / A(180) with A(x) = 1 − e^(−x/τ), so that
-                // the six amplitudes are the deviation reached at 180 minutes (as for the linear drift) and
-                // a very slow exponential tends to the linear drift instead of trading a huge amplitude
-                // against a huge τ.
-                let tau = tau.clamp(1e-3, MAX_TAU_MIN);
-                let a = |x: f64| -(-x / tau).exp_m1();
-                let da = |x: f64| -(-x / tau).exp() * x / (tau * tau);
-                let (at, ar) = (a(m.time_min), a(LINEAR_DRIFT_REFERENCE_MIN));
-                let ds = (da(m.time_min) * ar - at * da(LINEAR_DRIFT_REFERENCE_MIN)) / (ar * ar);
-                (at / ar, ds)
+                let df = |t: f64| profile.time_factor_dtau(t).unwrap_or(0.0);
+                (df(m.time_min) * fr - ft * df(LINEAR_DRIFT_REFERENCE_MIN)) / (fr * fr)
             }
-            DriftShape::Temperature => (temp_rise, 0.0),
-        }
+            _ => 0.0,
+        };
+        (ft / fr, ds)
     }
 
     /// Predicted TCP position of one measurement and, if asked, its 3 × len Jacobian.
     pub fn predict(
         &self,
-        base: &Base,
+        robot: &Robot,
         theta: &[f64],
         m: &Measurement,
         temp_rise: f64,
@@ -254,7 +349,7 @@ impl Model {
         jacobian: Option<&mut Matrix3xX<f64>>,
         cache: &mut Option<Chain>,
     ) -> Result<Vector3<f64>, DiagnoseError> {
-        let chain = &base.chain;
+        let chain = robot.chain();
         let mut base_err = chain.base().error;
         let mut tool_err = chain.tool().error;
         let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
@@ -265,22 +360,22 @@ impl Model {
             ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
         };
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
-            match e.kind {
-                EffectKind::Registration | EffectKind::BaseFrame => base_err = base_err.add(&six(o)),
-                EffectKind::ToolPoint | EffectKind::ToolFrame => {
+            match *e {
+                Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
+                Effect::ToolPoint | Effect::ToolFrame => {
                     tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
                 }
-                EffectKind::JointOffset => zeros[e.joint.unwrap_or(0)] += theta[o],
-                EffectKind::LinkDeviation => {
-                    let j = e.joint.unwrap_or(0);
+                Effect::JointOffset(j) => zeros[j.index()] += theta[o],
+                Effect::LinkDeviation(j) => {
+                    let j = j.index();
                     joint_err[j] = joint_err[j].add(&six(o));
                 }
-                EffectKind::JointCompliance => {
-                    let j = e.joint.unwrap_or(0);
+                Effect::JointCompliance(j) => {
+                    let j = j.index();
                     q[j] += theta[o] * torques[j];
                 }
-                EffectKind::ThermalDrift(shape) => {
-                    let j = e.joint.unwrap_or(0);
+                Effect::ThermalDrift(j, shape) => {
+                    let j = j.index();
                     let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
                     let (s, ds) = Self::drift_factor(shape, m, temp_rise, tau);
                     joint_err[j] = joint_err[j].add(&six(o).scaled(s));
@@ -325,24 +420,20 @@ impl Model {
                         jac[(r, dst)] = pj[(r, src)] * scale;
                     }
                 };
-                match e.kind {
-                    EffectKind::Registration | EffectKind::BaseFrame => {
+                match *e {
+                    Effect::Registration | Effect::BaseFrame => {
                         (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0))
                     }
-                    EffectKind::ToolPoint | EffectKind::ToolFrame => {
-                        (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0))
-                    }
-                    EffectKind::JointOffset => copy(o, layout.zero(e.joint.unwrap_or(0)), 1.0),
-                    EffectKind::LinkDeviation => {
-                        (0..6).for_each(|c| copy(o + c, layout.joint(e.joint.unwrap_or(0)) + c, 1.0))
-                    }
-                    EffectKind::JointCompliance => {
-                        let j = e.joint.unwrap_or(0);
+                    Effect::ToolPoint | Effect::ToolFrame => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                    Effect::JointOffset(j) => copy(o, layout.zero(j.index()), 1.0),
+                    Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
+                    Effect::JointCompliance(j) => {
+                        let j = j.index();
                         let scale = if chain.joints()[j].kind == JointKind::Revolute { torques[j] } else { 0.0 };
                         copy(o, layout.zero(j), scale);
                     }
-                    EffectKind::ThermalDrift(shape) => {
-                        let j = e.joint.unwrap_or(0);
+                    Effect::ThermalDrift(j, shape) => {
+                        let j = j.index();
                         let &(_, s, ds) = drift.next().filter(|d| d.0 == k).unwrap_or(&(k, 0.0, 0.0));
                         (0..6).for_each(|c| copy(o + c, layout.joint(j) + c, s));
                         if shape == DriftShape::Exponential {
@@ -387,8 +478,8 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
 }
 
 /// Per-measurement quantities that do not depend on the parameters: gravity torques and temperature rise.
-pub(crate) fn prepare(base: &Base, data: &Dataset) -> (Vec<Vec<f64>>, Vec<f64>) {
-    let torques = data.measurements.iter().map(|m| gravity_torques(&base.chain, &base.masses, &m.q)).collect();
+pub(crate) fn prepare(robot: &Robot, data: &Dataset) -> (Vec<Vec<f64>>, Vec<f64>) {
+    let torques = data.measurements.iter().map(|m| gravity_torques(robot.chain(), robot.masses(), &m.q)).collect();
     let first: Option<Vec<f64>> =
         data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
     let rise = data

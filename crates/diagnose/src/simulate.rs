@@ -5,7 +5,9 @@ use nalgebra::{Isometry3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use crate::model::{Base, Effect, Model, prepare};
+use thermokin_chain::Robot;
+
+use crate::model::{Effect, Model, prepare};
 use crate::{Dataset, DiagnoseError, Measurement};
 
 /// A hidden effect with its parameter values (internal units: mm, radians, minutes, rad per N·m).
@@ -40,12 +42,12 @@ impl Default for SimulationConfig {
 
 /// Random poses within the joint limits (±π where a joint has none), measured on the robot with the
 /// hidden effects, with Gaussian noise.
-pub fn simulate(base: &Base, hidden: &[HiddenEffect], config: &SimulationConfig) -> Result<Dataset, DiagnoseError> {
+pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfig) -> Result<Dataset, DiagnoseError> {
     let mut rng = ChaCha8Rng::seed_from_u64(config.seed);
     let mut data = Dataset::default();
     for k in 0..config.poses {
-        let q: Vec<f64> = base
-            .chain
+        let q: Vec<f64> = robot
+            .chain()
             .joints()
             .iter()
             .map(|j| {
@@ -58,26 +60,22 @@ pub fn simulate(base: &Base, hidden: &[HiddenEffect], config: &SimulationConfig)
         let time_min = if config.poses > 1 { config.minutes * k as f64 / (config.poses - 1) as f64 } else { 0.0 };
         data.measurements.push(Measurement { time_min, q, position_mm: Vector3::zeros(), temps: Vec::new() });
     }
-    for h in hidden {
-        h.effect.validate(base.chain.dof())?;
-    }
     let effects: Vec<Effect> = hidden.iter().map(|h| h.effect).collect();
-    let model = Model::new(effects, Isometry3::identity());
+    let model = Model::new(robot, effects)?;
     let mut theta = model.initial();
-    for (h, &o) in hidden.iter().zip(&model.offsets) {
+    for (h, &o) in hidden.iter().zip(model.offsets()) {
         if h.values.len() != h.effect.len() {
-            return Err(DiagnoseError::Input(format!(
-                "{}: {} values for {} parameters",
-                h.effect.label(),
-                h.values.len(),
-                h.effect.len()
-            )));
+            return Err(DiagnoseError::ParameterCount {
+                effect: h.effect.label(),
+                expected: h.effect.len(),
+                got: h.values.len(),
+            });
         }
         theta[o..o + h.values.len()].copy_from_slice(&h.values);
     }
-    let pre = prepare(base, &data);
+    let pre = prepare(robot, &data);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let p = model.predict(base, &theta, m, pre.1[i], &pre.0[i], None, &mut None)?;
+        let p = model.predict(robot, &theta, m, pre.1[i], &pre.0[i], None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
     }

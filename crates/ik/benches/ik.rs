@@ -10,21 +10,21 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams, xyz_rotation};
 use thermokin_deform::{AfterStabilization, DeviationTable, TableSemantics, TimeProfile};
-use thermokin_ik::{Backend, Params, Seeds, Target, Workspace, solve, solve_batch};
+use thermokin_ik::{Backend, Goal, Params, Seeds, Workspace, solve, solve_batch};
 
 fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn robot() -> Chain {
-    thermokin_io::read_robot(&root().join("configs/irb140.toml")).expect("bundled robot").chain
+    thermokin_io::read_robot(&root().join("configs/irb140.toml")).expect("bundled robot").chain().clone()
 }
 
 fn table() -> DeviationTable {
     DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6])
 }
 
-fn cases(chain: &Chain, n: usize, spread: f64, seed: u64) -> Vec<(Target, Vec<f64>)> {
+fn cases(chain: &Chain, n: usize, spread: f64, seed: u64) -> Vec<(Goal, Vec<f64>)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
@@ -38,7 +38,7 @@ fn cases(chain: &Chain, n: usize, spread: f64, seed: u64) -> Vec<(Target, Vec<f6
             } else {
                 chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect()
             };
-            (Target::Pose(chain.tool_pose(&q).unwrap()), s)
+            (Goal::Pose(chain.tool_pose(&q).unwrap()), s)
         })
         .collect()
 }
@@ -82,13 +82,13 @@ fn benches(c: &mut Criterion) {
     // The paper's transient program: 50 targets of Table 12, 201 model states (minutes 0..=200), each
     // target seeded from its previous solution.
     let text = std::fs::read_to_string(root().join("fixtures/paper/table12-targets.csv")).unwrap();
-    let targets: Vec<Target> = text
+    let targets: Vec<Goal> = text
         .lines()
         .filter(|l| l.starts_with('P'))
         .map(|l| {
             let v: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
             let r = xyz_rotation(&Vector3::new(v[3], v[4], v[5]).map(f64::to_radians));
-            Target::Pose(nalgebra::Isometry3::from_parts(
+            Goal::Pose(nalgebra::Isometry3::from_parts(
                 Vector3::new(v[0], v[1], v[2]).into(),
                 nalgebra::UnitQuaternion::from_matrix(&r),
             ))

@@ -5,7 +5,7 @@ use thermokin_chain::Chain;
 
 use crate::IkError;
 use crate::lm::Workspace;
-use crate::params::{Params, Solution, Target};
+use crate::params::{Goal, Params, Solution};
 use crate::solve::solve;
 
 /// Where the seeds of a batch come from.
@@ -24,7 +24,7 @@ pub enum Seeds<'a> {
 /// because every target's restart generator depends only on `params.rng_seed` and its index.
 pub fn solve_batch(
     chain: &Chain,
-    targets: &[Target],
+    targets: &[Goal],
     seeds: Seeds<'_>,
     params: &Params,
 ) -> Result<Vec<Solution>, IkError> {

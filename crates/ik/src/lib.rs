@@ -20,7 +20,7 @@ mod solve;
 
 pub use batch::{Seeds, solve_batch};
 pub use lm::Workspace;
-pub use params::{Backend, LimitPolicy, Params, Solution, Status, Target};
+pub use params::{Backend, Goal, LimitPolicy, Params, Solution, Status};
 pub use solve::solve;
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).

@@ -16,7 +16,7 @@ use faer::{Accum, Mat, Par};
 use nalgebra::{Matrix3, Matrix6, Vector6};
 use thermokin_chain::{Chain, JointKind, rotation_log};
 
-use crate::params::{Backend, LimitPolicy, Params, Target};
+use crate::params::{Backend, Goal, LimitPolicy, Params};
 
 /// Reusable buffers for one thread: nothing is allocated inside the iteration loop.
 pub struct Workspace {
@@ -62,17 +62,17 @@ pub(crate) struct Eval {
     rot_err: f64,
 }
 
-fn evaluate(chain: &Chain, q: &[f64], target: &Target, l: f64, cols: &mut [[f64; 6]]) -> Option<Eval> {
+fn evaluate(chain: &Chain, q: &[f64], target: &Goal, l: f64, cols: &mut [[f64; 6]]) -> Option<Eval> {
     let (p, r) = chain.pose_and_jacobian_into(q, cols).ok()?;
     let dp = target.position() - p;
     Some(match target {
-        Target::Pose(t) => {
+        Goal::Pose(t) => {
             let r_err: Matrix3<f64> = t.rotation.to_rotation_matrix().matrix() * r.transpose();
             let w = rotation_log(&r_err);
             let e = Vector6::new(dp.x, dp.y, dp.z, l * w.x, l * w.y, l * w.z);
             Eval { e, rows: 6, cost: e.norm_squared(), pos_err: dp.norm(), rot_err: w.norm() }
         }
-        Target::Position(_) => {
+        Goal::Position(_) => {
             let e = Vector6::new(dp.x, dp.y, dp.z, 0.0, 0.0, 0.0);
             Eval { e, rows: 3, cost: dp.norm_squared(), pos_err: dp.norm(), rot_err: 0.0 }
         }
@@ -213,7 +213,7 @@ const DAMPING_FLOOR: f64 = 1e-6;
 /// One attempt from `seed`: returns (best evaluation, iterations, converged).
 pub(crate) fn attempt(
     chain: &Chain,
-    target: &Target,
+    target: &Goal,
     q: &mut [f64],
     params: &Params,
     ws: &mut Workspace,

@@ -1,4 +1,4 @@
-//! The solver's vocabulary: what to reach ([`Target`]), the settings ([`Params`]), and how a solve ended
+//! The solver's vocabulary: what to reach ([`Goal`]), the settings ([`Params`]), and how a solve ended
 //! ([`Status`], [`Solution`]).
 
 use std::time::Duration;
@@ -8,26 +8,26 @@ use serde::Serialize;
 
 /// What the solver must reach.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Target {
+pub enum Goal {
     /// Position and orientation of the TCP in the base frame.
     Pose(Isometry3<f64>),
     /// TCP position only (mm); orientation free.
     Position(Vector3<f64>),
 }
 
-impl Target {
+impl Goal {
     pub(crate) fn position(&self) -> Vector3<f64> {
         match self {
-            Target::Pose(p) => p.translation.vector,
-            Target::Position(p) => *p,
+            Goal::Pose(p) => p.translation.vector,
+            Goal::Position(p) => *p,
         }
     }
     pub(crate) fn is_finite(&self) -> bool {
         match self {
-            Target::Pose(p) => {
+            Goal::Pose(p) => {
                 p.translation.vector.iter().all(|v| v.is_finite()) && p.rotation.coords.iter().all(|v| v.is_finite())
             }
-            Target::Position(p) => p.iter().all(|v| v.is_finite()),
+            Goal::Position(p) => p.iter().all(|v| v.is_finite()),
         }
     }
 }

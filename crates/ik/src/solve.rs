@@ -10,7 +10,7 @@ use crate::IkError;
 use std::time::Instant;
 
 use crate::lm::{Eval, Workspace, attempt, past};
-use crate::params::{LimitPolicy, Params, Solution, Status, Target};
+use crate::params::{Goal, LimitPolicy, Params, Solution, Status};
 
 /// Restarts drawn near the seed before the uniform ones.
 const LOCAL_RESTARTS: usize = 4;
@@ -80,7 +80,7 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// ```
 /// use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 /// use thermokin_chain::{Chain, FixedRow, Joint};
-/// use thermokin_ik::{Params, Target, Workspace, solve};
+/// use thermokin_ik::{Params, Goal, Workspace, solve};
 ///
 /// // A planar 3R arm with 300 mm links.
 /// let link = Vector3::new(300.0, 0.0, 0.0);
@@ -94,14 +94,14 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// let goal = chain.tool_pose(&[0.3, -0.6, 0.9]).unwrap();
 /// let mut ws = Workspace::new(chain.dof());
 /// let params = Params { restarts: 20, ..Params::default() };
-/// let sol = solve(&chain, &Target::Position(goal.translation.vector), &[0.0; 3], &params, &mut ws, 0).unwrap();
+/// let sol = solve(&chain, &Goal::Position(goal.translation.vector), &[0.0; 3], &params, &mut ws, 0).unwrap();
 /// assert!(sol.converged());
 /// assert!(sol.position_error_mm <= 1e-9);
 /// # let _ = UnitQuaternion::<f64>::identity();
 /// ```
 pub fn solve(
     chain: &Chain,
-    target: &Target,
+    target: &Goal,
     seed: &[f64],
     params: &Params,
     ws: &mut Workspace,
@@ -189,12 +189,12 @@ pub fn solve(
 /// [`Chain::tool_pose`] (an isometry with a unit quaternion, not the rotation matrix the residual uses),
 /// and the quaternion angle [`rotation_angle`] instead of the matrix log. Returns (mm, rad); NaN when the
 /// chain cannot evaluate `q`.
-fn independent_error(chain: &Chain, q: &[f64], target: &Target) -> (f64, f64) {
+fn independent_error(chain: &Chain, q: &[f64], target: &Goal) -> (f64, f64) {
     let Ok(base_from_tcp) = chain.tool_pose(q) else { return (f64::NAN, f64::NAN) };
     let position = (target.position() - base_from_tcp.translation.vector).norm();
     let orientation = match target {
-        Target::Pose(goal) => rotation_angle(&goal.rotation, &base_from_tcp.rotation),
-        Target::Position(_) => 0.0,
+        Goal::Pose(goal) => rotation_angle(&goal.rotation, &base_from_tcp.rotation),
+        Goal::Position(_) => 0.0,
     };
     (position, orientation)
 }
@@ -205,7 +205,7 @@ fn independent_error(chain: &Chain, q: &[f64], target: &Target) -> (f64, f64) {
 /// ulps of the TCP coordinates (|p| ≲ 10 m → ~1e-12 mm) and of the rotation entries (~1e-15 rad). The
 /// allowance `64 ε (1 + |p|)` mm and `64 ε` rad covers that and stays three orders below the default
 /// tolerances (1e-9 mm, 1.7e-11 rad), so it cannot turn a real miss into a pass.
-fn verified(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> bool {
+fn verified(chain: &Chain, q: &[f64], target: &Goal, params: &Params) -> bool {
     let (position, orientation) = independent_error(chain, q, target);
     let rounding = 64.0 * f64::EPSILON;
     position <= params.position_tolerance_mm + rounding * (1.0 + target.position().norm())
@@ -213,7 +213,7 @@ fn verified(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> bool 
 }
 
 /// Why the best solution is not a solution.
-fn classify(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> Status {
+fn classify(chain: &Chain, q: &[f64], target: &Goal, params: &Params) -> Status {
     let at_limit = params.limits == LimitPolicy::Enforce
         && chain
             .joints()
@@ -224,7 +224,7 @@ fn classify(chain: &Chain, q: &[f64], target: &Target, params: &Params) -> Statu
         return Status::JointLimit;
     }
     let Ok(j) = chain.jacobian(q) else { return Status::Unreachable };
-    let rows = if matches!(target, Target::Pose(_)) { 6 } else { 3 };
+    let rows = if matches!(target, Goal::Pose(_)) { 6 } else { 3 };
     let mut jw = j.rows(0, rows).into_owned();
     if rows == 6 {
         for c in 0..jw.ncols() {
@@ -273,7 +273,7 @@ mod tests {
 
     use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 
-    use super::{Params, Target, verified};
+    use super::{Goal, Params, verified};
 
     #[test]
     fn the_independent_check_sees_a_half_turn() {
@@ -283,10 +283,10 @@ mod tests {
         for axis in [Vector3::x_axis(), Vector3::y_axis(), Vector3::z_axis()] {
             let turned = base_from_tcp.rotation * UnitQuaternion::from_axis_angle(&axis, PI);
             let flipped = Isometry3::from_parts(base_from_tcp.translation, turned);
-            assert!(!verified(&chain, &q, &Target::Pose(flipped), &Params::default()));
+            assert!(!verified(&chain, &q, &Goal::Pose(flipped), &Params::default()));
         }
-        assert!(verified(&chain, &q, &Target::Pose(base_from_tcp), &Params::default()));
-        let moved = Target::Position(base_from_tcp.translation.vector + Vector3::new(0.0, 0.0, 1e-6));
+        assert!(verified(&chain, &q, &Goal::Pose(base_from_tcp), &Params::default()));
+        let moved = Goal::Position(base_from_tcp.translation.vector + Vector3::new(0.0, 0.0, 1e-6));
         assert!(!verified(&chain, &q, &moved, &Params::default()));
     }
 }

@@ -25,20 +25,7 @@ use toml::Spanned;
 
 use crate::{IoError, line_of, read_text};
 
-/// A robot read from a file: its chain and, where given, link masses (for gravity compliance).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Robot {
-    /// Display name.
-    pub name: String,
-    /// The extended table.
-    pub chain: Chain,
-    /// Mass and centre of mass of the link moved by each joint, when known.
-    pub masses: Vec<Option<LinkMass>>,
-    /// Rated speed and effort of each joint, when known (rad/s, N·m; mm/s, N for prismatic joints).
-    pub ratings: Vec<JointRatings>,
-}
-
-pub use thermokin_chain::{JointRatings, LinkMass};
+pub use thermokin_chain::{JointRatings, LinkMass, Robot};
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -286,7 +273,8 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
             (chain, vec![None; n], vec![JointRatings::default(); n])
         }
     };
-    Ok(Robot { name, chain, masses, ratings })
+    let described = |e: thermokin_chain::ChainError| IoError::input(path, None, "joint", e.to_string());
+    Robot::new(name, chain).with_masses(masses).and_then(|r| r.with_ratings(ratings)).map_err(described)
 }
 
 /// The key named in a serde message such as "unknown field `foo`, expected …".
@@ -397,7 +385,7 @@ pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoE
         };
         IoError::input(path, None, field, message)
     })?;
-    Ok(Robot { name: imported.name, chain: imported.chain, masses: imported.masses, ratings: imported.ratings })
+    Ok(imported.robot)
 }
 
 /// Decimals of lengths (mm) and angles (degrees) in a written robot file: 1e-12 keeps FK exact to far
@@ -449,9 +437,9 @@ fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
 pub fn robot_to_toml(robot: &Robot) -> String {
     let mut s = format!(
         "# Written by thermokin: the same-orientation extended table, mm and degrees.\nname = {:?}\nconvention = \"extended\"\n",
-        robot.name
+        robot.name()
     );
-    for (i, j) in robot.chain.joints().iter().enumerate() {
+    for (i, j) in robot.chain().joints().iter().enumerate() {
         let to_file = |v: f64| if j.kind == JointKind::Revolute { v.to_degrees() } else { v };
         s.push_str(&format!(
             "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
@@ -471,7 +459,7 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         if !j.error.is_zero() {
             s.push_str(&format!("error = {}\n", fmt6(j.error.to_mm_deg())));
         }
-        if let Some(r) = robot.ratings.get(i) {
+        if let Some(r) = robot.ratings().get(i) {
             if let Some(v) = r.velocity {
                 s.push_str(&format!("max_velocity = {}\n", num(to_file(v))));
             }
@@ -479,13 +467,13 @@ pub fn robot_to_toml(robot: &Robot) -> String {
                 s.push_str(&format!("max_effort = {}\n", num(e)));
             }
         }
-        if let Some(Some(m)) = robot.masses.get(i) {
+        if let Some(Some(m)) = robot.masses().get(i) {
             s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
         }
     }
-    if robot.chain.base() != &FixedRow::identity() {
-        row_toml(&mut s, "base", robot.chain.base());
+    if robot.chain().base() != &FixedRow::identity() {
+        row_toml(&mut s, "base", robot.chain().base());
     }
-    row_toml(&mut s, "tool", robot.chain.tool());
+    row_toml(&mut s, "tool", robot.chain().tool());
     s
 }

@@ -8,33 +8,14 @@
 
 use std::path::Path;
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, Vector3};
+pub use thermokin_chain::Target;
 
 use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, Orientation, read_text};
 
 /// The orientation of every target of Table 12, degrees (X-Y-Z Euler: the tool Z axis along world +X).
 pub const DEFAULT_ORIENTATION_DEG: [f64; 3] = [0.0, 90.0, 0.0];
-
-/// One programmed target.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Target {
-    /// Label from the first column (`P1`, …).
-    pub label: String,
-    /// Position, mm.
-    pub position_mm: Vector3<f64>,
-    /// Orientation of the TCP in the base frame.
-    pub rotation: UnitQuaternion<f64>,
-    /// Line in the file.
-    pub line: usize,
-}
-
-impl Target {
-    /// The programmed TCP pose in the base frame (mm).
-    pub fn pose(&self) -> Isometry3<f64> {
-        Isometry3::from_parts(Translation3::from(self.position_mm), self.rotation)
-    }
-}
 
 /// Reads a targets CSV.
 pub fn read_targets(path: &Path) -> Result<Vec<Target>, IoError> {
@@ -109,7 +90,8 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
             .map(|c| r.cells[c].clone())
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| format!("P{}", out.len() + 1));
-        out.push(Target { label, position_mm: p, rotation, line: r.line });
+        let pose = Isometry3::from_parts(Translation3::from(p), rotation);
+        out.push(Target { label, pose, line: Some(r.line) });
     }
     if out.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));

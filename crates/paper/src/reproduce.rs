@@ -10,9 +10,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 use thermokin_chain::Chain;
-use thermokin_compensate::{
-    Cycle, ProgramTarget, RunOutput, RunSettings, Summary, compensate_static, compensate_transient,
-};
+use thermokin_compensate::{Cycle, RunOutput, RunSettings, Summary, Target, compensate_static, compensate_transient};
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
 use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, read_robot, read_targets};
@@ -154,13 +152,10 @@ struct Measured {
 pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<Reproduction, PaperError> {
     let a = inputs;
     let robot = read_robot(&a.robot)?;
-    let chain = robot.chain.clone();
-    let scene = read_robot(&a.scene_robot)?.chain;
+    let chain = robot.chain().clone();
+    let scene = read_robot(&a.scene_robot)?.chain().clone();
     let f = |name: &str| a.fixtures.join(name);
-    let prog: Vec<ProgramTarget> = read_targets(&f("table12-targets.csv"))?
-        .into_iter()
-        .map(|t| ProgramTarget { pose: t.pose(), label: t.label })
-        .collect();
+    let prog: Vec<Target> = read_targets(&f("table12-targets.csv"))?;
     let table = read_deviation_table(&f("deformations-case-study.toml"))?;
     let printed = Printed::from_print();
     let table14 = labelled_rows(&f("table14-reached-static.csv"))?;

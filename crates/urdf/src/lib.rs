@@ -9,7 +9,7 @@
 use std::collections::{HashMap, HashSet};
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
-use thermokin_chain::{Chain, ChainError, JointFactor, JointKind, JointLimits, JointRatings, LinkMass};
+use thermokin_chain::{Chain, ChainError, JointFactor, JointKind, JointLimits, JointRatings, LinkMass, Robot};
 
 /// Errors of URDF import and export, naming the element concerned.
 #[derive(Debug, thiserror::Error)]
@@ -61,20 +61,14 @@ pub struct ImportOptions {
     pub tip: Option<String>,
 }
 
-/// An imported robot: the chain and the masses of the links each joint moves (from `<inertial>`, fixed
-/// links folded in), in the same-orientation joint frames.
+/// An imported robot: the robot (chain, and the masses of the links each joint moves from `<inertial>`,
+/// fixed links folded in, in the same-orientation joint frames; the ratings from `<limit velocity
+/// effort>` where positive) and the links the chain was cut between.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ImportedRobot {
-    /// Robot name from the URDF.
-    pub name: String,
-    /// The extended table.
-    pub chain: Chain,
-    /// Per joint: the mass carried by that joint's link (up to the next moving joint).
-    pub masses: Vec<Option<LinkMass>>,
-    /// Per joint: rated speed and effort from `<limit>` (rad/s, N·m; mm/s, N for prismatic joints),
-    /// where positive.
-    pub ratings: Vec<JointRatings>,
-    /// Base and tip links used.
+    /// The robot, named as in the URDF.
+    pub robot: Robot,
+    /// Base link used.
     pub base_link: String,
     /// Tip link used.
     pub tip_link: String,
@@ -108,11 +102,12 @@ fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
 ///   </joint>
 /// </robot>"#;
 /// let robot = import_urdf(urdf, "two_link.urdf", &ImportOptions::default()).unwrap();
-/// assert_eq!(robot.chain.dof(), 2);
+/// let robot = robot.robot;
+/// assert_eq!(robot.chain().dof(), 2);
 /// // Metres became millimetres: at zero the tip is 400 mm out and 300 mm up.
-/// let tip = robot.chain.tool_pose(&[0.0, 0.0]).unwrap().translation.vector;
+/// let tip = robot.chain().tool_pose(&[0.0, 0.0]).unwrap().translation.vector;
 /// assert!((tip - nalgebra::Vector3::new(400.0, 0.0, 300.0)).norm() < 1e-9);
-/// assert_eq!(robot.ratings[0].velocity, Some(2.0));
+/// assert_eq!(robot.ratings()[0].velocity, Some(2.0));
 /// ```
 pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Result<ImportedRobot, UrdfError> {
     let src = source_name.to_string();
@@ -306,7 +301,12 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
         .zip(&frames)
         .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
         .collect();
-    Ok(ImportedRobot { name: robot.name.clone(), chain, masses, ratings, base_link: base, tip_link: tip })
+    let described = |source: ChainError| UrdfError::Chain { source_name: src.clone(), source };
+    let imported = Robot::new(robot.name.clone(), chain)
+        .with_masses(masses)
+        .and_then(|r| r.with_ratings(ratings))
+        .map_err(described)?;
+    Ok(ImportedRobot { robot: imported, base_link: base, tip_link: tip })
 }
 
 /// Refuses XML namespace use, which URDF does not have and the parser underneath mishandles (found by
@@ -400,17 +400,7 @@ fn xml_escape(s: &str) -> String {
 /// the chain's: every joint's fixed row (error parameters and zero offset included) becomes its
 /// `<origin>`, the tool row a fixed joint. Names and limits are kept (limits in radians and metres).
 pub fn export_urdf(chain: &Chain, robot_name: &str) -> String {
-    export_urdf_with(chain, robot_name, &ExportOptions::default())
-}
-
-/// What a URDF export carries beside the kinematics.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct ExportOptions {
-    /// Per joint, the mass of the link it moves (→ `<inertial>`); empty or `None`: no inertial.
-    pub masses: Vec<Option<LinkMass>>,
-    /// Per joint, rated speed and effort (→ `<limit velocity effort>`); missing values take the
-    /// documented defaults [`DEFAULT_VELOCITY_RAD_S`], [`DEFAULT_VELOCITY_MM_S`], [`DEFAULT_EFFORT`].
-    pub ratings: Vec<JointRatings>,
+    export_robot(&Robot::new(robot_name, chain.clone()))
 }
 
 /// `<limit velocity>` of a revolute joint whose speed is unknown, rad/s: 1 rad/s (57°/s), below the
@@ -433,9 +423,13 @@ pub fn urdf_name(name: &str) -> String {
     if s.is_empty() { "robot".into() } else { s }
 }
 
-/// As [`export_urdf`], with inertials from the link masses and limits with velocity and effort.
-pub fn export_urdf_with(chain: &Chain, robot_name: &str, options: &ExportOptions) -> String {
-    let (factors, tail) = chain.to_factors();
+/// As [`export_urdf`] for a whole robot: its name, its chain, `<inertial>` from the link masses (a solid
+/// sphere of [`INERTIA_SPHERE_RADIUS_MM`] at the centre of mass) and `<limit velocity effort>` from the
+/// ratings — unknown values take the documented defaults [`DEFAULT_VELOCITY_RAD_S`],
+/// [`DEFAULT_VELOCITY_MM_S`], [`DEFAULT_EFFORT`].
+pub fn export_robot(robot: &Robot) -> String {
+    let robot_name = robot.name();
+    let (factors, tail) = robot.chain().to_factors();
     let mut s = String::new();
     s.push_str("<?xml version=\"1.0\"?>\n");
     s.push_str(&format!(
@@ -452,7 +446,7 @@ pub fn export_urdf_with(chain: &Chain, robot_name: &str, options: &ExportOptions
             (JointKind::Revolute, Some(_)) => "revolute",
             (JointKind::Revolute, None) => "continuous",
         };
-        match options.masses.get(i).copied().flatten() {
+        match robot.masses()[i] {
             Some(m) if m.mass_kg > 0.0 => {
                 let com = m.com_mm / M_TO_MM;
                 let r = INERTIA_SPHERE_RADIUS_MM / M_TO_MM;
@@ -475,7 +469,7 @@ pub fn export_urdf_with(chain: &Chain, robot_name: &str, options: &ExportOptions
         s.push_str(&format!("    <axis xyz=\"{} {} {}\"/>\n", num(a.x), num(a.y), num(a.z)));
         let prismatic = f.kind == JointKind::Prismatic;
         let scale = if prismatic { 1.0 / M_TO_MM } else { 1.0 };
-        let rating = options.ratings.get(i).copied().unwrap_or_default();
+        let rating = robot.ratings()[i];
         let velocity =
             rating.velocity.unwrap_or(if prismatic { DEFAULT_VELOCITY_MM_S } else { DEFAULT_VELOCITY_RAD_S });
         let effort = rating.effort.unwrap_or(DEFAULT_EFFORT);

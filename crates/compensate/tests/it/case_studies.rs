@@ -3,8 +3,8 @@
 
 use nalgebra::Isometry3;
 use thermokin_compensate::{
-    AbbTargets, Controller, Cycle, ProgramSettings, ProgramTarget, RunSettings, compensate_static,
-    compensate_transient, confdata, programs, write_results_csv,
+    AbbTargets, Controller, Cycle, ProgramSettings, RunSettings, Target, compensate_static, compensate_transient,
+    confdata, programs, write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Status};
@@ -15,12 +15,8 @@ fn robot() -> Robot {
     read_robot(&workspace("configs/irb140.toml")).unwrap()
 }
 
-fn program() -> Vec<ProgramTarget> {
-    read_targets(&workspace("fixtures/paper/table12-targets.csv"))
-        .unwrap()
-        .into_iter()
-        .map(|t| ProgramTarget { pose: t.pose(), label: t.label })
-        .collect()
+fn program() -> Vec<Target> {
+    read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap()
 }
 
 fn table() -> DeviationTable {
@@ -58,10 +54,10 @@ fn check_rows(deformed_at: impl Fn(f64) -> thermokin_chain::Chain, run: &thermok
 fn static_case_reaches_all_50_targets() {
     let r = robot();
     for semantics in [coppelia(), TableSemantics::Canonical] {
-        let run = compensate_static(&r.chain, &table(), &program(), &settings(semantics.clone())).unwrap();
+        let run = compensate_static(r.chain(), &table(), &program(), &settings(semantics.clone())).unwrap();
         assert_eq!(run.rows.len(), 50);
         assert_eq!(run.summary.failures, 0);
-        let deformed = table().apply(&r.chain, &semantics).unwrap();
+        let deformed = table().apply(r.chain(), &semantics).unwrap();
         check_rows(|_| deformed.clone(), &run);
         // The uncompensated program misses by tens of millimetres ("even 20 mm", results section).
         assert!(run.summary.max_uncompensated_error_mm > 10.0, "{}", run.summary.max_uncompensated_error_mm);
@@ -73,12 +69,12 @@ fn transient_case_reaches_all_10050_targets() {
     let r = robot();
     let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
     let run =
-        compensate_transient(&r.chain, &table(), &profile, Cycle::PAPER, &program(), &settings(coppelia()), |_, _| {})
+        compensate_transient(r.chain(), &table(), &profile, Cycle::PAPER, &program(), &settings(coppelia()), |_, _| {})
             .unwrap();
     assert_eq!(run.rows.len(), 10_050);
     assert_eq!(run.summary.failures, 0);
     let t = table();
-    check_rows(|time| profile.table_at(&t, time).unwrap().apply(&r.chain, &coppelia()).unwrap(), &run);
+    check_rows(|time| profile.table_at(&t, time).unwrap().apply(r.chain(), &coppelia()).unwrap(), &run);
     // Minute 0 is the nominal robot: compensation changes nothing there.
     assert!(run.rows.iter().filter(|r| r.time_min == 0.0).all(|r| r.uncompensated_error_mm < 1e-6));
 }
@@ -88,14 +84,14 @@ fn unreachable_targets_are_records_and_the_run_goes_on() {
     let r = robot();
     let mut prog = program();
     prog.truncate(5);
-    prog.insert(2, ProgramTarget { label: "FAR".into(), pose: Isometry3::translation(3000.0, 0.0, 0.0) });
-    let run = compensate_static(&r.chain, &table(), &prog, &settings(TableSemantics::Canonical)).unwrap();
+    prog.insert(2, Target::new("FAR", Isometry3::translation(3000.0, 0.0, 0.0)));
+    let run = compensate_static(r.chain(), &table(), &prog, &settings(TableSemantics::Canonical)).unwrap();
     assert_eq!(run.rows.len(), 6);
     assert_eq!(run.summary.failures, 1);
     assert_eq!(run.rows[2].status, Status::Unreachable);
     assert!(run.rows.iter().enumerate().all(|(i, row)| i == 2 || row.status == Status::Converged));
     // The RAPID module never moves to a failed target.
-    let rapid = programs(&run, &r.chain, &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
+    let rapid = programs(&run, r.chain(), &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
     assert!(rapid.contains("! jt_FAR: not reached (Unreachable)"));
     assert!(!rapid.contains("MoveAbsJ jt_FAR"));
     assert_eq!(rapid.matches("MoveAbsJ").count(), 5);
@@ -104,7 +100,7 @@ fn unreachable_targets_are_records_and_the_run_goes_on() {
 #[test]
 fn results_csv_reads_back_in_the_authors_layout() {
     let r = robot();
-    let run = compensate_static(&r.chain, &table(), &program(), &settings(coppelia())).unwrap();
+    let run = compensate_static(r.chain(), &table(), &program(), &settings(coppelia())).unwrap();
     let dir = std::env::temp_dir().join(format!("thermokin-comp-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("static.csv");
@@ -137,8 +133,8 @@ fn rapid_module_is_well_formed() {
     let r = robot();
     let mut prog = program();
     prog.truncate(3);
-    let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
-    let m = programs(&run, &r.chain, &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
+    let run = compensate_static(r.chain(), &table(), &prog, &settings(coppelia())).unwrap();
+    let m = programs(&run, r.chain(), &ProgramSettings::new(Controller::Abb)).unwrap().remove(0).text;
     assert!(m.starts_with("MODULE thermokin_compensated\n"));
     assert!(m.trim_end().ends_with("ENDMODULE"));
     let line = m.lines().find(|l| l.contains("CONST jointtarget jt_P1:=")).unwrap();
@@ -160,13 +156,13 @@ fn programs_for_abb_kuka_and_ur_parse_back_to_the_same_joints() {
     let r = robot();
     let mut prog = program();
     prog.truncate(10);
-    prog.insert(4, ProgramTarget { label: "FAR".into(), pose: Isometry3::translation(3000.0, 0.0, 0.0) });
-    let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
+    prog.insert(4, Target::new("FAR", Isometry3::translation(3000.0, 0.0, 0.0)));
+    let run = compensate_static(r.chain(), &table(), &prog, &settings(coppelia())).unwrap();
     let reached: Vec<&Vec<f64>> =
         run.rows.iter().filter(|r| r.status == Status::Converged).map(|r| &r.joints_deg).collect();
     assert_eq!(reached.len(), 10);
     let parsed = |controller: Controller, settings: ProgramSettings| -> Vec<Vec<f64>> {
-        let text = programs(&run, &r.chain, &settings).unwrap().remove(0).text;
+        let text = programs(&run, r.chain(), &settings).unwrap().remove(0).text;
         match controller {
             Controller::Abb => text
                 .lines()
@@ -199,7 +195,7 @@ fn programs_for_abb_kuka_and_ur_parse_back_to_the_same_joints() {
             // Six decimals of degrees (nine of radians for UR): 1e-6° after the round trip.
             assert!(b.iter().zip(q.iter()).all(|(x, y)| (x - y).abs() <= 1e-6), "{controller:?}: {b:?} vs {q:?}");
         }
-        let text = programs(&run, &r.chain, &settings).unwrap().remove(0).text;
+        let text = programs(&run, r.chain(), &settings).unwrap().remove(0).text;
         assert!(text.contains("FAR"), "{controller:?}: the failed target is named in a comment");
         assert!(text.contains(&settings.zone), "{controller:?}: zone flag honoured");
     }
@@ -213,8 +209,8 @@ fn a_transient_run_gives_one_program_per_time_step() {
     let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
     let cycle = Cycle { duration_min: 3.0, step_min: 1.0 };
     let run =
-        compensate_transient(&r.chain, &table(), &profile, cycle, &prog, &settings(coppelia()), |_, _| {}).unwrap();
-    let out = programs(&run, &r.chain, &ProgramSettings::new(Controller::Kuka)).unwrap();
+        compensate_transient(r.chain(), &table(), &profile, cycle, &prog, &settings(coppelia()), |_, _| {}).unwrap();
+    let out = programs(&run, r.chain(), &ProgramSettings::new(Controller::Kuka)).unwrap();
     let suffixes: Vec<&str> = out.iter().map(|p| p.suffix.as_str()).collect();
     assert_eq!(suffixes, ["_t0", "_t1", "_t2", "_t3"]);
     assert!(out.iter().all(|p| p.text.matches("PTP {E6AXIS").count() == 4));
@@ -230,10 +226,10 @@ fn abb_robtargets_pin_the_compensated_joints() {
     let r = robot();
     let mut prog = program();
     prog.truncate(8);
-    let run = compensate_static(&r.chain, &table(), &prog, &settings(coppelia())).unwrap();
+    let run = compensate_static(r.chain(), &table(), &prog, &settings(coppelia())).unwrap();
     let mut s = ProgramSettings::new(Controller::Abb);
     s.abb_targets = AbbTargets::Robtarget;
-    let text = programs(&run, &r.chain, &s).unwrap().remove(0).text;
+    let text = programs(&run, r.chain(), &s).unwrap().remove(0).text;
     assert!(text.contains("ConfJ \\On;") && text.contains("MoveJ p_P1, v100, fine, tool0;"));
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(140);
     let mut ws = thermokin_ik::Workspace::new(6);
@@ -247,12 +243,16 @@ fn abb_robtargets_pin_the_compensated_joints() {
         let goal = Isometry3::from_parts(nalgebra::Translation3::new(pos[0], pos[1], pos[2]), rotation);
         let mut matched = 0;
         for k in 0..300 {
-            let seed: Vec<f64> =
-                r.chain.joints().iter().map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper))).collect();
+            let seed: Vec<f64> = r
+                .chain()
+                .joints()
+                .iter()
+                .map(|j| j.limits.map_or(0.0, |l| rng.random_range(l.lower..l.upper)))
+                .collect();
             let params = thermokin_ik::Params { restarts: 0, ..thermokin_ik::Params::default() };
             let sol =
-                thermokin_ik::solve(&r.chain, &thermokin_ik::Target::Pose(goal), &seed, &params, &mut ws, k).unwrap();
-            if !sol.converged() || confdata(&r.chain, &sol.q).to_vec() != conf {
+                thermokin_ik::solve(r.chain(), &thermokin_ik::Goal::Pose(goal), &seed, &params, &mut ws, k).unwrap();
+            if !sol.converged() || confdata(r.chain(), &sol.q).to_vec() != conf {
                 continue;
             }
             matched += 1;

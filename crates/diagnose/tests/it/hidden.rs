@@ -2,13 +2,17 @@
 //! and the joint; the held-out RMS must shrink at least 5× and end within 1.5× of the noise.
 
 use thermokin_diagnose::{
-    Base, Config, DriftShape, Effect, EffectKind, HiddenEffect, SimulationConfig, diagnose, simulate,
+    Config, DriftShape, Effect, HiddenEffect, JointIndex, Robot, SimulationConfig, diagnose, simulate,
 };
 use thermokin_testdata::workspace;
 
-fn base() -> Base {
-    let r = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    Base { chain: r.chain, masses: r.masses }
+fn base() -> Robot {
+    thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap()
+}
+
+/// Joint `j` (0-based) of the IRB 140.
+fn joint(j: usize) -> JointIndex {
+    JointIndex::of(&base(), j).unwrap()
 }
 
 const NOISE: f64 = 0.005;
@@ -53,48 +57,36 @@ fn check(hidden: HiddenEffect, expect_kind: &str, expect_joint: Option<usize>) {
 #[test]
 fn finds_a_base_misalignment() {
     let v = vec![0.5, -0.3, 0.4, deg(0.02), deg(-0.01), deg(0.015)];
-    check(HiddenEffect { effect: Effect::global(EffectKind::BaseFrame), values: v }, "base_frame", None);
+    check(HiddenEffect { effect: Effect::BaseFrame, values: v }, "base_frame", None);
 }
 
 #[test]
 fn finds_a_tool_error() {
-    check(
-        HiddenEffect { effect: Effect::global(EffectKind::ToolFrame), values: vec![0.3, 0.2, -0.4] },
-        "tool_frame",
-        None,
-    );
+    check(HiddenEffect { effect: Effect::ToolFrame, values: vec![0.3, 0.2, -0.4] }, "tool_frame", None);
 }
 
 #[test]
 fn finds_a_joint_offset() {
-    check(
-        HiddenEffect { effect: Effect::at(EffectKind::JointOffset, 1), values: vec![deg(0.05)] },
-        "joint_offset",
-        Some(2),
-    );
+    check(HiddenEffect { effect: Effect::JointOffset(joint(1)), values: vec![deg(0.05)] }, "joint_offset", Some(2));
 }
 
 #[test]
 fn finds_a_link_deviation() {
     // Joint 3 turns about Y: its Δθy would be a joint offset, so the hidden deviation has none.
     let v = vec![0.3, -0.2, 0.25, deg(0.02), 0.0, deg(0.015)];
-    check(HiddenEffect { effect: Effect::at(EffectKind::LinkDeviation, 2), values: v }, "link_deviation", Some(3));
+    check(HiddenEffect { effect: Effect::LinkDeviation(joint(2)), values: v }, "link_deviation", Some(3));
 }
 
 #[test]
 fn finds_gravity_compliance() {
-    check(
-        HiddenEffect { effect: Effect::at(EffectKind::JointCompliance, 1), values: vec![2e-5] },
-        "joint_compliance",
-        Some(2),
-    );
+    check(HiddenEffect { effect: Effect::JointCompliance(joint(1)), values: vec![2e-5] }, "joint_compliance", Some(2));
 }
 
 #[test]
 fn finds_a_linear_thermal_drift() {
     let v = vec![0.4, 0.0, -0.3, 0.0, deg(0.0), deg(0.02)];
     check(
-        HiddenEffect { effect: Effect::at(EffectKind::ThermalDrift(DriftShape::Linear), 1), values: v },
+        HiddenEffect { effect: Effect::ThermalDrift(joint(1), DriftShape::Linear), values: v },
         "thermal_drift",
         Some(2),
     );
@@ -104,23 +96,35 @@ fn finds_a_linear_thermal_drift() {
 fn finds_an_exponential_thermal_drift() {
     let v = vec![0.0, 0.3, -0.4, deg(0.02), 0.0, 0.0, 50.0];
     check(
-        HiddenEffect { effect: Effect::at(EffectKind::ThermalDrift(DriftShape::Exponential), 2), values: v },
+        HiddenEffect { effect: Effect::ThermalDrift(joint(2), DriftShape::Exponential), values: v },
         "thermal_drift",
         Some(3),
     );
 }
 
 #[test]
-fn an_effect_on_a_joint_the_robot_lacks_is_an_error_not_a_panic() {
-    use thermokin_diagnose::{Base, Effect, EffectKind, HiddenEffect, SimulationConfig, simulate};
-    let base = Base { chain: thermokin_testdata::irb140_table9(), masses: vec![None; 6] };
-    for effect in [
-        Effect::at(EffectKind::JointOffset, 8),
-        Effect::global(EffectKind::LinkDeviation),
-        Effect::at(EffectKind::BaseFrame, 1),
-    ] {
-        let hidden = [HiddenEffect { effect, values: vec![0.0; effect.len()] }];
-        let r = simulate(&base, &hidden, &SimulationConfig { poses: 10, ..SimulationConfig::default() });
-        assert!(r.is_err(), "{effect:?} was accepted");
-    }
+fn an_effect_on_a_joint_the_robot_lacks_cannot_be_made_or_used() {
+    let robot = Robot::new("IRB 140", thermokin_testdata::irb140_table9());
+    // Construction checks the joint against the robot …
+    assert!(JointIndex::of(&robot, 6).is_err());
+    assert!(Effect::named(&robot, "joint_offset", Some(8)).is_err());
+    assert!(Effect::named(&robot, "link_deviation", None).is_err());
+    assert!(Effect::named(&robot, "base_frame", Some(1)).is_err());
+    assert!(Effect::named(&robot, "gear_backlash", Some(1)).is_err());
+    assert_eq!(Effect::named(&robot, "joint_offset", Some(5)).unwrap().label(), "joint_offset[6]");
+    // … and a joint of a larger robot, used on this one, is refused by the model, not a panic.
+    let chain = robot.chain();
+    let mut joints = chain.joints().to_vec();
+    joints.push(thermokin_chain::Joint::revolute("A7", nalgebra::Vector3::zeros(), nalgebra::Vector3::z_axis()));
+    let seven = Robot::new(
+        "7 joints",
+        thermokin_chain::Chain::new(chain.base().clone(), joints, chain.tool().clone()).unwrap(),
+    );
+    let effect = Effect::JointOffset(JointIndex::of(&seven, 6).unwrap());
+    let hidden = [HiddenEffect { effect, values: vec![0.0] }];
+    let r = simulate(&robot, &hidden, &SimulationConfig { poses: 10, ..SimulationConfig::default() });
+    assert!(r.is_err(), "{effect:?} was accepted on a 6-joint robot");
+    // A wrong number of values is an error too.
+    let hidden = [HiddenEffect { effect: Effect::BaseFrame, values: vec![0.0; 3] }];
+    assert!(simulate(&robot, &hidden, &SimulationConfig { poses: 10, ..SimulationConfig::default() }).is_err());
 }

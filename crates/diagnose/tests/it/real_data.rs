@@ -3,7 +3,7 @@
 
 use nalgebra::Vector3;
 use thermokin_chain::{DhConvention, DhRow, DhTable};
-use thermokin_diagnose::{Base, Config, Dataset, FrameMode, Measurement, ToolMode, diagnose};
+use thermokin_diagnose::{Config, Dataset, FrameMode, Measurement, Robot, ToolMode, diagnose};
 use thermokin_testdata::{authors, rokae_robot_b};
 
 /// Rows of numbers of a small comma-separated file with one header line.
@@ -17,7 +17,7 @@ fn numbers(path: &std::path::Path) -> Vec<Vec<f64>> {
         .collect()
 }
 
-pub fn rokae() -> (Base, Dataset) {
+pub fn rokae() -> (Robot, Dataset) {
     let mdh = rokae_robot_b("nominal-mdh.csv");
     let joints = rokae_robot_b("joints-deg.csv");
     let poses = rokae_robot_b("tracker-poses.csv");
@@ -46,8 +46,7 @@ pub fn rokae() -> (Base, Dataset) {
             temps: Vec::new(),
         })
         .collect();
-    let n = chain.dof();
-    (Base { chain, masses: vec![None; n] }, Dataset { measurements, temperature_names: Vec::new() })
+    (Robot::new("Rokae robot B", chain), Dataset { measurements, temperature_names: Vec::new() })
 }
 
 #[test]
@@ -93,10 +92,10 @@ fn paper_static_case_gap() {
     ))
     .unwrap();
     let semantics = thermokin_deform::TableSemantics::CoppeliaSim(thermokin_deform::CoppeliaSimEdits::at(vec![0.0; 6]));
-    let chain = table.apply(&robot.chain, &semantics).unwrap();
+    let chain = table.apply(robot.chain(), &semantics).unwrap();
     let data = thermokin_io::read_measurements(&path, &[thermokin_io::JointKind::Revolute; 6]).unwrap();
     assert_eq!(data.len(), 50);
-    let report = diagnose(&Base { chain, masses: robot.masses }, &data, None, &Config::default()).unwrap();
+    let report = diagnose(&robot.with_chain(chain).unwrap(), &data, None, &Config::default()).unwrap();
     for row in &report.additive {
         eprintln!(
             "{:<40} mean {:.4}  rms {:.4}  max {:.4}",

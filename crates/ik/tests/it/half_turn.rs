@@ -8,11 +8,11 @@ use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, xyz_rotation};
-use thermokin_ik::{Params, Status, Target, Workspace, solve};
+use thermokin_ik::{Goal, Params, Status, Workspace, solve};
 use thermokin_testdata::workspace;
 
 fn irb140() -> Chain {
-    thermokin_io::read_robot(&workspace("configs/irb140.toml")).expect("bundled robot").chain
+    thermokin_io::read_robot(&workspace("configs/irb140.toml")).expect("bundled robot").chain().clone()
 }
 
 /// A pose from mm and X-Y-Z Euler degrees (the CLI's `--pose` convention).
@@ -54,7 +54,7 @@ fn the_reported_case_tool_down_at_500_0_300() {
     let goal = pose(500.0, 0.0, 300.0, 180.0, 0.0, 0.0);
     let mut ws = Workspace::new(6);
     for seed in [[0.0; 6], [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians)] {
-        let s = solve(&chain, &Target::Pose(goal), &seed, &Params::default(), &mut ws, 0).unwrap();
+        let s = solve(&chain, &Goal::Pose(goal), &seed, &Params::default(), &mut ws, 0).unwrap();
         assert_honest(&chain, &goal, &s, "500,0,300,180,0,0");
         assert_eq!(s.status, Status::Converged, "the pose is reachable (tool down in front of the robot)");
     }
@@ -76,7 +76,7 @@ fn half_turns_from_the_seed_about_every_tool_axis() {
         for (k, axis) in [Vector3::x_axis(), Vector3::y_axis(), Vector3::z_axis()].into_iter().enumerate() {
             let turn = UnitQuaternion::from_rotation_matrix(&Rotation3::from_axis_angle(&axis, PI));
             let goal = Isometry3::from_parts(start.translation, start.rotation * turn);
-            let s = solve(&chain, &Target::Pose(goal), &q0, &Params::default(), &mut ws, case).unwrap();
+            let s = solve(&chain, &Goal::Pose(goal), &q0, &Params::default(), &mut ws, case).unwrap();
             assert_honest(&chain, &goal, &s, &format!("case {case}, tool axis {k}"));
             converged[k] += usize::from(s.converged());
         }
@@ -97,7 +97,7 @@ fn tool_down_targets_for_every_bundled_robot() {
     assert!(robots.len() >= 4, "{robots:?}");
     let mut ws = Workspace::new(6);
     for path in robots {
-        let chain = thermokin_io::read_robot(&path).unwrap().chain;
+        let chain = thermokin_io::read_robot(&path).unwrap().chain().clone();
         let mut solved = 0;
         let mut total = 0;
         for x in [350.0, 450.0, 550.0, 650.0] {
@@ -108,7 +108,7 @@ fn tool_down_targets_for_every_bundled_robot() {
                     for rz in [0.0, 90.0] {
                         let goal = pose(x, y, z, 180.0, 0.0, rz);
                         let s =
-                            solve(&chain, &Target::Pose(goal), &[0.0; 6], &Params::default(), &mut ws, total).unwrap();
+                            solve(&chain, &Goal::Pose(goal), &[0.0; 6], &Params::default(), &mut ws, total).unwrap();
                         assert_honest(
                             &chain,
                             &goal,

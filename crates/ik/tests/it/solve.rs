@@ -7,11 +7,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_deform::{DeviationTable, TableSemantics};
-use thermokin_ik::{IkError, Params, Seeds, Status, Target, Workspace, solve, solve_batch};
+use thermokin_ik::{Goal, IkError, Params, Seeds, Status, Workspace, solve, solve_batch};
 use thermokin_testdata::workspace;
 
 fn irb140() -> Chain {
-    thermokin_io::read_robot(&workspace("configs/irb140.toml")).expect("bundled robot").chain
+    thermokin_io::read_robot(&workspace("configs/irb140.toml")).expect("bundled robot").chain().clone()
 }
 
 fn deformed() -> Chain {
@@ -25,19 +25,19 @@ fn random_in_limits(chain: &Chain, rng: &mut ChaCha8Rng) -> Vec<f64> {
 }
 
 /// (target, the q it came from)
-fn reachable_targets(chain: &Chain, n: usize, seed: u64) -> Vec<(Target, Vec<f64>)> {
+fn reachable_targets(chain: &Chain, n: usize, seed: u64) -> Vec<(Goal, Vec<f64>)> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     (0..n)
         .map(|_| {
             let q = random_in_limits(chain, &mut rng);
-            (Target::Pose(chain.tool_pose(&q).unwrap()), q)
+            (Goal::Pose(chain.tool_pose(&q).unwrap()), q)
         })
         .collect()
 }
 
 /// FK of the solution against the target: the tolerances of a converged solve, checked independently.
-fn check_fk(chain: &Chain, t: &Target, q: &[f64]) {
-    let Target::Pose(goal) = t else { unreachable!() };
+fn check_fk(chain: &Chain, t: &Goal, q: &[f64]) {
+    let Goal::Pose(goal) = t else { unreachable!() };
     let reached = chain.tool_pose(q).unwrap();
     let dp = (reached.translation.vector - goal.translation.vector).norm();
     let dr = reached.rotation.angle_to(&goal.rotation).to_degrees();
@@ -59,7 +59,7 @@ fn near_seed_case(chain: &Chain, seed: u64) {
             s
         })
         .collect();
-    let ts: Vec<Target> = targets.iter().map(|(t, _)| *t).collect();
+    let ts: Vec<Goal> = targets.iter().map(|(t, _)| *t).collect();
     let sols = solve_batch(chain, &ts, Seeds::PerTarget(&seeds), &params).unwrap();
     let failed: Vec<_> = sols
         .iter()
@@ -93,7 +93,7 @@ fn near_seeds_converge_always_deformed() {
 fn random_seed_case(chain: &Chain, seed: u64) {
     let params = Params::default();
     let targets = reachable_targets(chain, 10_000, seed);
-    let ts: Vec<Target> = targets.iter().map(|(t, _)| *t).collect();
+    let ts: Vec<Goal> = targets.iter().map(|(t, _)| *t).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed + 7);
     let seeds: Vec<Vec<f64>> = (0..ts.len()).map(|_| random_in_limits(chain, &mut rng)).collect();
     let sols = solve_batch(chain, &ts, Seeds::PerTarget(&seeds), &params).unwrap();
@@ -119,7 +119,7 @@ fn random_seeds_with_restarts_deformed() {
 #[test]
 fn far_target_is_unreachable_quickly() {
     let chain = irb140();
-    let target = Target::Pose(nalgebra::Isometry3::translation(5000.0, 0.0, 0.0));
+    let target = Goal::Pose(nalgebra::Isometry3::translation(5000.0, 0.0, 0.0));
     let mut ws = Workspace::new(6);
     let start = Instant::now();
     let s = solve(&chain, &target, &[0.0; 6], &Params::default(), &mut ws, 0).unwrap();
@@ -128,7 +128,7 @@ fn far_target_is_unreachable_quickly() {
     // "Quickly" is a property of the algorithm (no iterations at all), not a timing: see the benches.
     assert!(start.elapsed() < Duration::from_secs(1));
     // Inside the reach sphere but outside the joint limits' workspace: reported, not hung.
-    let behind_and_low = Target::Position(nalgebra::Vector3::new(-100.0, 0.0, -400.0));
+    let behind_and_low = Goal::Position(nalgebra::Vector3::new(-100.0, 0.0, -400.0));
     let s =
         solve(&chain, &behind_and_low, &[0.0; 6], &Params { restarts: 5, ..Params::default() }, &mut ws, 0).unwrap();
     assert!(matches!(s.status, Status::Unreachable | Status::JointLimit | Status::Singular), "{:?}", s.status);
@@ -143,7 +143,7 @@ fn wrist_singular_targets_converge_or_report() {
     for _ in 0..200 {
         let mut q = random_in_limits(&chain, &mut rng);
         q[4] = 0.0; // joints 4 and 6 aligned: wrist singularity
-        let target = Target::Pose(chain.tool_pose(&q).unwrap());
+        let target = Goal::Pose(chain.tool_pose(&q).unwrap());
         let seed: Vec<f64> = q.iter().map(|v| v + rng.random_range(-0.2..0.2)).collect();
         let s = solve(&chain, &target, &seed, &Params::default(), &mut ws, 0).unwrap();
         if s.converged() {
@@ -165,7 +165,7 @@ fn position_only_targets() {
     for _ in 0..500 {
         let q = random_in_limits(&chain, &mut rng);
         let p = chain.tool_pose(&q).unwrap().translation.vector;
-        let s = solve(&chain, &Target::Position(p), &[0.0; 6], &Params::default(), &mut ws, 0).unwrap();
+        let s = solve(&chain, &Goal::Position(p), &[0.0; 6], &Params::default(), &mut ws, 0).unwrap();
         assert!(s.converged(), "{:?}", s.status);
         assert!((chain.tool_pose(&s.q).unwrap().translation.vector - p).norm() <= 1e-9);
     }
@@ -174,7 +174,7 @@ fn position_only_targets() {
 #[test]
 fn batch_is_deterministic_across_thread_counts() {
     let chain = deformed();
-    let targets: Vec<Target> = reachable_targets(&chain, 500, 77).into_iter().map(|(t, _)| t).collect();
+    let targets: Vec<Goal> = reachable_targets(&chain, 500, 77).into_iter().map(|(t, _)| t).collect();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
         pool.install(|| solve_batch(&chain, &targets, Seeds::Same(&[0.0; 6]), &Params::default()).unwrap())
@@ -214,11 +214,11 @@ fn chained_seeding_keeps_the_branch() {
     let chain = irb140();
     let q0 = [0.2, 0.3, 0.1, 0.4, -0.8, 0.3];
     let start = chain.tool_pose(&q0).unwrap();
-    let targets: Vec<Target> = (0..100)
+    let targets: Vec<Goal> = (0..100)
         .map(|k| {
             let mut p = start;
             p.translation.vector.y += k as f64 * 2.0;
-            Target::Pose(p)
+            Goal::Pose(p)
         })
         .collect();
     let params = Params { restarts: 0, max_distance_from_seed: Some(0.2), ..Params::default() };
@@ -234,7 +234,7 @@ fn chained_seeding_keeps_the_branch() {
 fn bad_inputs_are_errors() {
     let chain = irb140();
     let mut ws = Workspace::new(6);
-    let t = Target::Position(nalgebra::Vector3::new(500.0, 0.0, 500.0));
+    let t = Goal::Position(nalgebra::Vector3::new(500.0, 0.0, 500.0));
     assert_eq!(
         solve(&chain, &t, &[0.0; 5], &Params::default(), &mut ws, 0),
         Err(IkError::SeedLength { expected: 6, got: 5 })
@@ -243,7 +243,7 @@ fn bad_inputs_are_errors() {
         solve(&chain, &t, &[0.0, 0.0, f64::NAN, 0.0, 0.0, 0.0], &Params::default(), &mut ws, 0),
         Err(IkError::SeedNotFinite { joint: 3 })
     );
-    let nan = Target::Position(nalgebra::Vector3::new(f64::NAN, 0.0, 0.0));
+    let nan = Goal::Position(nalgebra::Vector3::new(f64::NAN, 0.0, 0.0));
     assert!(matches!(
         solve(&chain, &nan, &[0.0; 6], &Params::default(), &mut ws, 3),
         Err(IkError::BadTarget { index: 3 })

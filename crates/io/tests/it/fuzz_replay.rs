@@ -43,7 +43,7 @@ fn every_corpus_replays_without_a_panic() {
             "urdf",
             replay("urdf", |t| {
                 if let Ok(r) = thermokin_urdf::import_urdf(t, "fuzz.urdf", &thermokin_urdf::ImportOptions::default()) {
-                    let _ = thermokin_urdf::export_urdf(&r.chain, &r.name);
+                    let _ = thermokin_urdf::export_robot(&r.robot);
                 }
             }),
         ),

@@ -28,8 +28,9 @@ fn targets_and_results_load() {
     let front = authors("targets-cube-front.csv");
     let t = read_targets(&front).unwrap();
     assert_eq!(t[0].label, "P1");
-    assert_eq!(t[0].position_mm.as_slice(), &[400.0, 300.0, 250.0]);
-    assert_eq!(thermokin_io::units::xyz_euler_deg(&t[0].rotation), [0.0, 90.0, 0.0]);
+    assert_eq!(t[0].pose.translation.vector.as_slice(), &[400.0, 300.0, 250.0]);
+    assert_eq!(thermokin_io::units::xyz_euler_deg(&t[0].pose.rotation), [0.0, 90.0, 0.0]);
+    assert_eq!(t[0].line, Some(2));
     let stat = authors("results-static-case-study.csv");
     let rows = read_paper_results(&stat).unwrap();
     assert_eq!(rows.len(), 50);
@@ -60,26 +61,26 @@ fn robot_toml_round_trip_keeps_fk_names_limits_and_masses() {
         .map(|i| thermokin_chain::ErrorParams::from_mm_deg([0.1 * i as f64, -0.2, 0.3, 0.01, -0.02, 0.03 * i as f64]))
         .collect();
     let chain = robot
-        .chain
+        .chain()
         .with_errors(
             thermokin_chain::ErrorParams::from_mm_deg([1.0, 0.0, 0.0, 0.0, 0.0, 0.5]),
             &errs,
-            robot.chain.tool().error,
+            robot.chain().tool().error,
         )
         .unwrap();
-    let deformed = thermokin_io::Robot { chain, ..robot.clone() };
+    let deformed = robot.with_chain(chain).unwrap();
     let text = thermokin_io::robot_to_toml(&deformed);
     let back = thermokin_io::parse_robot_toml(std::path::Path::new("round-trip.toml"), &text).unwrap();
-    assert_eq!(back.name, deformed.name);
-    assert_eq!(back.masses, deformed.masses);
-    for (a, b) in back.chain.joints().iter().zip(deformed.chain.joints()) {
+    assert_eq!(back.name(), deformed.name());
+    assert_eq!(back.masses(), deformed.masses());
+    for (a, b) in back.chain().joints().iter().zip(deformed.chain().joints()) {
         assert_eq!(a.name, b.name);
         let (la, lb) = (a.limits.unwrap(), b.limits.unwrap());
         assert!((la.lower - lb.lower).abs() < 1e-12 && (la.upper - lb.upper).abs() < 1e-12);
     }
     for q in [[0.0; 6], [0.3, -0.2, 0.5, 1.0, -0.7, 2.0]] {
-        let a = back.chain.tool_pose(&q).unwrap();
-        let b = deformed.chain.tool_pose(&q).unwrap();
+        let a = back.chain().tool_pose(&q).unwrap();
+        let b = deformed.chain().tool_pose(&q).unwrap();
         assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
     }
 }

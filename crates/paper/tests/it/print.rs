@@ -49,7 +49,7 @@ fn their_static_angles_on_the_replayed_scene_give_table_15() {
     // Table 15 is the authors' solver's residual: programmed − where their angles put the TCP. Recomputed
     // here from their angles on our replay of their scene, it agrees with print to the printed precision
     // plus the replay's own accuracy on the same rows (its worst residual, computed, not assumed).
-    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain;
+    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain().clone();
     let table = read_deviation_table(&authors("deformations-case-study.csv")).unwrap();
     let replayed = table.apply(&scene, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6]))).unwrap();
     let rows = read_paper_results(&authors("results-static-case-study.csv")).unwrap();
@@ -72,7 +72,7 @@ fn their_static_angles_on_the_replayed_scene_give_table_15() {
         "Table 15 from their angles on the replay: worst gap to print {worst:.4} mm (replay accuracy {accuracy:.4} mm)"
     );
     // On Table 9 as printed (no scene), the same recomputation misses print by the 0.45 mm of the issue.
-    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain;
+    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain().clone();
     let on_table9 = table.apply(&table9, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6]))).unwrap();
     let (lo, hi) = replayed_position_deviation(&on_table9, &rows).unwrap();
     let worst9 =

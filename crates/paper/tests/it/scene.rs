@@ -15,8 +15,8 @@ fn minute0(rows: &[PaperResultRow]) -> Vec<&PaperResultRow> {
 
 #[test]
 fn the_shipped_scene_is_what_minute_zero_identifies() {
-    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain;
-    let shipped = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain;
+    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain().clone();
+    let shipped = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain().clone();
     let rows = transient();
     let tool_point = identify_tool_point(&table9, &minute0(&rows)).unwrap();
     eprintln!("identified tool point (joint 6 frame): {:?} mm", tool_point.as_slice());
@@ -45,7 +45,7 @@ fn the_shipped_scene_is_what_minute_zero_identifies() {
 #[test]
 fn static_replay_on_the_scene_reproduces_the_authors_coordinates() {
     // The scene's robot, the authors' own deformation file, their script's semantics, their 50 angles.
-    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain;
+    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain().clone();
     let table = read_deviation_table(&authors("deformations-case-study.csv")).unwrap();
     let deformed = table.apply(&scene, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6]))).unwrap();
     let static_rows = read_paper_results(&authors("results-static-case-study.csv")).unwrap();
@@ -72,7 +72,7 @@ fn static_replay_on_the_scene_reproduces_the_authors_coordinates() {
 
 #[test]
 fn only_joint_six_at_the_flange_explains_the_static_gap() {
-    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain;
+    let table9 = read_robot(&workspace("configs/irb140.toml")).unwrap().chain().clone();
     let table = read_deviation_table(&authors("deformations-case-study.csv")).unwrap();
     let static_rows = read_paper_results(&authors("results-static-case-study.csv")).unwrap();
     let rows = transient();
@@ -99,7 +99,7 @@ fn only_joint_six_at_the_flange_explains_the_static_gap() {
 fn the_transient_replays_tried_so_far_do_not_reproduce_the_file() {
     // Finding, not a goal met: neither candidate reaches the file (see docs/paper-reproduction.md). Pinned
     // to 1 µm at minute 1 so that a change of the deformation code shows here.
-    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain;
+    let scene = read_robot(&workspace("configs/irb140-scene.toml")).unwrap().chain().clone();
     let table = read_deviation_table(&authors("deformations-case-study.csv")).unwrap();
     let candidates = transient_candidates(&scene, &table, &transient()).unwrap();
     for c in &candidates {

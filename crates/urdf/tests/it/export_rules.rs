@@ -7,7 +7,7 @@ use std::collections::{HashMap, HashSet};
 
 use thermokin_chain::{JointRatings, LinkMass};
 use thermokin_testdata::urdf;
-use thermokin_urdf::{DEFAULT_EFFORT, ExportOptions, ImportOptions, export_urdf_with, import_urdf, urdf_name};
+use thermokin_urdf::{DEFAULT_EFFORT, ImportOptions, export_robot, import_urdf, urdf_name};
 
 #[test]
 fn exported_urdf_passes_the_consumers_rules_and_round_trips() {
@@ -16,8 +16,8 @@ fn exported_urdf_passes_the_consumers_rules_and_round_trips() {
     {
         let text = std::fs::read_to_string(urdf(file)).unwrap();
         let options = ImportOptions { base: None, tip: tip.map(str::to_string) };
-        let robot = import_urdf(&text, file, &options).unwrap();
-        let n = robot.chain.dof();
+        let robot = import_urdf(&text, file, &options).unwrap().robot;
+        let n = robot.chain().dof();
         // Masses everywhere; ratings on every other joint (the rest take the documented defaults).
         let masses: Vec<Option<LinkMass>> = (0..n)
             .map(|i| {
@@ -33,9 +33,9 @@ fn exported_urdf_passes_the_consumers_rules_and_round_trips() {
                 }
             })
             .collect();
-        let name = format!("{} with spaces & symbols", robot.name);
-        let xml =
-            export_urdf_with(&robot.chain, &name, &ExportOptions { masses: masses.clone(), ratings: ratings.clone() });
+        let name = format!("{} with spaces & symbols", robot.name());
+        let described = robot.clone().renamed(name.clone()).with_masses(masses.clone()).unwrap();
+        let xml = export_robot(&described.with_ratings(ratings.clone()).unwrap());
         let parsed =
             urdf_rs::read_from_string(&xml).unwrap_or_else(|e| panic!("{file}: urdf-rs refuses the export: {e}"));
 
@@ -72,19 +72,19 @@ fn exported_urdf_passes_the_consumers_rules_and_round_trips() {
             assert!(i.ixx > 0.0 && i.iyy > 0.0 && i.izz > 0.0, "{file}: {}", l.name);
         }
         // Re-import: the same masses, ratings (defaults where none were given) and FK.
-        let back = import_urdf(&xml, "exported", &ImportOptions::default()).unwrap();
-        for (k, (b, m)) in back.masses.iter().zip(&masses).enumerate() {
+        let back = import_urdf(&xml, "exported", &ImportOptions::default()).unwrap().robot;
+        for (k, (b, m)) in back.masses().iter().zip(&masses).enumerate() {
             let (b, m) = (b.unwrap(), m.unwrap());
             assert!((b.mass_kg - m.mass_kg).abs() < 1e-9, "{file}: joint {k} mass");
             assert!((b.com_mm - m.com_mm).norm() < 1e-6, "{file}: joint {k} com {:?} vs {:?}", b.com_mm, m.com_mm);
         }
-        for (k, (b, r)) in back.ratings.iter().zip(&ratings).enumerate() {
+        for (k, (b, r)) in back.ratings().iter().zip(&ratings).enumerate() {
             assert_eq!(b.effort, Some(r.effort.unwrap_or(DEFAULT_EFFORT)), "{file}: joint {k}");
             assert!(b.velocity.is_some(), "{file}: joint {k}");
         }
         let q: Vec<f64> = (0..n).map(|i| 0.3 - 0.1 * i as f64).collect();
-        let d = back.chain.tool_pose(&q).unwrap().translation.vector
-            - robot.chain.tool_pose(&q).unwrap().translation.vector;
+        let d = back.chain().tool_pose(&q).unwrap().translation.vector
+            - robot.chain().tool_pose(&q).unwrap().translation.vector;
         assert!(d.norm() < 1e-9, "{file}: {d:?}");
     }
 }

@@ -1,0 +1,179 @@
+//! What the diagnosis reports: held-out statistics, the additive and leave-one-out tables (the DLR
+//! format), each effect with its parameters, identifiability, and where the residuals lie.
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+use thermokin_chain::Robot;
+
+use crate::fit::{FixedParameter, Observability, residuals};
+use crate::model::{Effect, Model};
+use crate::validation::Pre;
+use crate::{Dataset, DiagnoseError};
+
+/// Held-out error statistics of the 3-D position residual, mm.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Stats {
+    /// Mean |e|.
+    pub heldout_mean_mm: f64,
+    /// RMS |e|.
+    pub heldout_rms_mm: f64,
+    /// Max |e|.
+    pub heldout_max_mm: f64,
+    /// Held-out residuals counted.
+    pub heldout_count: usize,
+}
+
+impl Stats {
+    pub(crate) fn of(norms: &[f64]) -> Stats {
+        let n = norms.len().max(1) as f64;
+        Stats {
+            heldout_mean_mm: norms.iter().sum::<f64>() / n,
+            heldout_rms_mm: (norms.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
+            heldout_max_mm: norms.iter().copied().fold(0.0, f64::max),
+            heldout_count: norms.len(),
+        }
+    }
+}
+
+/// A row of the additive or leave-one-out table.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TableRow {
+    /// The model of this row, e.g. `nominal + joint_offset[2]`.
+    pub model: String,
+    /// Its held-out errors.
+    #[serde(flatten)]
+    pub stats: Stats,
+}
+
+/// A fitted parameter in report units (mm, degrees, minutes, degrees per N·m).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ParameterValue {
+    /// Value.
+    pub value: f64,
+    /// One standard deviation (NaN when fixed as unidentifiable).
+    pub std: f64,
+}
+
+/// One effect of the final model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EffectReport {
+    /// The effect's kind name (`joint_offset`, …).
+    pub effect: String,
+    /// Label with joint and shape (`joint_offset[2]`).
+    pub label: String,
+    /// Joints, 1-based.
+    pub joints: Vec<usize>,
+    /// Held-out RMS before this effect was added, mm.
+    pub heldout_rms_before_mm: f64,
+    /// Held-out RMS after it was added, mm.
+    pub heldout_rms_after_mm: f64,
+    /// Held-out RMS of the final model without this effect, mm (the leave-one-out table).
+    pub heldout_rms_without_mm: f64,
+    /// Fitted parameters.
+    pub parameters: BTreeMap<String, ParameterValue>,
+    /// Blocks that span the same directions.
+    pub equivalent: Vec<String>,
+}
+
+/// Identifiability of the final model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Identifiability {
+    /// Observability indices and condition number.
+    pub observability: Option<Observability>,
+    /// Parameters fixed as unidentifiable, with the reason.
+    pub fixed: Vec<FixedParameter>,
+    /// Candidates skipped because they add nothing identifiable to the model: (candidate, reason).
+    pub skipped_candidates: Vec<(String, String)>,
+}
+
+/// Residual RMS broken down by groups of measurements, mm.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Breakdown {
+    /// Per joint: RMS in the four quartiles of that joint's angle.
+    pub by_joint: Vec<[f64; 4]>,
+    /// Workspace: near-low, near-high, far-low, far-high (reach and height against their medians).
+    pub by_workspace_region: [f64; 4],
+    /// Joint space: elbow (joint 3 below/above its median) × wrist (joint 5 negative/positive).
+    pub by_joint_space_region: [f64; 4],
+    /// Time quartiles (empty without a time column).
+    pub by_time: Vec<f64>,
+    /// |residual| of every measurement, in file order (model fitted on all data), mm.
+    pub per_measurement_mm: Vec<f64>,
+}
+
+/// The diagnosis.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// The nominal model (with the always-estimated blocks) on held-out data.
+    pub nominal: Stats,
+    /// How held-out errors were obtained.
+    pub validation: String,
+    /// Effects of the final model, main cause first.
+    pub effects: Vec<EffectReport>,
+    /// Held-out errors as effects are added, in the order chosen.
+    pub additive: Vec<TableRow>,
+    /// Held-out errors of the final model with each effect left out.
+    pub leave_one_out: Vec<TableRow>,
+    /// Observability and fixed parameters of the final model.
+    pub identifiability: Identifiability,
+    /// Where the nominal model's residuals lie.
+    pub residuals_before: Breakdown,
+    /// Where the final model's residuals lie.
+    pub residuals_after: Breakdown,
+    /// Bayesian information criterion of each model in the additive table (full-data fits).
+    pub bic: Vec<f64>,
+}
+
+pub(crate) fn breakdown(
+    robot: &Robot,
+    data: &Dataset,
+    model: &Model,
+    theta: &[f64],
+    pre: &Pre,
+) -> Result<Breakdown, DiagnoseError> {
+    let all: Vec<usize> = (0..data.len()).collect();
+    let (r, _) = residuals(robot, model, theta, data, &all, pre, false)?;
+    let e: Vec<f64> = r.chunks(3).map(|c| c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).collect();
+    let rms_of = |sel: &[usize]| -> f64 {
+        if sel.is_empty() { f64::NAN } else { (sel.iter().map(|&i| e[i]).sum::<f64>() / sel.len() as f64).sqrt() }
+    };
+    let quartiles = |key: &dyn Fn(usize) -> f64| -> [f64; 4] {
+        let mut idx = all.clone();
+        idx.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
+        let n = idx.len();
+        [0, 1, 2, 3].map(|k| rms_of(&idx[k * n / 4..(k + 1) * n / 4]))
+    };
+    let n = robot.chain().dof();
+    let by_joint = (0..n).map(|j| quartiles(&|i| data.measurements[i].q[j])).collect();
+    let median = |v: &mut Vec<f64>| -> f64 {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    let reach: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.xy().norm()).collect();
+    let height: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.z).collect();
+    let (mr, mh) = (median(&mut reach.clone()), median(&mut height.clone()));
+    let region = |f: &dyn Fn(usize) -> usize| -> [f64; 4] {
+        [0, 1, 2, 3].map(|k| rms_of(&all.iter().copied().filter(|&i| f(i) == k).collect::<Vec<_>>()))
+    };
+    let by_workspace_region = region(&|i| usize::from(reach[i] > mr) * 2 + usize::from(height[i] > mh));
+    let elbow: Vec<f64> = data.measurements.iter().map(|m| m.q.get(2).copied().unwrap_or(0.0)).collect();
+    let me = median(&mut elbow.clone());
+    let by_joint_space_region = region(&|i| {
+        usize::from(elbow[i] > me) * 2 + usize::from(data.measurements[i].q.get(4).copied().unwrap_or(0.0) > 0.0)
+    });
+    let by_time =
+        if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
+    let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();
+    Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time, per_measurement_mm })
+}
+
+/// The equivalences that hold by construction in the same-orientation convention.
+pub(crate) fn static_equivalents(e: &Effect, dof: usize) -> Vec<String> {
+    match e {
+        Effect::BaseFrame => vec!["link_deviation[1]".into()],
+        Effect::ToolFrame => vec![format!("link_deviation[{dof}] (translation)")],
+        Effect::JointOffset(j) => vec![format!("link_deviation[{}] (rotation about its own axis)", j.number())],
+        _ => Vec::new(),
+    }
+}

@@ -1,0 +1,134 @@
+//! How held-out errors are obtained: folds grouped in time (or a seeded shuffle), forward-chained folds
+//! for time-dependent effects, an explicit hold-out set; and the fits the ladder asks for.
+
+use rand::SeedableRng;
+use rand::seq::SliceRandom;
+use rand_chacha::ChaCha8Rng;
+use thermokin_chain::Robot;
+
+use crate::fit::{Fit, FixedParameter, fit, identifiable, initial_registration, residuals};
+use crate::model::{Effect, Model};
+use crate::report::Stats;
+use crate::{Dataset, DiagnoseError};
+
+pub(crate) type Pre = (Vec<Vec<f64>>, Vec<f64>);
+/// A scored candidate: the effect, its newly identifiable parameters, its held-out statistics.
+pub(crate) type Scored = Result<Option<(Effect, usize, Stats)>, DiagnoseError>;
+pub(crate) type Folds = Vec<(Vec<usize>, Vec<usize>)>;
+
+/// Folds grouped in time when the data span time — the time-ordered measurements cut into chunks, fold
+/// `f` holding chunks `f, f + k, f + 2k, …` so that neighbours in time (which share a thermal state)
+/// never sit on both sides, while every fold spans the whole run — and a seeded shuffle otherwise.
+pub(crate) fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
+    let n = data.len();
+    let mut idx: Vec<usize> = (0..n).collect();
+    if data.time_span() > 0.0 {
+        idx.sort_by(|&a, &b| data.measurements[a].time_min.total_cmp(&data.measurements[b].time_min).then(a.cmp(&b)));
+    } else {
+        idx.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    }
+    let k = k.clamp(2, n.max(2));
+    let chunks = if data.time_span() > 0.0 { (4 * k).min(n) } else { k };
+    let chunk_of = |pos: usize| pos * chunks / n;
+    (0..k)
+        .map(|f| {
+            let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&pos| chunk_of(pos) % k == f);
+            (train.iter().map(|&p| idx[p]).collect(), test.iter().map(|&p| idx[p]).collect())
+        })
+        .collect()
+}
+
+/// Forward-chained folds: train on the earliest blocks, test on the next one.
+pub(crate) fn forward_chained(data: &Dataset, k: usize) -> Folds {
+    let n = data.len();
+    let mut idx: Vec<usize> = (0..n).collect();
+    idx.sort_by(|&a, &b| data.measurements[a].time_min.total_cmp(&data.measurements[b].time_min).then(a.cmp(&b)));
+    let blocks = k + 1;
+    (1..blocks)
+        .map(|b| {
+            let cut = b * n / blocks;
+            let end = (b + 1) * n / blocks;
+            (idx[..cut].to_vec(), idx[cut..end].to_vec())
+        })
+        .collect()
+}
+
+/// What every held-out evaluation of one diagnosis shares.
+pub(crate) struct Ctx<'a> {
+    pub(crate) robot: &'a Robot,
+    pub(crate) data: &'a Dataset,
+    pub(crate) pre: Pre,
+    pub(crate) holdout: Option<(&'a Dataset, Pre)>,
+    pub(crate) folds: Folds,
+    pub(crate) forward: Folds,
+}
+
+impl Ctx<'_> {
+    /// The model of `effects`, its registration started from the measurements `rows` (Kabsch).
+    pub(crate) fn model(&self, effects: &[Effect], rows: &[usize]) -> Result<Model, DiagnoseError> {
+        let m = Model::new(self.robot, effects.to_vec())?;
+        Ok(if m.has_registration() {
+            let registration = initial_registration(self.robot, self.data, rows)?;
+            m.with_registration(registration)
+        } else {
+            m
+        })
+    }
+
+    /// Held-out statistics of a model: the hold-out set when given, else cross-validation on `folds`.
+    pub(crate) fn heldout(&self, effects: &[Effect], folds: &Folds) -> Result<Stats, DiagnoseError> {
+        let mut norms = Vec::new();
+        if let Some((hold, hpre)) = &self.holdout {
+            let all: Vec<usize> = (0..self.data.len()).collect();
+            let model = self.model(effects, &all)?;
+            let f = fit(self.robot, &model, self.data, &all, &self.pre)?;
+            let rows: Vec<usize> = (0..hold.len()).collect();
+            let (r, _) = residuals(self.robot, &model, &f.theta, hold, &rows, hpre, false)?;
+            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
+            return Ok(Stats::of(&norms));
+        }
+        for (train, test) in folds {
+            if train.is_empty() || test.is_empty() {
+                continue;
+            }
+            let model = self.model(effects, train)?;
+            let f = fit(self.robot, &model, self.data, train, &self.pre)?;
+            let (r, _) = residuals(self.robot, &model, &f.theta, self.data, test, &self.pre, false)?;
+            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
+        }
+        Ok(Stats::of(&norms))
+    }
+
+    /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
+    pub(crate) fn new_free(
+        &self,
+        effects: &[Effect],
+        candidate: Effect,
+    ) -> Result<(usize, Vec<FixedParameter>), DiagnoseError> {
+        let mut all_effects = effects.to_vec();
+        all_effects.push(candidate);
+        let all: Vec<usize> = (0..self.data.len()).collect();
+        let model = self.model(&all_effects, &all)?;
+        let (_, jac) = residuals(self.robot, &model, &model.initial(), self.data, &all, &self.pre, true)?;
+        let names = model.parameter_names();
+        let (free, fixed) = identifiable(&jac, &names, &vec![true; model.len()]);
+        let start = model.offsets()[model.offsets().len() - 1];
+        let new = (start..model.len()).filter(|&c| free[c]).count();
+        let fixed_new = fixed.into_iter().filter(|f| candidate.parameter_names().contains(&f.parameter)).collect();
+        Ok((new, fixed_new))
+    }
+
+    pub(crate) fn full_fit(&self, effects: &[Effect]) -> Result<(Model, Fit), DiagnoseError> {
+        let all: Vec<usize> = (0..self.data.len()).collect();
+        let model = self.model(effects, &all)?;
+        let f = fit(self.robot, &model, self.data, &all, &self.pre)?;
+        Ok((model, f))
+    }
+
+    pub(crate) fn bic(&self, effects: &[Effect]) -> Result<f64, DiagnoseError> {
+        let (_, f) = self.full_fit(effects)?;
+        let m = (self.data.len() * 3) as f64;
+        let k = f.free.iter().filter(|&&x| x).count() as f64;
+        Ok(m * (f.ssr / m).max(1e-300).ln() + k * m.ln())
+    }
+}
