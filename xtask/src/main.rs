@@ -173,10 +173,14 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("thermokin-ik", &["thermokin-chain"]),
     ("thermokin-urdf", &["thermokin-chain"]),
     ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform"]),
-    ("thermokin-compensate", &["thermokin-chain", "thermokin-deform", "thermokin-ik"]),
     // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
     // deform) and knows no identification, IK or compensation.
     ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf"]),
+    // The compensation's writers put results in degrees through io's one unit boundary.
+    (
+        "thermokin-compensate",
+        &["thermokin-chain", "thermokin-deform", "thermokin-ik", "thermokin-io", "thermokin-urdf"],
+    ),
     // The paper crate reads the authors' rows through io and reruns the case studies.
     (
         "thermokin-paper",
@@ -192,9 +196,12 @@ const ALLOWED: &[(&str, &[&str])] = &[
 ];
 
 /// File-format and CLI crates, allowed only where named.
-/// (`thermokin-paper` sees them only through `thermokin-io`, whose readers it calls.)
-const FORMAT_CRATES: &[(&str, &[&str])] =
-    &[("toml", &["thermokin-io", "thermokin-paper"]), ("csv", &["thermokin-io", "thermokin-paper"]), ("clap", &[])];
+/// (`thermokin-paper` and `thermokin-compensate` see them only through `thermokin-io`.)
+const FORMAT_CRATES: &[(&str, &[&str])] = &[
+    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-paper"]),
+    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-paper"]),
+    ("clap", &[]),
+];
 
 fn deps() -> Result<()> {
     let mut bad = Vec::new();

@@ -10,7 +10,7 @@ use thermokin_chain::{Chain, ErrorParams};
 /// error rotation is really multiplied.
 fn irb140_deformed() -> Chain {
     let nominal = thermokin_testdata::irb140_table9();
-    let errors = vec![ErrorParams::from_mm_deg([1.0; 6]); 6];
+    let errors = vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6];
     nominal.with_errors(ErrorParams::ZERO, &errors, ErrorParams::ZERO).expect("valid")
 }
 

@@ -40,21 +40,6 @@ impl ErrorParams {
         Self { translation, rotation }
     }
 
-    /// From the six values in the order of the authors' CSV (`Dx,Dy,Dz,Dox,Doy,Doz`): mm, mm, mm, deg,
-    /// deg, deg.
-    pub fn from_mm_deg(values: [f64; 6]) -> Self {
-        Self {
-            translation: Vector3::new(values[0], values[1], values[2]),
-            rotation: Vector3::new(values[3], values[4], values[5]).map(f64::to_radians),
-        }
-    }
-
-    /// The six values in mm and degrees, the CSV order.
-    pub fn to_mm_deg(&self) -> [f64; 6] {
-        let r = self.rotation.map(f64::to_degrees);
-        [self.translation.x, self.translation.y, self.translation.z, r.x, r.y, r.z]
-    }
-
     /// The six values as one vector `[ΔX, ΔY, ΔZ, Δθx, Δθy, Δθz]` (mm, rad).
     pub fn as_array(&self) -> [f64; 6] {
         [self.translation.x, self.translation.y, self.translation.z, self.rotation.x, self.rotation.y, self.rotation.z]

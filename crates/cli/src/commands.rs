@@ -12,7 +12,7 @@ use thermokin_compensate::{
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Goal, Params, Workspace, solve};
-use thermokin_io::units::{joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
+use thermokin_io::units::{degrees, joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
@@ -132,14 +132,18 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
         println!(
             "{}",
             json!({"joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(), "status": format!("{:?}", s.status), "iterations": s.iterations, "restarts": s.restarts,
-                   "position_error_mm": s.position_error_mm, "orientation_error_deg": s.orientation_error_deg})
+                   "position_error_mm": s.position_error_mm, "orientation_error_deg": degrees(s.orientation_error_rad)})
         );
     } else {
         let list: Vec<String> = deg.iter().map(|&d| format!("{:.6}", rounded(d, 6))).collect();
         println!("joints_deg   {}", list.join(","));
         println!(
             "status       {:?} after {} iterations, {} restarts; error {:.3e} mm, {:.3e}° (checked by FK)",
-            s.status, s.iterations, s.restarts, s.position_error_mm, s.orientation_error_deg
+            s.status,
+            s.iterations,
+            s.restarts,
+            s.position_error_mm,
+            degrees(s.orientation_error_rad)
         );
     }
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
@@ -255,7 +259,7 @@ fn robot_programs(
 }
 
 fn print_summary(run: &RunOutput, as_json: bool) {
-    let s = &run.summary;
+    let s = &thermokin_compensate::SummaryOut::of(&run.summary);
     if as_json {
         println!("{}", serde_json::to_string(s).unwrap_or_default());
         return;

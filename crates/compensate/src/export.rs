@@ -6,8 +6,9 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 use thermokin_chain::{quaternion_wxyz, xyz_angles_for_output};
+use thermokin_io::units::{degrees, degrees3, joint_value_out, rounded};
 
-use crate::run::{RunOutput, Summary, TargetResult};
+use crate::run::{Axes, RunOutput, Summary, TargetResult};
 
 /// Decimals written for millimetres and degrees: 1e-9, the solver's tolerance. Below it a number is
 /// binary noise (`640.9999999999994` is written `641`, `5.68e-13` is written `0`).
@@ -22,12 +23,9 @@ fn meaningful(x: f64) -> f64 {
     rounded(x, DECIMALS)
 }
 
-fn rounded(x: f64, decimals: i32) -> f64 {
-    if !x.is_finite() {
-        return x;
-    }
-    let scale = 10f64.powi(decimals);
-    (x * scale).round() / scale + 0.0
+/// A row's joint values as files give them (degrees, mm for prismatic joints).
+fn joints_out(run: &RunOutput, r: &TargetResult) -> Vec<f64> {
+    run.kinds.iter().zip(&r.joints).map(|(&k, &v)| joint_value_out(k, v)).collect()
 }
 
 fn join_joints(values: &[f64]) -> String {
@@ -36,8 +34,46 @@ fn join_joints(values: &[f64]) -> String {
 
 fn euler_deg(r: &TargetResult, reached: bool) -> [f64; 3] {
     let pose = if reached { &r.reached } else { &r.programmed };
-    let a = xyz_angles_for_output(pose.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
-    [a.x, a.y, a.z]
+    let a = xyz_angles_for_output(pose.rotation.to_rotation_matrix().matrix());
+    degrees3([a.x, a.y, a.z])
+}
+
+/// The summary as the results documents carry it: millimetres and degrees.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SummaryOut {
+    /// Solves in the run.
+    pub solves: usize,
+    /// Solves that did not converge.
+    pub failures: usize,
+    /// The failed targets, named.
+    pub failed: Vec<String>,
+    /// Programmed − reached, mm (Tables 15, 17).
+    pub position_mm: Axes,
+    /// Orientation error rotation vector, degrees (Tables 13, 18).
+    pub orientation_deg: Axes,
+    /// Largest position error, mm.
+    pub max_position_error_mm: f64,
+    /// Largest orientation error angle, degrees.
+    pub max_orientation_error_deg: f64,
+    /// Largest position error of the uncompensated program over the reached targets, mm.
+    pub max_uncompensated_error_mm: f64,
+}
+
+impl SummaryOut {
+    /// The summary in millimetres and degrees.
+    pub fn of(s: &Summary) -> Self {
+        let deg = |a: &Axes| Axes { min: degrees3(a.min), max: degrees3(a.max) };
+        Self {
+            solves: s.solves,
+            failures: s.failures,
+            failed: s.failed.clone(),
+            position_mm: s.position_mm,
+            orientation_deg: deg(&s.orientation_rad),
+            max_position_error_mm: s.max_position_error_mm,
+            max_orientation_error_deg: degrees(s.max_orientation_error_rad),
+            max_uncompensated_error_mm: s.max_uncompensated_error_mm,
+        }
+    }
 }
 
 fn join(values: &[f64]) -> String {
@@ -50,7 +86,7 @@ fn join(values: &[f64]) -> String {
 /// A1..An, then our `status`; `MIN`/`MAX` trailer rows. With `with_time = false` the time column is left
 /// out, as in the authors' static file.
 pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool) -> io::Result<()> {
-    let n = run.rows.first().map_or(6, |r| r.joints_deg.len());
+    let n = run.kinds.len();
     let lead = if with_time { "," } else { "" };
     writeln!(
         out,
@@ -77,12 +113,12 @@ pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool)
             join(&r.position_deviation_mm),
             join(&euler_deg(r, false)),
             join(&euler_deg(r, true)),
-            join(&r.orientation_deviation_deg),
-            join_joints(&r.joints_deg),
+            join(&degrees3(r.orientation_deviation_rad)),
+            join_joints(&joints_out(run, r)),
             r.status
         )?;
     }
-    let s = &run.summary;
+    let s = SummaryOut::of(&run.summary);
     let pad = if with_time { ",,,,,,," } else { ",,,,,," };
     writeln!(out, "{pad}MIN,{},,,,,,MIN,{}", join(&s.position_mm.min), join(&s.orientation_deg.min))?;
     writeln!(out, "{pad}MAX,{},,,,,,MAX,{}", join(&s.position_mm.max), join(&s.orientation_deg.max))?;
@@ -91,11 +127,11 @@ pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool)
 
 /// The compensated joint targets: `time_min,label,A1..An` (degrees), one row per target and time.
 pub fn write_joint_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
-    let n = run.rows.first().map_or(6, |r| r.joints_deg.len());
+    let n = run.kinds.len();
     let joints: Vec<String> = (1..=n).map(|i| format!("A{i}")).collect();
     writeln!(out, "time_min,label,{},status", joints.join(","))?;
     for r in &run.rows {
-        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join_joints(&r.joints_deg), r.status)?;
+        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join_joints(&joints_out(run, r)), r.status)?;
     }
     Ok(())
 }
@@ -138,11 +174,12 @@ pub fn write_long_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
         for (c, v) in xyz.iter().zip(r.position_deviation_mm) {
             row("deviation", c, v, "mm")?;
         }
-        for (c, v) in xyz.iter().zip(r.orientation_deviation_deg) {
+        for (c, v) in xyz.iter().zip(degrees3(r.orientation_deviation_rad)) {
             row("orientation_deviation", c, v, "deg")?;
         }
-        for (i, v) in r.joints_deg.iter().enumerate() {
-            row("joint", &format!("A{}", i + 1), *v, "deg")?;
+        for (i, (v, kind)) in joints_out(run, r).iter().zip(&run.kinds).enumerate() {
+            let unit = if *kind == thermokin_chain::JointKind::Revolute { "deg" } else { "mm" };
+            row("joint", &format!("A{}", i + 1), *v, unit)?;
         }
         row("uncompensated_error", "norm", r.uncompensated_error_mm, "mm")?;
     }
@@ -183,17 +220,18 @@ pub fn write_results_json(out: &mut impl Write, run: &RunOutput) -> io::Result<(
                 programmed_quaternion_wxyz: quaternion_wxyz(&r.programmed.rotation).map(meaningful),
                 reached_mm: ok.then(|| m3([reached.x, reached.y, reached.z])),
                 deviation_mm: ok.then(|| m3(r.position_deviation_mm)),
-                orientation_deviation_deg: ok.then(|| m3(r.orientation_deviation_deg)),
-                joints_deg: ok.then(|| r.joints_deg.iter().map(|&v| rounded(v, JOINT_DECIMALS)).collect()),
+                orientation_deviation_deg: ok.then(|| m3(degrees3(r.orientation_deviation_rad))),
+                joints_deg: ok.then(|| joints_out(run, r).iter().map(|&v| rounded(v, JOINT_DECIMALS)).collect()),
                 uncompensated_error_mm: ok.then(|| meaningful(r.uncompensated_error_mm)),
             }
         })
         .collect();
     #[derive(Serialize)]
     struct Doc<'a> {
-        summary: &'a Summary,
+        summary: SummaryOut,
         rows: Vec<JsonRow<'a>>,
     }
-    serde_json::to_writer(&mut *out, &Doc { summary: &run.summary, rows }).map_err(io::Error::other)?;
+    let doc = Doc { summary: SummaryOut::of(&run.summary), rows };
+    serde_json::to_writer(&mut *out, &doc).map_err(io::Error::other)?;
     writeln!(out)
 }

@@ -15,11 +15,11 @@ mod export;
 mod program;
 mod run;
 
-pub use export::{write_joint_csv, write_long_csv, write_results_csv, write_results_json};
+pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use program::{AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, programs};
 pub use run::{
     Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
-    orientation_error_deg, pose_from_xyz_deg,
+    orientation_error,
 };
 pub use thermokin_chain::Target;
 

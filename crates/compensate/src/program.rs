@@ -147,8 +147,8 @@ pub fn programs(run: &RunOutput, nominal: &Chain, settings: &ProgramSettings) ->
             );
             let text = match settings.controller {
                 Controller::Abb => abb(&name, &header, &rows, nominal, settings),
-                Controller::Kuka => kuka(&name, &header, &rows, settings),
-                Controller::UniversalRobots => ur(&name, &header, &rows, settings),
+                Controller::Kuka => kuka(&name, &header, &rows, nominal, settings),
+                Controller::UniversalRobots => ur(&name, &header, &rows, nominal, settings),
             };
             Program { suffix, text }
         })
@@ -169,15 +169,15 @@ fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pr
     for r in rows {
         let robtarget = s.abb_targets == AbbTargets::Robtarget;
         let target = identifier(&format!("{}_{}", if robtarget { "p" } else { "jt" }, r.label), 32);
-        let q = internal(nominal, &r.joints_deg);
-        let pose = if robtarget { nominal.tool_pose(&q).ok() } else { None };
+        let q = &r.joints;
+        let pose = if robtarget { nominal.tool_pose(q).ok() } else { None };
         if !r.converged() {
             out.push_str(&format!("  ! {target}: not reached ({:?})\n", r.status));
             moves.push_str(&format!("    ! skipped {}\n", r.label));
         } else if let Some(base_from_tcp) = pose {
             let p = base_from_tcp.translation.vector;
             let quat = quaternion_wxyz(&base_from_tcp.rotation).map(|v| format!("{v:.9}"));
-            let [cf1, cf4, cf6, cfx] = confdata(nominal, &q);
+            let [cf1, cf4, cf6, cfx] = confdata(nominal, q);
             out.push_str(&format!(
                 "  CONST robtarget {target}:=[[{:.6},{:.6},{:.6}],[{}],[{cf1},{cf4},{cf6},{cfx}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n",
                 p.x + 0.0,
@@ -187,7 +187,7 @@ fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pr
             ));
             moves.push_str(&format!("    MoveJ {target}, {}, {}, {};\n", s.speed, s.zone, s.tool));
         } else {
-            let mut a = axes(&r.joints_deg, 6);
+            let mut a = axes(&controller_joints(nominal, &r.joints), 6);
             a.resize(6, "0".into());
             out.push_str(&format!("  CONST jointtarget {target}:=[[{}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n", a.join(",")));
             moves.push_str(&format!("    MoveAbsJ {target}\\NoEOffs, {}, {}, {};\n", s.speed, s.zone, s.tool));
@@ -198,14 +198,9 @@ fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pr
     out
 }
 
-/// Joint values of a result (degrees, mm) back in the chain's radians (mm).
-fn internal(chain: &Chain, joints_deg: &[f64]) -> Vec<f64> {
-    chain
-        .joints()
-        .iter()
-        .zip(joints_deg)
-        .map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_radians() } else { v })
-        .collect()
+/// Joint values of a result (radians, mm) as ABB and KUKA controllers take them (degrees, mm).
+fn controller_joints(chain: &Chain, q: &[f64]) -> Vec<f64> {
+    thermokin_io::units::joints_to_external(chain, q)
 }
 
 /// The wrist centre of a six-joint arm: joint 5's origin, where axes 4, 5 and 6 meet.
@@ -256,13 +251,13 @@ pub fn confdata(chain: &Chain, q: &[f64]) -> [i64; 4] {
     [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
 }
 
-fn kuka(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -> String {
+fn kuka(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
     let program = identifier(name, 24);
     let approx = if s.zone.eq_ignore_ascii_case("fine") { String::new() } else { format!(" {}", s.zone) };
     let mut out = format!("DEF {program}( )\n; {header}\nBAS(#INITMOV, 0)\nBAS(#VEL_PTP, {})\n", s.speed);
     for r in rows {
         if r.converged() {
-            let a = axes(&r.joints_deg, 6);
+            let a = axes(&controller_joints(nominal, &r.joints), 6);
             let named: Vec<String> = a.iter().enumerate().take(6).map(|(i, v)| format!("A{} {v}", i + 1)).collect();
             out.push_str(&format!("PTP {{E6AXIS: {}}}{approx} ; {}\n", named.join(", "), r.label));
         } else {
@@ -273,15 +268,21 @@ fn kuka(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -
     out
 }
 
-fn ur(name: &str, header: &str, rows: &[&TargetResult], s: &ProgramSettings) -> String {
+fn ur(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
     let program = identifier(name, 64);
     let mut out = format!("def {program}():\n  # {header}\n");
     for r in rows {
         if r.converged() {
-            let radians: Vec<f64> = r.joints_deg.iter().map(|d| d.to_radians()).collect();
+            // URScript takes radians and metres: the library's radians, its millimetres / 1000.
+            let si: Vec<f64> = nominal
+                .joints()
+                .iter()
+                .zip(&r.joints)
+                .map(|(j, &v)| if j.kind == JointKind::Prismatic { v / 1000.0 } else { v })
+                .collect();
             out.push_str(&format!(
                 "  movej([{}], a=1.4, v={}, r={})  # {}\n",
-                axes(&radians, 9).join(", "),
+                axes(&si, 9).join(", "),
                 s.speed,
                 s.zone,
                 r.label

@@ -1,24 +1,19 @@
 //! Static and transient compensation runs and their summaries (Tables 13, 15, 17, 18).
 
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, Target, rotation_log, xyz_rotation};
+use thermokin_chain::{Chain, JointKind, Target, rotation_log};
 use thermokin_deform::{DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Goal, Params, Seeds, Solution, Status, solve_batch};
 
 use crate::CompensateError;
 
-/// A pose from a position (mm) and CoppeliaSim X-Y-Z Euler angles (degrees).
-pub fn pose_from_xyz_deg(position_mm: Vector3<f64>, rotation_xyz_deg: Vector3<f64>) -> Isometry3<f64> {
-    let r = xyz_rotation(&rotation_xyz_deg.map(f64::to_radians));
-    Isometry3::from_parts(Translation3::from(position_mm), UnitQuaternion::from_matrix(&r))
-}
-
-/// The orientation error of `reached` against `programmed` as a rotation vector in degrees (world frame):
-/// the axis of `R_reached R_programmedᵀ` times its angle; for small errors, the per-axis rotations.
-pub fn orientation_error_deg(programmed: &Isometry3<f64>, reached: &Isometry3<f64>) -> Vector3<f64> {
+/// The orientation error of `reached` against `programmed` as a rotation vector in radians (world
+/// frame): the axis of `R_reached R_programmedᵀ` times its angle; for small errors, the per-axis
+/// rotations (the DRX, DRY, DRZ of the authors' files, in degrees there).
+pub fn orientation_error(programmed: &Isometry3<f64>, reached: &Isometry3<f64>) -> Vector3<f64> {
     let programmed_to_reached = (reached.rotation * programmed.rotation.inverse()).to_rotation_matrix();
-    rotation_log(programmed_to_reached.matrix()).map(f64::to_degrees)
+    rotation_log(programmed_to_reached.matrix())
 }
 
 /// The run's time axis: from 0 to `duration_min` every `step_min` (the paper: 200 min, every minute).
@@ -61,25 +56,23 @@ pub struct RunSettings {
     pub start: Vec<f64>,
 }
 
-/// One solved target at one time.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// One solved target at one time, in the library's units (mm, radians; the writers convert).
+#[derive(Clone, Debug, PartialEq)]
 pub struct TargetResult {
     /// Operating time, minutes.
     pub time_min: f64,
     /// Target label.
     pub label: String,
     /// Programmed pose.
-    #[serde(skip)]
     pub programmed: Isometry3<f64>,
     /// Pose the deformed robot reaches with the compensated joints.
-    #[serde(skip)]
     pub reached: Isometry3<f64>,
-    /// Compensated joint values, degrees (mm for prismatic joints).
-    pub joints_deg: Vec<f64>,
+    /// Compensated joint values, radians (mm for prismatic joints).
+    pub joints: Vec<f64>,
     /// Programmed − reached position, mm (the authors' sign).
     pub position_deviation_mm: [f64; 3],
-    /// Orientation error as a rotation vector, degrees.
-    pub orientation_deviation_deg: [f64; 3],
+    /// Orientation error as a rotation vector ([`orientation_error`]), radians.
+    pub orientation_deviation_rad: [f64; 3],
     /// Position error of the uncompensated program (nominal IK angles on the deformed robot), mm.
     pub uncompensated_error_mm: f64,
     /// IK outcome.
@@ -117,8 +110,9 @@ impl Axes {
     }
 }
 
-/// The summary of Tables 15, 17 (position) and 13, 18 (orientation), over converged targets.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// The summary of Tables 15, 17 (position) and 13, 18 (orientation), over converged targets, in the
+/// library's units (the tables print degrees: the writers and the paper's report convert).
+#[derive(Clone, Debug, PartialEq)]
 pub struct Summary {
     /// Solves in the run.
     pub solves: usize,
@@ -129,27 +123,29 @@ pub struct Summary {
     pub failed: Vec<String>,
     /// Programmed − reached, mm.
     pub position_mm: Axes,
-    /// Orientation error rotation vector, degrees.
-    pub orientation_deg: Axes,
+    /// Orientation error rotation vector, radians.
+    pub orientation_rad: Axes,
     /// Largest position error, mm.
     pub max_position_error_mm: f64,
-    /// Largest orientation error angle, degrees.
-    pub max_orientation_error_deg: f64,
+    /// Largest orientation error angle, radians.
+    pub max_orientation_error_rad: f64,
     /// Largest position error of the uncompensated program over the reached targets, mm.
     pub max_uncompensated_error_mm: f64,
 }
 
 /// A run's results and summary.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RunOutput {
     /// One row per target and time, in time order then program order.
     pub rows: Vec<TargetResult>,
+    /// The kind of each joint of the robot (what the writers need to put joint values in degrees or mm).
+    pub kinds: Vec<JointKind>,
     /// Min/max over the converged rows.
     pub summary: Summary,
 }
 
 impl RunOutput {
-    fn new(rows: Vec<TargetResult>) -> Self {
+    fn new(chain: &Chain, rows: Vec<TargetResult>) -> Self {
         let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.converged()).collect();
         let transient = rows.iter().any(|r| r.time_min != 0.0);
         let summary = Summary {
@@ -164,32 +160,20 @@ impl RunOutput {
                 })
                 .collect(),
             position_mm: Axes::of(ok.iter().map(|r| r.position_deviation_mm)),
-            orientation_deg: Axes::of(ok.iter().map(|r| r.orientation_deviation_deg)),
+            orientation_rad: Axes::of(ok.iter().map(|r| r.orientation_deviation_rad)),
             max_position_error_mm: ok.iter().map(|r| Vector3::from(r.position_deviation_mm).norm()).fold(0.0, f64::max),
-            max_orientation_error_deg: ok
+            max_orientation_error_rad: ok
                 .iter()
-                .map(|r| Vector3::from(r.orientation_deviation_deg).norm())
+                .map(|r| Vector3::from(r.orientation_deviation_rad).norm())
                 .fold(0.0, f64::max),
             max_uncompensated_error_mm: ok.iter().map(|r| r.uncompensated_error_mm).fold(0.0, f64::max),
         };
-        Self { rows, summary }
+        Self { rows, kinds: chain.joints().iter().map(|j| j.kind).collect(), summary }
     }
 }
 
 fn to_goals(program: &[Target]) -> Vec<Goal> {
     program.iter().map(|t| Goal::Pose(t.pose)).collect()
-}
-
-fn joints_out(chain: &Chain, q: &[f64]) -> Vec<f64> {
-    chain
-        .joints()
-        .iter()
-        .zip(q)
-        .map(|(j, &v)| match j.kind {
-            thermokin_chain::JointKind::Revolute => v.to_degrees(),
-            thermokin_chain::JointKind::Prismatic => v,
-        })
-        .collect()
 }
 
 fn record(
@@ -202,15 +186,15 @@ fn record(
     let reached = deformed.tool_pose(&solution.q).map_err(thermokin_deform::DeformError::from)?;
     let uncompensated = deformed.tool_pose(nominal_q).map_err(thermokin_deform::DeformError::from)?;
     let dp = target.pose.translation.vector - reached.translation.vector;
-    let dr = orientation_error_deg(&target.pose, &reached);
+    let dr = orientation_error(&target.pose, &reached);
     Ok(TargetResult {
         time_min,
         label: target.label.clone(),
         programmed: target.pose,
         reached,
-        joints_deg: joints_out(deformed, &solution.q),
+        joints: solution.q.clone(),
         position_deviation_mm: [dp.x, dp.y, dp.z],
-        orientation_deviation_deg: [dr.x, dr.y, dr.z],
+        orientation_deviation_rad: [dr.x, dr.y, dr.z],
         uncompensated_error_mm: (target.pose.translation.vector - uncompensated.translation.vector).norm(),
         status: solution.status,
         iterations: solution.iterations,
@@ -231,13 +215,12 @@ fn nominal_program(
 ///
 /// ```
 /// use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-/// use thermokin_chain::ErrorParams;
 /// use thermokin_compensate::{Target, RunSettings, compensate_static};
 /// use thermokin_deform::{DeviationTable, TableSemantics};
 ///
 /// let robot = thermokin_testdata::irb140_table9();
 /// // Tables 10–11: 1 mm and 1° on every axis of every joint.
-/// let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6]);
+/// let table = DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6]);
 /// // Table 12's first target: tool Z along world +X, i.e. X-Y-Z Euler (0, 90°, 0).
 /// let tool_along_x = UnitQuaternion::from_axis_angle(&Vector3::y_axis(), std::f64::consts::FRAC_PI_2);
 /// let program = vec![Target::new("P1", Isometry3::from_parts(Translation3::new(641.0, 21.0, 473.0), tool_along_x))];
@@ -269,7 +252,7 @@ pub fn compensate_static(
         .zip(&nominal)
         .map(|((t, s), n)| record(&deformed, 0.0, t, s, &n.q))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(RunOutput::new(rows))
+    Ok(RunOutput::new(chain, rows))
 }
 
 /// Transient case: at each time of `cycle` the model is updated from `profile` and every target
@@ -303,5 +286,5 @@ pub fn compensate_transient(
         }
         progress(k + 1, times.len());
     }
-    Ok(RunOutput::new(rows))
+    Ok(RunOutput::new(chain, rows))
 }

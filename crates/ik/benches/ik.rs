@@ -8,7 +8,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_chain::{Chain, ErrorParams, xyz_rotation};
+use thermokin_chain::{Chain, xyz_rotation};
 use thermokin_deform::{AfterStabilization, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Backend, Goal, Params, Seeds, Workspace, solve, solve_batch};
 
@@ -21,7 +21,7 @@ fn robot() -> Chain {
 }
 
 fn table() -> DeviationTable {
-    DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6])
+    DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6])
 }
 
 fn cases(chain: &Chain, n: usize, spread: f64, seed: u64) -> Vec<(Goal, Vec<f64>)> {

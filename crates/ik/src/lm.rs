@@ -220,7 +220,7 @@ pub(crate) fn attempt(
     deadline: Option<Instant>,
 ) -> (Option<Eval>, usize, bool) {
     let l = params.length_scale_mm;
-    let tol_rot = params.orientation_tolerance_deg.to_radians();
+    let tol_rot = params.orientation_tolerance_rad;
     let converged = |ev: &Eval| ev.pos_err <= params.position_tolerance_mm && ev.rot_err <= tol_rot;
     clamp_into_limits(chain, q, params.limits);
     let Some(mut ev) = evaluate(chain, q, target, l, &mut ws.cols) else { return (None, 0, false) };

@@ -117,14 +117,7 @@ pub fn solve(
     let deadline = params.time_budget.map(|b| Instant::now() + b);
     let record = |q: Vec<f64>, status, iterations, restarts| {
         let (position_error_mm, orientation_error_rad) = independent_error(chain, &q, target);
-        Solution {
-            q,
-            status,
-            iterations,
-            restarts,
-            position_error_mm,
-            orientation_error_deg: orientation_error_rad.to_degrees(),
-        }
+        Solution { q, status, iterations, restarts, position_error_mm, orientation_error_rad }
     };
     if let Some((o1, reach)) = reach_bound(chain) {
         let d = (target.position() - o1).norm();
@@ -209,7 +202,7 @@ fn verified(chain: &Chain, q: &[f64], target: &Goal, params: &Params) -> bool {
     let (position, orientation) = independent_error(chain, q, target);
     let rounding = 64.0 * f64::EPSILON;
     position <= params.position_tolerance_mm + rounding * (1.0 + target.position().norm())
-        && orientation <= params.orientation_tolerance_deg.to_radians() + rounding
+        && orientation <= params.orientation_tolerance_rad + rounding
 }
 
 /// Why the best solution is not a solution.
@@ -253,7 +246,7 @@ fn validate(chain: &Chain, seed: &[f64], params: &Params) -> Result<(), IkError>
     }
     let positive = [
         ("position_tolerance_mm", params.position_tolerance_mm),
-        ("orientation_tolerance_deg", params.orientation_tolerance_deg),
+        ("orientation_tolerance_rad", params.orientation_tolerance_rad),
         ("length_scale_mm", params.length_scale_mm),
         ("initial_damping", params.initial_damping),
         ("max_step_rad", params.max_step_rad),

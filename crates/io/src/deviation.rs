@@ -8,7 +8,7 @@ use thermokin_chain::ErrorParams;
 use thermokin_deform::{DeviationTable, TemperatureLog};
 
 use crate::csvtext::{column, expect_fields, number, records};
-use crate::{IoError, line_of, read_text};
+use crate::{IoError, line_of, read_text, units};
 
 const HEADER: [&str; 6] = ["Dx", "Dy", "Dz", "Dox", "Doy", "Doz"];
 
@@ -76,7 +76,7 @@ fn parse_csv(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
         for k in 0..6 {
             v[k] = number(path, r.line, HEADER[k], &r.cells[index[k]])?;
         }
-        joints.push(ErrorParams::from_mm_deg(v));
+        joints.push(units::error_params_in(v));
     }
     Ok(DeviationTable::from_joint_rows(joints))
 }
@@ -94,7 +94,7 @@ fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
         .map_err(|e| IoError::input(path, e.span().map(|s| line_of(text, s.start)), "toml", e.message().to_string()))?;
     let check = |name: String, v: &[f64; 6]| -> Result<ErrorParams, IoError> {
         if v.iter().all(|x| x.is_finite()) {
-            Ok(ErrorParams::from_mm_deg(*v))
+            Ok(units::error_params_in(*v))
         } else {
             Err(IoError::input(path, None, name, "values must be finite"))
         }

@@ -18,12 +18,10 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
-use thermokin_chain::{
-    Chain, DhConvention, DhRow, DhTable, ErrorParams, FixedRow, Joint, JointKind, JointLimits, xyz_rotation,
-};
+use thermokin_chain::{Chain, DhConvention, DhRow, DhTable, FixedRow, Joint, JointKind, JointLimits, xyz_rotation};
 use toml::Spanned;
 
-use crate::{IoError, line_of, read_text};
+use crate::{IoError, line_of, read_text, units};
 
 pub use thermokin_chain::{JointRatings, LinkMass, Robot};
 
@@ -174,15 +172,16 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                 finite(path, line, &field("zero"), &[spec.zero])?;
                 let name = spec.name.clone().unwrap_or_else(|| format!("A{}", i + 1));
                 let offset = Vector3::from(spec.offset_mm);
-                let (mut joint, to_internal): (Joint, fn(f64) -> f64) = match spec.kind {
-                    KindSpec::Revolute => (Joint::revolute(name, offset, axis), f64::to_radians),
-                    KindSpec::Prismatic => (Joint::prismatic(name, offset, axis), |v| v),
+                let mut joint = match spec.kind {
+                    KindSpec::Revolute => Joint::revolute(name, offset, axis),
+                    KindSpec::Prismatic => Joint::prismatic(name, offset, axis),
                 };
-                joint.zero = to_internal(spec.zero);
-                joint.limits = limits(path, line, &field("limits"), spec.limits, to_internal)?;
+                let kind = joint.kind;
+                joint.zero = units::joint_value_in(kind, spec.zero);
+                joint.limits = limits(path, line, &field("limits"), spec.limits, kind)?;
                 if let Some(e) = spec.error {
                     finite(path, line, &field("error"), &e)?;
-                    joint.error = ErrorParams::from_mm_deg(e);
+                    joint.error = units::error_params_in(e);
                 }
                 let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, IoError> {
                     match v {
@@ -193,7 +192,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                     }
                 };
                 ratings.push(JointRatings {
-                    velocity: positive("max_velocity", spec.max_velocity)?.map(to_internal),
+                    velocity: positive("max_velocity", spec.max_velocity)?.map(|v| units::joint_value_in(kind, v)),
                     effort: positive("max_effort", spec.max_effort)?,
                 });
                 joints.push(joint);
@@ -244,18 +243,18 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
                     &field("a_mm, alpha_deg, d_mm, theta_deg"),
                     &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg],
                 )?;
-                let (kind, to_internal): (JointKind, fn(f64) -> f64) = match s.kind {
-                    KindSpec::Revolute => (JointKind::Revolute, f64::to_radians),
-                    KindSpec::Prismatic => (JointKind::Prismatic, |v| v),
+                let kind = match s.kind {
+                    KindSpec::Revolute => JointKind::Revolute,
+                    KindSpec::Prismatic => JointKind::Prismatic,
                 };
                 rows.push(DhRow {
                     name: s.name.clone().unwrap_or_else(|| format!("A{}", i + 1)),
                     a: s.a_mm,
-                    alpha: s.alpha_deg.to_radians(),
+                    alpha: units::radians(s.alpha_deg),
                     d: s.d_mm,
-                    theta: s.theta_deg.to_radians(),
+                    theta: units::radians(s.theta_deg),
                     kind,
-                    limits: limits(path, line, &field("limits"), s.limits, to_internal)?,
+                    limits: limits(path, line, &field("limits"), s.limits, kind)?,
                 });
             }
             let convention = if conv == Convention::Dh { DhConvention::Classic } else { DhConvention::Modified };
@@ -297,14 +296,14 @@ fn limits(
     line: Option<usize>,
     field: &str,
     spec: Option<[f64; 2]>,
-    to_internal: fn(f64) -> f64,
+    kind: JointKind,
 ) -> Result<Option<JointLimits>, IoError> {
     let Some([lo, hi]) = spec else { return Ok(None) };
     finite(path, line, field, &[lo, hi])?;
     if lo > hi {
         return Err(IoError::input(path, line, field, format!("lower limit {lo} is above upper limit {hi}")));
     }
-    Ok(Some(JointLimits { lower: to_internal(lo), upper: to_internal(hi) }))
+    Ok(Some(JointLimits { lower: units::joint_value_in(kind, lo), upper: units::joint_value_in(kind, hi) }))
 }
 
 fn axis(spec: &AxisSpec) -> Result<Unit<Vector3<f64>>, String> {
@@ -340,13 +339,13 @@ fn row(path: &Path, text: &str, spec: Option<&Spanned<RowSpec>>, which: &str) ->
     let s = spanned.get_ref();
     finite(path, line, &format!("{which}.translation_mm"), &s.translation_mm)?;
     finite(path, line, &format!("{which}.rotation_xyz_deg"), &s.rotation_xyz_deg)?;
-    let rot = xyz_rotation(&Vector3::from(s.rotation_xyz_deg).map(f64::to_radians));
+    let rot = xyz_rotation(&Vector3::from(s.rotation_xyz_deg).map(units::radians));
     let iso =
         Isometry3::from_parts(Translation3::from(Vector3::from(s.translation_mm)), UnitQuaternion::from_matrix(&rot));
     let mut r = FixedRow::from_isometry(&iso);
     if let Some(e) = s.error {
         finite(path, line, &format!("{which}.error"), &e)?;
-        r.error = ErrorParams::from_mm_deg(e);
+        r.error = units::error_params_in(e);
     }
     Ok(r)
 }
@@ -395,7 +394,7 @@ const FILE_DECIMALS: i32 = 12;
 
 /// One number as written: rounded to [`FILE_DECIMALS`], always with a decimal point (valid TOML float).
 fn num(x: f64) -> String {
-    format!("{:?}", crate::units::rounded(x, FILE_DECIMALS))
+    format!("{:?}", units::rounded(x, FILE_DECIMALS))
 }
 
 fn fmt3(v: &Vector3<f64>) -> String {
@@ -420,15 +419,14 @@ fn axis_toml(a: &Vector3<f64>) -> String {
 }
 
 fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
-    let angles =
-        thermokin_chain::xyz_angles_for_output(row.rotation.to_rotation_matrix().matrix()).map(f64::to_degrees);
+    let angles = thermokin_chain::xyz_angles_for_output(row.rotation.to_rotation_matrix().matrix()).map(units::degrees);
     out.push_str(&format!(
         "\n[{which}]\ntranslation_mm = {}\nrotation_xyz_deg = {}\n",
         fmt3(&row.translation),
         fmt3(&angles)
     ));
     if !row.error.is_zero() {
-        out.push_str(&format!("error = {}\n", fmt6(row.error.to_mm_deg())));
+        out.push_str(&format!("error = {}\n", fmt6(units::error_params_out(&row.error))));
     }
 }
 
@@ -440,7 +438,7 @@ pub fn robot_to_toml(robot: &Robot) -> String {
         robot.name()
     );
     for (i, j) in robot.chain().joints().iter().enumerate() {
-        let to_file = |v: f64| if j.kind == JointKind::Revolute { v.to_degrees() } else { v };
+        let to_file = |v: f64| units::joint_value_out(j.kind, v);
         s.push_str(&format!(
             "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
             j.name,
@@ -457,7 +455,7 @@ pub fn robot_to_toml(robot: &Robot) -> String {
             s.push_str(&format!("limits = [{}, {}]\n", num(to_file(l.lower)), num(to_file(l.upper))));
         }
         if !j.error.is_zero() {
-            s.push_str(&format!("error = {}\n", fmt6(j.error.to_mm_deg())));
+            s.push_str(&format!("error = {}\n", fmt6(units::error_params_out(&j.error))));
         }
         if let Some(r) = robot.ratings().get(i) {
             if let Some(v) = r.velocity {

@@ -6,7 +6,7 @@
 //! as rounding noise.
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
-use thermokin_chain::{Chain, JointKind, xyz_rotation};
+use thermokin_chain::{Chain, ErrorParams, JointKind, xyz_rotation};
 
 /// How three or four numbers describe an orientation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -137,19 +137,44 @@ pub fn joint_value_out(kind: JointKind, value: f64) -> f64 {
 /// Joint values from a file or flag (degrees for revolute joints, mm for prismatic ones) to the library's
 /// radians and mm. `None` when the count does not match the chain.
 pub fn joints_to_internal(chain: &Chain, values: &[f64]) -> Option<Vec<f64>> {
-    (values.len() == chain.dof()).then(|| {
-        chain
-            .joints()
-            .iter()
-            .zip(values)
-            .map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_radians() } else { v })
-            .collect()
-    })
+    (values.len() == chain.dof())
+        .then(|| chain.joints().iter().zip(values).map(|(j, &v)| joint_value_in(j.kind, v)).collect())
 }
 
 /// The library's joint values (radians, mm) to the edge's degrees and mm.
 pub fn joints_to_external(chain: &Chain, q: &[f64]) -> Vec<f64> {
-    chain.joints().iter().zip(q).map(|(j, &v)| if j.kind == JointKind::Revolute { v.to_degrees() } else { v }).collect()
+    chain.joints().iter().zip(q).map(|(j, &v)| joint_value_out(j.kind, v)).collect()
+}
+
+/// An angle of the library (radians) in degrees, for a file or a terminal.
+pub fn degrees(radians: f64) -> f64 {
+    radians.to_degrees()
+}
+
+/// An angle from a file or a flag (degrees) in the library's radians.
+pub fn radians(degrees: f64) -> f64 {
+    degrees.to_radians()
+}
+
+/// Three angles of the library (radians) in degrees.
+pub fn degrees3(radians: [f64; 3]) -> [f64; 3] {
+    radians.map(f64::to_degrees)
+}
+
+/// Six error parameters as files and the paper's tables give them (`Dx,Dy,Dz,Dox,Doy,Doz`: mm, mm, mm,
+/// degrees, degrees, degrees) in the library's millimetres and radians.
+pub fn error_params_in(values: [f64; 6]) -> ErrorParams {
+    ErrorParams::new(
+        Vector3::new(values[0], values[1], values[2]),
+        Vector3::new(values[3], values[4], values[5]).map(f64::to_radians),
+    )
+}
+
+/// Six error parameters of the library in the files' millimetres and degrees (the inverse of
+/// [`error_params_in`]).
+pub fn error_params_out(e: &ErrorParams) -> [f64; 6] {
+    let r = e.rotation.map(f64::to_degrees);
+    [e.translation.x, e.translation.y, e.translation.z, r.x, r.y, r.z]
 }
 
 /// `x` rounded to `decimals` places for printing: the meaningful precision, not the binary noise

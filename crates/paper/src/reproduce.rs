@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 use thermokin_chain::Chain;
-use thermokin_compensate::{Cycle, RunOutput, RunSettings, Summary, Target, compensate_static, compensate_transient};
+use thermokin_compensate::{
+    Cycle, RunOutput, RunSettings, SummaryOut, Target, compensate_static, compensate_transient,
+};
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
 use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, read_robot, read_targets};
@@ -101,7 +103,8 @@ fn labelled_rows(path: &Path) -> Result<Vec<(String, Vec<f64>)>, PaperError> {
 
 /// Joint values of the case studies' rows (degrees) in radians, through the unit boundary; every joint of
 /// the IRB 140 is revolute, so a row of the wrong length yields an empty vector and FK refuses it.
-fn deg_to_rad(chain: &Chain, v: &[f64]) -> Vec<f64> {
+/// Joint values of a file or a table (degrees, mm) in the chain's radians (mm), per joint kind.
+fn to_internal(chain: &Chain, v: &[f64]) -> Vec<f64> {
     thermokin_io::units::joints_to_internal(chain, v).unwrap_or_default()
 }
 
@@ -109,7 +112,7 @@ fn deg_to_rad(chain: &Chain, v: &[f64]) -> Vec<f64> {
 fn fk_residual(chain: &Chain, rows: &[(Vec<f64>, Vector3<f64>)]) -> Value {
     let errs: Vec<Vector3<f64>> = rows
         .iter()
-        .filter_map(|(q, p)| chain.tool_pose(&deg_to_rad(chain, q)).ok().map(|pose| pose.translation.vector - p))
+        .filter_map(|(q, p)| chain.tool_pose(&to_internal(chain, q)).ok().map(|pose| pose.translation.vector - p))
         .collect();
     let n = errs.len().max(1) as f64;
     let rms = (errs.iter().map(Vector3::norm_squared).sum::<f64>() / n).sqrt();
@@ -118,7 +121,12 @@ fn fk_residual(chain: &Chain, rows: &[(Vec<f64>, Vector3<f64>)]) -> Value {
     json!({"rows": errs.len(), "rms_mm": rms, "rms_per_coordinate_mm": rms / 3f64.sqrt(), "mean_mm": [mean.x, mean.y, mean.z], "max_mm": max})
 }
 
-fn summary_json(s: &Summary) -> Value {
+/// Joint values of a run's row (radians, mm) in degrees (mm), per joint kind.
+fn to_external(run: &RunOutput, q: &[f64]) -> Vec<f64> {
+    run.kinds.iter().zip(q).map(|(&k, &v)| thermokin_io::units::joint_value_out(k, v)).collect()
+}
+
+fn summary_json(s: &SummaryOut) -> Value {
     serde_json::to_value(s).unwrap_or(Value::Null)
 }
 
@@ -163,7 +171,7 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
     let coppelia = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; chain.dof()]));
     // The authors' IK ran in CoppeliaSim from the robot's current pose; a seed with the wrist bent down
     // (A5 = −45°) puts every target on the branch of their Table 16 (A5 < 0).
-    let start = deg_to_rad(&scene, &[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
+    let start = to_internal(&scene, &[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
     let settings = RunSettings { semantics: coppelia.clone(), ik: Params::default(), start };
 
     let static_run = compensate_static(&scene, &table, &prog, &settings)?;
@@ -249,8 +257,8 @@ fn measure(
          (degenerate at RY = 90°).\n"
     );
     // Tables 13 and 15 side by side.
-    let s = &static_run.summary;
-    let c = &canonical_run.summary;
+    let s = &SummaryOut::of(&static_run.summary);
+    let c = &SummaryOut::of(&canonical_run.summary);
     let _ = writeln!(w, "## Static case: Tables 13 and 15 (min / max per axis)\n");
     let _ = writeln!(
         w,
@@ -314,20 +322,21 @@ fn measure(
     for (label, q_pub) in table16 {
         let Some(ours) = static_run.rows.iter().find(|r| &r.label == label) else { continue };
         let Some((_, p14)) = table14.iter().find(|(l, _)| l == label) else { continue };
-        let d: Vec<f64> = q_pub.iter().zip(&ours.joints_deg).map(|(a, b)| b - a).collect();
+        let ours_deg = to_external(static_run, &ours.joints);
+        let d: Vec<f64> = q_pub.iter().zip(&ours_deg).map(|(a, b)| b - a).collect();
         for (k, v) in d.iter().enumerate() {
             joint_diff[k] = joint_diff[k].max(v.abs());
         }
         let p14 = Vector3::new(p14[0], p14[1], p14[2]);
         let fk =
-            deformed.tool_pose(&deg_to_rad(deformed, q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
+            deformed.tool_pose(&to_internal(deformed, q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
         t16_rows.push((q_pub.clone(), p14));
         let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
         let _ = writeln!(
             w,
             "| {label} | {} | {} | {:.4} | {:.3}, {:.3}, {:.3} | {:+.3}, {:+.3}, {:+.3} |",
             list(q_pub),
-            list(&ours.joints_deg),
+            list(&ours_deg),
             d.iter().fold(0.0f64, |m, v| m.max(v.abs())),
             p14.x,
             p14.y,
@@ -385,7 +394,7 @@ fn measure(
     let _ = writeln!(w);
 
     // Transient.
-    let t = &transient_run.summary;
+    let t = &SummaryOut::of(&transient_run.summary);
     let _ = writeln!(w, "## Transient case: Tables 17 and 18 (200 minutes, every minute, 10,050 solves)\n");
     let _ = writeln!(
         w,
@@ -583,9 +592,19 @@ fn print_section(
             Some((replay_lo, replay_hi)),
             &static_run.summary.position_mm,
         ),
-        (TABLE_13, file_orientation_deviation(authors_static), None, &static_run.summary.orientation_deg),
+        (
+            TABLE_13,
+            file_orientation_deviation(authors_static),
+            None,
+            &SummaryOut::of(&static_run.summary).orientation_deg,
+        ),
         (TABLE_17, file_position_deviation(authors_transient), None, &transient_run.summary.position_mm),
-        (TABLE_18, file_orientation_deviation(authors_transient), None, &transient_run.summary.orientation_deg),
+        (
+            TABLE_18,
+            file_orientation_deviation(authors_transient),
+            None,
+            &SummaryOut::of(&transient_run.summary).orientation_deg,
+        ),
     ];
     let mut disagreements = Vec::new();
     for (printed, (lo, hi), replay, ours) in cases {
@@ -646,10 +665,10 @@ fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
     authors
         .iter()
         .filter_map(|a| {
-            ours.rows
-                .iter()
-                .find(|o| o.label == a.label && o.time_min == a.time_min)
-                .map(|o| a.joints_deg.iter().zip(&o.joints_deg).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max))
+            ours.rows.iter().find(|o| o.label == a.label && o.time_min == a.time_min).map(|o| {
+                let ours = to_external(ours, &o.joints);
+                a.joints_deg.iter().zip(&ours).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+            })
         })
         .fold(0.0, f64::max)
 }

@@ -27,6 +27,7 @@ use serde::Serialize;
 use thermokin_chain::{Chain, JointKind, rotation_angle, xyz_rotation};
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
 use thermokin_io::PaperResultRow;
+use thermokin_io::units;
 
 use crate::PaperError;
 
@@ -82,8 +83,8 @@ pub fn residuals<'a>(
         if error.norm() > worst.0 {
             worst = (error.norm(), format!("{} at minute {}", row.label, row.time_min));
         }
-        let published = UnitQuaternion::from_matrix(&xyz_rotation(&row.reached_deg.map(f64::to_radians)));
-        worst_orientation = worst_orientation.max(rotation_angle(&published, &base_from_tcp.rotation).to_degrees());
+        let published = UnitQuaternion::from_matrix(&xyz_rotation(&row.reached_deg.map(units::radians)));
+        worst_orientation = worst_orientation.max(units::degrees(rotation_angle(&published, &base_from_tcp.rotation)));
     }
     if n == 0 {
         return Err(PaperError::Shape { what: "rows to compare", expected: 1, got: 0 });

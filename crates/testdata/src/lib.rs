@@ -66,3 +66,14 @@ pub fn irb140_table9() -> thermokin_chain::Chain {
         Err(e) => unreachable!("Table 9 is a valid chain: {e}"),
     }
 }
+
+/// Six error parameters written as the paper's tables write them (`Dx,Dy,Dz` mm, `Dox,Doy,Doz`
+/// degrees), for tests of crates below the unit boundary (`thermokin_io::units::error_params_in` is the
+/// boundary itself).
+pub fn error_mm_deg(values: [f64; 6]) -> thermokin_chain::ErrorParams {
+    let [dx, dy, dz, ox, oy, oz] = values;
+    thermokin_chain::ErrorParams::new(
+        nalgebra::Vector3::new(dx, dy, dz),
+        nalgebra::Vector3::new(ox.to_radians(), oy.to_radians(), oz.to_radians()),
+    )
+}

@@ -20,7 +20,7 @@ fn two_joint_case_by_hand() {
     // now points along world +Y: TCP (1, 152, 303).
     let chain = two_joints();
     let table = DeviationTable::from_joint_rows(vec![
-        ErrorParams::from_mm_deg([1.0, 2.0, 3.0, 0.0, 0.0, 90.0]),
+        thermokin_testdata::error_mm_deg([1.0, 2.0, 3.0, 0.0, 0.0, 90.0]),
         ErrorParams::ZERO,
     ]);
     let deformed = table.apply(&chain, &TableSemantics::Canonical).unwrap();
@@ -72,7 +72,7 @@ fn eq_18_to_20_multiplied_out_for_two_joints() {
         .iter()
         .zip(e21)
         .map(|(j, e)| {
-            ErrorParams::from_mm_deg(e).regroup(ErrorGrouping::PaperEq21, ErrorGrouping::Canonical, &j.offset)
+            thermokin_testdata::error_mm_deg(e).regroup(ErrorGrouping::PaperEq21, ErrorGrouping::Canonical, &j.offset)
         })
         .collect();
     let deformed = DeviationTable::from_joint_rows(rows).apply(&chain, &TableSemantics::Canonical).unwrap();
@@ -89,7 +89,7 @@ fn home_displacement_under_the_case_study_table() {
     // Every joint 1 mm off along each axis and turned 1° about each (Tables 10–11). At home no joint
     // turns, so the rows only stack: p_tcp = Σ_i R^(i−1) (p_i + d) + R^6 t_tool with R = Rx(1°)Ry(1°)Rz(1°).
     let chain = irb140();
-    let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6]);
+    let table = DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6]);
     let deformed = table.apply(&chain, &TableSemantics::Canonical).unwrap();
     let one = 1f64.to_radians();
     let r = Rotation3::from_axis_angle(&Vector3::x_axis(), one)
@@ -118,8 +118,8 @@ fn coppeliasim_edits_are_re_expressed_exactly() {
     // and reading the TCP must equal the FK of the re-expressed chain, at home and elsewhere.
     let chain = irb140();
     let table = DeviationTable::from_joint_rows(vec![
-        ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
-        ErrorParams::from_mm_deg([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
+        thermokin_testdata::error_mm_deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        thermokin_testdata::error_mm_deg([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]),
         ErrorParams::ZERO,
         ErrorParams::ZERO,
         ErrorParams::ZERO,

@@ -1,10 +1,9 @@
 //! Time profiles: nominal at t = 0, the linear profile's half-way point, plateau or not, bad parameters.
 
-use thermokin_chain::ErrorParams;
 use thermokin_deform::{AfterStabilization, DeformError, DeviationTable, TemperatureLog, TimeProfile};
 
 fn table() -> DeviationTable {
-    DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0, -2.0, 3.0, 0.5, -0.25, 1.0]); 3])
+    DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0, -2.0, 3.0, 0.5, -0.25, 1.0]); 3])
 }
 
 fn log() -> TemperatureLog {

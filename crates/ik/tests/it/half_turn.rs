@@ -43,7 +43,8 @@ fn assert_honest(chain: &Chain, goal: &Isometry3<f64>, s: &thermokin_ik::Solutio
     }
     // The reported errors are the independent ones.
     assert!((s.position_error_mm - dp).abs() <= 1e-9, "{what}: reported {} mm, FK {dp} mm", s.position_error_mm);
-    assert!((s.orientation_error_deg - dr).abs() <= 2e-6, "{what}: reported {}°, FK {dr}°", s.orientation_error_deg);
+    let reported = s.orientation_error_rad.to_degrees();
+    assert!((reported - dr).abs() <= 2e-6, "{what}: reported {reported}°, FK {dr}°");
 }
 
 #[test]

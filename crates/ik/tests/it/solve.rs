@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_chain::{Chain, ErrorParams};
+use thermokin_chain::Chain;
 use thermokin_deform::{DeviationTable, TableSemantics};
 use thermokin_ik::{Goal, IkError, Params, Seeds, Status, Workspace, solve, solve_batch};
 use thermokin_testdata::workspace;
@@ -16,7 +16,7 @@ fn irb140() -> Chain {
 
 fn deformed() -> Chain {
     // Tables 10–11: 1 mm and 1° on every axis of every joint.
-    let table = DeviationTable::from_joint_rows(vec![ErrorParams::from_mm_deg([1.0; 6]); 6]);
+    let table = DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6]);
     table.apply(&irb140(), &TableSemantics::Canonical).unwrap()
 }
 

@@ -9,7 +9,7 @@ fn published_deviation_tables_load() {
     let t = read_deviation_table(&case).unwrap();
     assert_eq!(t.dof(), 6);
     for row in &t.joints {
-        assert_eq!(row.to_mm_deg().map(|v| (v * 1e9).round() / 1e9), [1.0; 6]);
+        assert_eq!(thermokin_io::units::error_params_out(row).map(|v| (v * 1e9).round() / 1e9), [1.0; 6]);
     }
     let measured = authors("deformations-measured.csv");
     let m = read_deviation_table(&measured).unwrap();
@@ -58,12 +58,12 @@ fn toml_table_equals_csv_table() {
 fn robot_toml_round_trip_keeps_fk_names_limits_and_masses() {
     let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
     let errs: Vec<_> = (0..6)
-        .map(|i| thermokin_chain::ErrorParams::from_mm_deg([0.1 * i as f64, -0.2, 0.3, 0.01, -0.02, 0.03 * i as f64]))
+        .map(|i| thermokin_testdata::error_mm_deg([0.1 * i as f64, -0.2, 0.3, 0.01, -0.02, 0.03 * i as f64]))
         .collect();
     let chain = robot
         .chain()
         .with_errors(
-            thermokin_chain::ErrorParams::from_mm_deg([1.0, 0.0, 0.0, 0.0, 0.0, 0.5]),
+            thermokin_testdata::error_mm_deg([1.0, 0.0, 0.0, 0.0, 0.0, 0.5]),
             &errs,
             robot.chain().tool().error,
         )

@@ -83,7 +83,7 @@ fn export_then_import_is_exact() {
         // Deform it first: every joint gets error parameters, so the export must carry them.
         let mut rng = ChaCha8Rng::seed_from_u64(3);
         let errs: Vec<_> = (0..robot.chain().dof())
-            .map(|_| thermokin_chain::ErrorParams::from_mm_deg([0.0; 6].map(|_: f64| rng.random_range(-1.0..1.0))))
+            .map(|_| thermokin_testdata::error_mm_deg([0.0; 6].map(|_: f64| rng.random_range(-1.0..1.0))))
             .collect();
         let deformed = robot
             .chain()
