@@ -1,5 +1,10 @@
 //! The same-orientation extended table (paper section 3, Tables 5–7, eq. 18–22): joints, base and tool
 //! rows, forward kinematics and the geometric Jacobian.
+//!
+//! Conversions of a chain live beside it, one file per source: [`Chain::from_factors`] and
+//! [`Chain::to_factors`] (any list of fixed transforms and joint motions, `factors.rs`),
+//! [`crate::DhTable::to_extended`] and [`Chain::to_modified_dh`] (classic and modified DH, `dh.rs`), the
+//! parameter Jacobian below ([`Chain::parameter_jacobian`]).
 
 use nalgebra::{Isometry3, Matrix3, Matrix6xX, Unit, Vector3};
 

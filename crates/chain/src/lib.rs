@@ -7,14 +7,16 @@
 mod chain;
 mod dh;
 mod error_params;
+mod factors;
 mod frame;
 mod measurements;
 mod robot;
 mod so3;
 
 pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
-pub use dh::{DhConvention, DhRow, DhTable, JointFactor};
+pub use dh::{DhConvention, DhRow, DhTable};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
+pub use factors::JointFactor;
 pub use measurements::{Dataset, Measurement};
 pub use robot::{JointRatings, LinkMass, Robot, Target};
 pub use so3::{quaternion_wxyz, rotation_angle, rotation_log};
