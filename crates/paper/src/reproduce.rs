@@ -186,18 +186,15 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
 
     let deformed = table.apply(&scene, &coppelia)?;
     let deformed_canonical = table.apply(&chain, &TableSemantics::Canonical)?;
-    let m = measure(
-        a,
-        &chain,
-        &deformed,
-        &deformed_canonical,
-        &static_run,
-        &canonical_run,
-        &transient_run,
-        &printed,
-        &table14,
-        &table16,
-    )?;
+    let runs = Runs {
+        nominal: &chain,
+        deformed: &deformed,
+        deformed_canonical: &deformed_canonical,
+        static_run: &static_run,
+        canonical_run: &canonical_run,
+        transient_run: &transient_run,
+    };
+    let m = measure(a, &runs, &printed, &table14, &table16)?;
     Ok(Reproduction { json: m.json, report: m.report, static_run, transient_run, scene, deformed })
 }
 
@@ -227,19 +224,24 @@ pub fn brief(j: &Value) -> String {
     )
 }
 
-#[allow(clippy::too_many_arguments)]
+/// The chains and the three runs a reproduction measures.
+struct Runs<'a> {
+    nominal: &'a Chain,
+    deformed: &'a Chain,
+    deformed_canonical: &'a Chain,
+    static_run: &'a RunOutput,
+    canonical_run: &'a RunOutput,
+    transient_run: &'a RunOutput,
+}
+
 fn measure(
     a: &Inputs,
-    chain: &Chain,
-    deformed: &Chain,
-    deformed_canonical: &Chain,
-    static_run: &RunOutput,
-    canonical_run: &RunOutput,
-    transient_run: &RunOutput,
+    runs: &Runs<'_>,
     printed: &Printed,
     table14: &[(String, Vec<f64>)],
     table16: &[(String, Vec<f64>)],
 ) -> Result<Measured, PaperError> {
+    let Runs { nominal: chain, deformed, deformed_canonical, static_run, canonical_run, transient_run } = *runs;
     let mut r = String::new();
     let w = &mut r;
     let _ = writeln!(w, "# Reproduction of the paper's case studies\n");
