@@ -22,15 +22,21 @@ pub fn read_measurements(path: &Path, kinds: &[JointKind]) -> Result<Dataset, Io
 pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Result<Dataset, IoError> {
     let dof = kinds.len();
     if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
+        // The authors' results files hold the six joint angles of a revolute arm.
+        if kinds.len() != 6 || kinds.iter().any(|&k| k != JointKind::Revolute) {
+            return Err(IoError::input(
+                path,
+                Some(1),
+                "A1..A6",
+                format!(
+                    "an authors' results file holds six revolute joints; the robot has {dof} joints of kinds {kinds:?}"
+                ),
+            ));
+        }
         let rows = parse_paper_results(path, text)?;
         let measurements = rows
             .into_iter()
-            .map(|r| Measurement {
-                time_min: r.time_min,
-                q: r.joints_deg.iter().zip(kinds).map(|(&v, &k)| joint_value_in(k, v)).collect(),
-                position_mm: r.reached_mm,
-                temps: Vec::new(),
-            })
+            .map(|r| Measurement { time_min: r.time_min, q: r.joints, position_mm: r.reached_mm, temps: Vec::new() })
             .collect();
         return Ok(Dataset { measurements, temperature_names: Vec::new() });
     }

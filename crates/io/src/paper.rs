@@ -6,8 +6,10 @@ use std::path::Path;
 
 use nalgebra::Vector3;
 
+use thermokin_chain::JointKind;
+
 use crate::csvtext::{number, records};
-use crate::{IoError, read_text};
+use crate::{IoError, read_text, units};
 
 /// One row of an authors' results file.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,12 +22,14 @@ pub struct PaperResultRow {
     pub programmed_mm: Vector3<f64>,
     /// Position reached in CoppeliaSim, mm.
     pub reached_mm: Vector3<f64>,
-    /// Programmed orientation, degrees.
-    pub programmed_deg: Vector3<f64>,
-    /// Orientation reached, degrees.
-    pub reached_deg: Vector3<f64>,
-    /// Joint angles A1..A6, degrees.
-    pub joints_deg: Vec<f64>,
+    /// Programmed orientation: the file's X-Y-Z Euler angles (RX, RY, RZ), in radians. Kept as the
+    /// three angles, not a rotation: Tables 13 and 18 are differences of these angles, and every
+    /// target sits at the Euler singularity (RY = 90°), where a rotation does not give them back.
+    pub programmed_xyz_rad: Vector3<f64>,
+    /// Orientation reached, the file's X-Y-Z Euler angles in radians.
+    pub reached_xyz_rad: Vector3<f64>,
+    /// Joint values A1..A6 in radians (the authors' IRB 140 has revolute joints only).
+    pub joints: Vec<f64>,
 }
 
 /// Reads either results file (the transient one is recognised by its leading time column).
@@ -61,15 +65,18 @@ pub fn parse_paper_results(path: &Path, text: &str) -> Result<Vec<PaperResultRow
         let v3 = |k: usize, name: &str| -> Result<Vector3<f64>, IoError> {
             Ok(Vector3::new(n(k, name)?, n(k + 1, name)?, n(k + 2, name)?))
         };
-        let joints = (19..25).map(|k| n(k, &format!("A{}", k - 18))).collect::<Result<Vec<_>, _>>()?;
+        let joints = (19..25)
+            .map(|k| n(k, &format!("A{}", k - 18)).map(|v| units::joint_value_in(JointKind::Revolute, v)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let angles = |k: usize, name: &str| v3(k, name).map(|v| v.map(units::radians));
         out.push(PaperResultRow {
             time_min: if transient { number(path, r.line, "Time (min)", &r.cells[0])? } else { 0.0 },
             label,
             programmed_mm: v3(1, "programmed X,Y,Z")?,
             reached_mm: v3(4, "CoppeliaSim X,Y,Z")?,
-            programmed_deg: v3(10, "programmed RX,RY,RZ")?,
-            reached_deg: v3(13, "CoppeliaSim RX,RY,RZ")?,
-            joints_deg: joints,
+            programmed_xyz_rad: angles(10, "programmed RX,RY,RZ")?,
+            reached_xyz_rad: angles(13, "CoppeliaSim RX,RY,RZ")?,
+            joints,
         });
     }
     Ok(out)

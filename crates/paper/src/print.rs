@@ -125,7 +125,7 @@ pub fn file_position_deviation(rows: &[PaperResultRow]) -> ([f64; 3], [f64; 3]) 
 /// Min/max of the authors' own orientation deviations (programmed − reached X-Y-Z Euler angles, degrees,
 /// as their file and tables give them).
 pub fn file_orientation_deviation(rows: &[PaperResultRow]) -> ([f64; 3], [f64; 3]) {
-    min_max(rows.iter().map(|r| r.programmed_deg - r.reached_deg))
+    min_max(rows.iter().map(|r| (r.programmed_xyz_rad - r.reached_xyz_rad).map(thermokin_io::units::degrees)))
 }
 
 /// Min/max of programmed − FK(their published angles) on `replayed` (the scene, deformed as their script
@@ -136,12 +136,7 @@ pub fn replayed_position_deviation(
 ) -> Result<([f64; 3], [f64; 3]), PaperError> {
     let mut deviations = Vec::with_capacity(rows.len());
     for r in rows {
-        let q = thermokin_io::units::joints_to_internal(replayed, &r.joints_deg).ok_or(PaperError::Shape {
-            what: "joint angles of a row",
-            expected: replayed.dof(),
-            got: r.joints_deg.len(),
-        })?;
-        deviations.push(r.programmed_mm - replayed.tool_pose(&q)?.translation.vector);
+        deviations.push(r.programmed_mm - replayed.tool_pose(&r.joints)?.translation.vector);
     }
     Ok(min_max(deviations.into_iter()))
 }

@@ -108,12 +108,10 @@ fn to_internal(chain: &Chain, v: &[f64]) -> Vec<f64> {
     thermokin_io::units::joints_to_internal(chain, v).unwrap_or_default()
 }
 
-/// RMS (3-D) and mean of FK(angles) − published coordinates.
+/// RMS (3-D) and mean of FK(joint values, radians) − published coordinates.
 fn fk_residual(chain: &Chain, rows: &[(Vec<f64>, Vector3<f64>)]) -> Value {
-    let errs: Vec<Vector3<f64>> = rows
-        .iter()
-        .filter_map(|(q, p)| chain.tool_pose(&to_internal(chain, q)).ok().map(|pose| pose.translation.vector - p))
-        .collect();
+    let errs: Vec<Vector3<f64>> =
+        rows.iter().filter_map(|(q, p)| chain.tool_pose(q).ok().map(|pose| pose.translation.vector - p)).collect();
     let n = errs.len().max(1) as f64;
     let rms = (errs.iter().map(Vector3::norm_squared).sum::<f64>() / n).sqrt();
     let mean = errs.iter().sum::<Vector3<f64>>() / n;
@@ -332,7 +330,7 @@ fn measure(
         let p14 = Vector3::new(p14[0], p14[1], p14[2]);
         let fk =
             deformed.tool_pose(&to_internal(deformed, q_pub)).map(|p| p.translation.vector - p14).unwrap_or_default();
-        t16_rows.push((q_pub.clone(), p14));
+        t16_rows.push((to_internal(deformed, q_pub), p14));
         let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(", ");
         let _ = writeln!(
             w,
@@ -435,7 +433,7 @@ fn measure(
     if static_file.exists() && transient_file.exists() {
         let authors_static = read_paper_results(&static_file)?;
         let rows: Vec<(Vec<f64>, Vector3<f64>)> =
-            authors_static.iter().map(|r| (r.joints_deg.clone(), r.reached_mm)).collect();
+            authors_static.iter().map(|r| (r.joints.clone(), r.reached_mm)).collect();
         let res = fk_residual(deformed, &rows);
         let joint = max_joint_diff(&authors_static, static_run);
         let _ = writeln!(w, "## The authors' full files (`fixtures/paper/authors`)\n");
@@ -448,11 +446,8 @@ fn measure(
             joint
         );
         let authors_transient = read_paper_results(&transient_file)?;
-        let minute0: Vec<(Vec<f64>, Vector3<f64>)> = authors_transient
-            .iter()
-            .filter(|r| r.time_min == 0.0)
-            .map(|r| (r.joints_deg.clone(), r.reached_mm))
-            .collect();
+        let minute0: Vec<(Vec<f64>, Vector3<f64>)> =
+            authors_transient.iter().filter(|r| r.time_min == 0.0).map(|r| (r.joints.clone(), r.reached_mm)).collect();
         let nominal_res = fk_residual(chain, &minute0);
         let tjoint = max_joint_diff(&authors_transient, transient_run);
         let _ = writeln!(
@@ -668,8 +663,8 @@ fn max_joint_diff(authors: &[PaperResultRow], ours: &RunOutput) -> f64 {
         .iter()
         .filter_map(|a| {
             ours.rows.iter().find(|o| o.label == a.label && o.time_min == a.time_min).map(|o| {
-                let ours = to_external(ours, &o.joints);
-                a.joints_deg.iter().zip(&ours).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+                let (theirs, ours) = (to_external(ours, &a.joints), to_external(ours, &o.joints));
+                theirs.iter().zip(&ours).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
             })
         })
         .fold(0.0, f64::max)

@@ -50,18 +50,10 @@ pub struct Residuals {
 
 /// The joint vector of a published row, radians (every IRB 140 joint is revolute).
 fn joints_rad(chain: &Chain, row: &PaperResultRow) -> Result<Vec<f64>, PaperError> {
-    if row.joints_deg.len() != chain.dof() {
-        return Err(PaperError::Shape {
-            what: "joint angles of a row",
-            expected: chain.dof(),
-            got: row.joints_deg.len(),
-        });
+    if row.joints.len() != chain.dof() {
+        return Err(PaperError::Shape { what: "joint angles of a row", expected: chain.dof(), got: row.joints.len() });
     }
-    thermokin_io::units::joints_to_internal(chain, &row.joints_deg).ok_or(PaperError::Shape {
-        what: "joint angles of a row",
-        expected: chain.dof(),
-        got: row.joints_deg.len(),
-    })
+    Ok(row.joints.clone())
 }
 
 /// FK of each row's published angles on `chain` against the row's published position and orientation.
@@ -83,7 +75,7 @@ pub fn residuals<'a>(
         if error.norm() > worst.0 {
             worst = (error.norm(), format!("{} at minute {}", row.label, row.time_min));
         }
-        let published = UnitQuaternion::from_matrix(&xyz_rotation(&row.reached_deg.map(units::radians)));
+        let published = UnitQuaternion::from_matrix(&xyz_rotation(&row.reached_xyz_rad));
         worst_orientation = worst_orientation.max(units::degrees(rotation_angle(&published, &base_from_tcp.rotation)));
     }
     if n == 0 {

@@ -89,7 +89,7 @@ fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
     let errors: Vec<Vector3<f64>> = minute0
         .iter()
         .map(|row| {
-            let q: Vec<f64> = row.joints_deg.iter().map(|d| d.to_radians()).collect();
+            let q = row.joints.clone();
             r.chain().tool_pose(&q).unwrap().translation.vector - row.reached_mm
         })
         .collect();
@@ -114,7 +114,7 @@ fn minute_zero_of_the_transient_file_is_reproduced_by_the_nominal_model() {
     let per_coordinate = (minute0
         .iter()
         .map(|row| {
-            let q: Vec<f64> = row.joints_deg.iter().map(|d| d.to_radians()).collect();
+            let q = row.joints.clone();
             (fitted.tool_pose(&q).unwrap().translation.vector - row.reached_mm).norm_squared()
         })
         .sum::<f64>()

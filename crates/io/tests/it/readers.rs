@@ -34,7 +34,7 @@ fn targets_and_results_load() {
     let stat = authors("results-static-case-study.csv");
     let rows = read_paper_results(&stat).unwrap();
     assert_eq!(rows.len(), 50);
-    assert_eq!(rows[0].joints_deg[0], 2.810995);
+    assert_eq!(rows[0].joints[0], 2.810995f64.to_radians());
     assert_eq!(rows[49].label, "P50");
 }
 
