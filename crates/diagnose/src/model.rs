@@ -477,8 +477,12 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
         .collect()
 }
 
+/// Per-measurement quantities that do not depend on the parameters: gravity torques (one list per
+/// measurement) and the mean temperature rise.
+pub(crate) type Pre = (Vec<Vec<f64>>, Vec<f64>);
+
 /// Per-measurement quantities that do not depend on the parameters: gravity torques and temperature rise.
-pub(crate) fn prepare(robot: &Robot, data: &Dataset) -> (Vec<Vec<f64>>, Vec<f64>) {
+pub(crate) fn prepare(robot: &Robot, data: &Dataset) -> Pre {
     let torques = data.measurements.iter().map(|m| gravity_torques(robot.chain(), robot.masses(), &m.q)).collect();
     let first: Option<Vec<f64>> =
         data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());

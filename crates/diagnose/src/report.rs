@@ -7,8 +7,7 @@ use serde::Serialize;
 use thermokin_chain::Robot;
 
 use crate::fit::{FixedParameter, Observability, residuals};
-use crate::model::{Effect, Model};
-use crate::validation::Pre;
+use crate::model::{Effect, Model, Pre};
 use crate::{Dataset, DiagnoseError};
 
 /// Held-out error statistics of the 3-D position residual, mm.

@@ -7,11 +7,10 @@ use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Robot;
 
 use crate::fit::{Fit, FixedParameter, fit, identifiable, initial_registration, residuals};
-use crate::model::{Effect, Model};
+use crate::model::{Effect, Model, Pre};
 use crate::report::Stats;
 use crate::{Dataset, DiagnoseError};
 
-pub(crate) type Pre = (Vec<Vec<f64>>, Vec<f64>);
 /// A scored candidate: the effect, its newly identifiable parameters, its held-out statistics.
 pub(crate) type Scored = Result<Option<(Effect, usize, Stats)>, DiagnoseError>;
 pub(crate) type Folds = Vec<(Vec<usize>, Vec<usize>)>;
