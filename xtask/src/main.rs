@@ -110,6 +110,22 @@ fn mean_ns(bench: &str) -> Option<f64> {
     estimate_ns(bench, "mean")
 }
 
+/// The processor the figures were taken on (`model name` of /proc/cpuinfo, and the cores): a speed figure
+/// is quoted with it.
+fn processor() -> String {
+    let cores = std::thread::available_parallelism().map_or(0, usize::from);
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{model}, {cores} cores")
+}
+
 fn bench(json: bool) -> Result<()> {
     run(cargo().args([
         "bench",
@@ -122,9 +138,15 @@ fn bench(json: bool) -> Result<()> {
         "--bench",
         "ik",
     ]))?;
-    let success = std::fs::read_to_string("target/criterion/ik_random_success.txt")
-        .ok()
-        .and_then(|s| s.trim().parse::<f64>().ok());
+    let rate = |file: &str| {
+        std::fs::read_to_string(Path::new("target/criterion").join(file))
+            .ok()
+            .and_then(|s| s.trim().parse::<f64>().ok())
+    };
+    let success = rate("ik_random_success.txt");
+    let k_success = rate("k_ik_near_success.txt");
+    let us = |v: Option<f64>| v.map(|n| n / 1e3);
+    let ratio = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a / b);
     let rows: Vec<(&str, Option<f64>, &str, f64)> = vec![
         ("fk_us", median_ns("fk_irb140_deformed").map(|n| n / 1e3), "median FK, IRB 140 with error parameters", 0.2),
         ("jacobian_us", median_ns("jacobian_irb140_deformed").map(|n| n / 1e3), "median pose + Jacobian", 0.3),
@@ -143,18 +165,49 @@ fn bench(json: bool) -> Result<()> {
         ),
         ("ik_random_us", mean_ns("ik_random_seed").map(|n| n / 1e3), "mean IK from random seeds with restarts", 50.0),
         (
+            "ik_random_random_restarts_us",
+            us(mean_ns("ik_random_seed_random_restarts")),
+            "same, random restarts only (no closed-form branches)",
+            f64::NAN,
+        ),
+        (
+            "branches_ratio",
+            ratio(mean_ns("ik_random_seed"), mean_ns("ik_random_seed_random_restarts")),
+            "random-seed IK with branches / without, same run",
+            f64::NAN,
+        ),
+        ("k_fk_us", us(median_ns("k_fk")), "peer: k crate FK, same robot and configurations", f64::NAN),
+        ("k_jacobian_us", us(median_ns("k_jacobian")), "peer: k crate FK + Jacobian", f64::NAN),
+        ("k_ik_near_us", us(median_ns("k_ik_near_seed")), "peer: k crate Jacobian IK near seed (1e-6 m)", f64::NAN),
+        ("k_fk_ratio", ratio(median_ns("fk_irb140_deformed"), median_ns("k_fk")), "ours / k, FK", 1.0),
+        (
+            "k_jacobian_ratio",
+            ratio(median_ns("jacobian_irb140_deformed"), median_ns("k_jacobian")),
+            "ours / k, pose + Jacobian",
+            1.0,
+        ),
+        (
+            "k_ik_near_ratio",
+            ratio(median_ns("ik_near_seed"), median_ns("k_ik_near_seed")),
+            "ours (1e-9 mm, limits) / k (1e-6 m), IK near seed",
+            1.0,
+        ),
+        ("k_ik_near_success", k_success, "peer: k's success rate near seed", f64::NAN),
+        (
             "transient_10050_s",
             mean_ns("program/transient_10050").map(|n| n / 1e9),
             "10,050 targets, warm-started (paper's 200 min)",
             0.1,
         ),
     ];
-    println!("{:<22} {:>12} {:>8}  what", "metric", "measured", "goal");
+    println!("processor: {}", processor());
+    println!("{:<28} {:>12} {:>8}  what", "metric", "measured", "goal");
     for (k, v, what, goal) in &rows {
-        println!("{k:<22} {:>12} {goal:>8}  {what}", v.map_or("n/a".into(), |x| format!("{x:.4}")));
+        let goal = if goal.is_nan() { "–".to_string() } else { goal.to_string() };
+        println!("{k:<28} {:>12} {goal:>8}  {what}", v.map_or("n/a".into(), |x| format!("{x:.4}")));
     }
     println!(
-        "{:<22} {:>12} {:>8}  success rate of random-seed IK over the bench's targets",
+        "{:<28} {:>12} {:>8}  success rate of random-seed IK over the bench's targets",
         "ik_random_success",
         success.map_or("n/a".into(), |x| format!("{x:.4}")),
         "0.999"
@@ -165,6 +218,7 @@ fn bench(json: bool) -> Result<()> {
             obj.insert(k.into(), v.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
         }
         obj.insert("ik_random_success".into(), success.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
+        obj.insert("processor".into(), serde_json::json!(processor()));
         println!("{}", serde_json::Value::Object(obj));
     }
     Ok(())

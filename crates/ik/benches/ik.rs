@@ -10,7 +10,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, xyz_rotation};
 use thermokin_deform::{AfterStabilization, DeviationTable, TableSemantics, TimeProfile};
-use thermokin_ik::{Backend, Goal, Params, Seeds, Workspace, solve, solve_batch};
+use thermokin_ik::{Backend, Goal, Params, RestartSeeds, Seeds, Workspace, solve, solve_batch};
 
 fn root() -> std::path::PathBuf {
     std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -71,14 +71,21 @@ fn benches(c: &mut Criterion) {
         root().join("target/criterion/ik_random_success.txt"),
         format!("{}\n", ok as f64 / random.len() as f64),
     );
-    let mut k = 0;
-    c.bench_function("ik_random_seed", |b| {
-        b.iter(|| {
-            let (t, s) = &random[k % random.len()];
-            k += 1;
-            black_box(solve(&chain, t, s, &params, &mut ws, k as u64).unwrap())
-        })
-    });
+    for (name, restart_seeds) in [
+        ("ik_random_seed", RestartSeeds::BranchesThenRandom),
+        ("ik_random_seed_random_restarts", RestartSeeds::RandomOnly),
+    ] {
+        let params = Params { restart_seeds, ..Params::default() };
+        let mut k = 0;
+        c.bench_function(name, |b| {
+            b.iter(|| {
+                let (t, s) = &random[k % random.len()];
+                k += 1;
+                black_box(solve(&chain, t, s, &params, &mut ws, k as u64).unwrap())
+            })
+        });
+    }
+    k_peers(c, &chain);
 
     // The paper's transient program: 50 targets of Table 12, 201 model states (minutes 0..=200), each
     // target seeded from its previous solution.
@@ -119,6 +126,69 @@ fn benches(c: &mut Criterion) {
         })
     });
     group.finish();
+}
+
+/// The `k` crate (an independent Rust kinematics library) on the same deformed robot — our chain exported
+/// as URDF, which k reads — and the same configurations: FK, the 6 × 6 Jacobian, and its Jacobian IK from
+/// a seed within 0.25 rad at its own default step (multiplier 0.5) to 1e-6 m and 1e-6 rad, 100 tries.
+/// Its success rate is written beside the timings (`target/criterion/k_ik_near_success.txt`).
+fn k_peers(c: &mut Criterion, chain: &Chain) {
+    use k::InverseKinematicsSolver;
+    let dir = root().join("target/criterion");
+    let _ = std::fs::create_dir_all(&dir);
+    let path = dir.join("irb140-case-study.urdf");
+    std::fs::write(&path, thermokin_urdf::export_urdf(chain, "irb140_case_study")).unwrap();
+    let tree = k::Chain::<f64>::from_urdf_file(&path).unwrap();
+    let arm = k::SerialChain::from_end(tree.find_link("tool0").unwrap());
+    let near = cases(chain, 1000, 0.25, 1);
+    let configs: Vec<Vec<f64>> = near.iter().map(|(_, s)| s.clone()).collect();
+    let mut k = 0;
+    c.bench_function("k_fk", |b| {
+        b.iter(|| {
+            arm.set_joint_positions_unchecked(&configs[k % configs.len()]);
+            k += 1;
+            black_box(arm.end_transform())
+        })
+    });
+    c.bench_function("k_jacobian", |b| {
+        b.iter(|| {
+            arm.set_joint_positions_unchecked(&configs[k % configs.len()]);
+            k += 1;
+            arm.update_transforms();
+            black_box(k::jacobian(&arm))
+        })
+    });
+    // Goals in k's units (metres) from our targets.
+    let goals: Vec<k::Isometry3<f64>> = near
+        .iter()
+        .map(|(g, _)| {
+            let Goal::Pose(p) = g else { unreachable!("the bench's goals are poses") };
+            let t = p.translation.vector / 1000.0;
+            let q = p.rotation.coords;
+            k::Isometry3::from_parts(
+                k::Translation3::new(t.x, t.y, t.z),
+                k::UnitQuaternion::from_quaternion(k::nalgebra::Quaternion::new(q.w, q.x, q.y, q.z)),
+            )
+        })
+        .collect();
+    let solver = k::JacobianIkSolver::new(1e-6, 1e-6, 0.5, 100);
+    let ok = configs
+        .iter()
+        .zip(&goals)
+        .filter(|(s, g)| {
+            arm.set_joint_positions_unchecked(s);
+            solver.solve(&arm, g).is_ok()
+        })
+        .count();
+    let _ = std::fs::write(dir.join("k_ik_near_success.txt"), format!("{}\n", ok as f64 / configs.len() as f64));
+    c.bench_function("k_ik_near_seed", |b| {
+        b.iter(|| {
+            let i = k % configs.len();
+            k += 1;
+            arm.set_joint_positions_unchecked(&configs[i]);
+            black_box(solver.solve(&arm, &goals[i]).is_ok())
+        })
+    });
 }
 
 criterion_group! {

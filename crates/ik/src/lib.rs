@@ -13,14 +13,16 @@
 //! move with [`Params::max_distance_from_seed`] so that a solution on another branch is reported as a
 //! failure rather than silently accepted.
 
+mod analytic;
 mod batch;
 mod lm;
 mod params;
 mod solve;
 
+pub use analytic::{Branch, SphericalWrist};
 pub use batch::{Seeds, solve_batch};
 pub use lm::Workspace;
-pub use params::{Backend, Goal, LimitPolicy, Params, Solution, Status};
+pub use params::{Backend, Goal, LimitPolicy, Params, RestartSeeds, Solution, Status};
 pub use solve::solve;
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).

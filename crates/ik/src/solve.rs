@@ -9,8 +9,9 @@ use thermokin_chain::{Chain, JointKind, rotation_angle};
 use crate::IkError;
 use std::time::Instant;
 
+use crate::analytic::SphericalWrist;
 use crate::lm::{Eval, Workspace, attempt, past};
-use crate::params::{Goal, LimitPolicy, Params, Solution, Status};
+use crate::params::{Goal, LimitPolicy, Params, RestartSeeds, Solution, Status};
 
 /// Restarts drawn near the seed before the uniform ones.
 const LOCAL_RESTARTS: usize = 4;
@@ -63,6 +64,31 @@ fn nearest_turn(chain: &Chain, q: &mut [f64], seed: &[f64], policy: LimitPolicy)
             }
         }
     }
+}
+
+/// The closed-form solutions of the chain's ideal geometry for a pose goal ([`SphericalWrist`]), moved by
+/// whole turns toward the seed, those inside the limits (when they bind), nearest to the seed first. Empty
+/// for position goals and for chains without a closed form.
+fn branch_seeds(chain: &Chain, goal: &Goal, seed: &[f64], params: &Params) -> std::vec::IntoIter<Vec<f64>> {
+    let Goal::Pose(pose) = goal else { return Vec::new().into_iter() };
+    if params.restart_seeds == RestartSeeds::RandomOnly {
+        return Vec::new().into_iter();
+    }
+    let Some(wrist) = SphericalWrist::detect(chain) else { return Vec::new().into_iter() };
+    let mut seeds: Vec<(bool, Vec<f64>)> = wrist
+        .branches(pose)
+        .into_iter()
+        .map(|b| {
+            let mut q = b.q.to_vec();
+            nearest_turn(chain, &mut q, seed, params.limits);
+            (b.exact, q)
+        })
+        .filter(|(_, q)| params.limits == LimitPolicy::Ignore || chain.within_limits(q))
+        .collect();
+    // Exact branches first (the nearest-solution ones of an out-of-reach equation are rough seeds), each
+    // group nearest to the seed first.
+    seeds.sort_by(|(ea, a), (eb, b)| eb.cmp(ea).then(distance(a, seed).total_cmp(&distance(b, seed))));
+    seeds.into_iter().map(|(_, q)| q).collect::<Vec<_>>().into_iter()
 }
 
 fn distance(a: &[f64], b: &[f64]) -> f64 {
@@ -131,12 +157,18 @@ pub fn solve(
     let mut total_iterations = 0;
     let mut far_found = false;
     let mut unverified_found = false;
+    // Closed-form branches of the chain's ideal geometry, nearest to the seed first: computed once the
+    // seed's own attempt has failed, tried before any random restart.
+    let mut branches: Option<std::vec::IntoIter<Vec<f64>>> = None;
     for restart in 0..=params.restarts {
         if restart > 0 {
             if past(deadline) {
                 break;
             }
-            q = if restart % 2 == 1 && restart < 2 * LOCAL_RESTARTS {
+            let next_branch = branches.get_or_insert_with(|| branch_seeds(chain, target, seed, params)).next();
+            q = if let Some(b) = next_branch {
+                b
+            } else if restart % 2 == 1 && restart < 2 * LOCAL_RESTARTS {
                 // Every other early restart near the seed (growing spread), which keeps its branch where
                 // one exists; the others, and all later ones, anywhere inside the limits.
                 let spread = 0.15 * restart.div_ceil(2) as f64;
