@@ -133,11 +133,19 @@ fn bench(json: bool) -> Result<()> {
         "thermokin-chain",
         "--package",
         "thermokin-ik",
+        "--package",
+        "thermokin-compensate",
         "--bench",
         "kinematics",
         "--bench",
         "ik",
+        "--bench",
+        "program",
     ]))?;
+    let stream: serde_json::Value = std::fs::read_to_string("target/criterion/program_stream.json")
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or(serde_json::Value::Null);
     let rate = |file: &str| {
         std::fs::read_to_string(Path::new("target/criterion").join(file))
             .ok()
@@ -193,6 +201,24 @@ fn bench(json: bool) -> Result<()> {
             1.0,
         ),
         ("k_ik_near_success", k_success, "peer: k's success rate near seed", f64::NAN),
+        (
+            "program_1m_s",
+            stream["1000000"]["seconds"].as_f64(),
+            "1,000,000 targets streamed (CSV in and out), every core",
+            10.0,
+        ),
+        (
+            "program_1m_peak_mib",
+            stream["1000000"]["peak_rss_mib"].as_f64(),
+            "peak memory after 1,000,000 targets, MiB",
+            f64::NAN,
+        ),
+        (
+            "program_300k_peak_mib",
+            stream["300000"]["peak_rss_mib"].as_f64(),
+            "peak memory after 300,000 targets, MiB (flat: same as 1M)",
+            f64::NAN,
+        ),
         (
             "transient_10050_s",
             mean_ns("program/transient_10050").map(|n| n / 1e9),

@@ -200,7 +200,7 @@ pub struct CompensateArgs {
     pub out: PathBuf,
     /// Layout of --out: authors (their CSV layout, two header rows, diffs against their files), long
     /// (one row per target, time and value: time_min,label,status,quantity,component,value,unit — for
-    /// pandas and SQL) or json ({"summary": …, "rows": […]}).
+    /// pandas and SQL), json ({"summary": …, "rows": […]}) or joints (time_min,label,A1..An,status).
     #[arg(long, value_enum, default_value_t = ResultsFormat::Authors)]
     pub format: ResultsFormat,
     /// Transient cycle length, minutes (with --profile).
@@ -242,6 +242,12 @@ pub struct CompensateArgs {
     /// Print the summary as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Stream a static program of any length with constant memory: targets are read in chunks, each
+    /// chunk solved on every core, --out (--format joints) written as it goes. Each target is solved on
+    /// its own from --seed (for a closed-form arm: the branch nearest to it) rather than chained from the
+    /// previous target. Not with --profile, --joints-out, --program or --plot.
+    #[arg(long)]
+    pub stream: bool,
 }
 
 /// `diagnose` arguments.
@@ -282,6 +288,8 @@ pub enum ResultsFormat {
     Long,
     /// JSON.
     Json,
+    /// The compensated joints only: time_min,label,A1..An,status (degrees; mm for prismatic joints).
+    Joints,
 }
 
 /// `--controller`.

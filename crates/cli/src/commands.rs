@@ -7,13 +7,14 @@ use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, compensate_static, compensate_transient,
-    programs, write_joint_csv, write_long_csv, write_results_csv, write_results_json,
+    AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, StreamSettings, Summary, SummaryOut,
+    compensate_static, compensate_static_stream, compensate_transient, programs, write_joint_csv, write_long_csv,
+    write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Goal, Params, Workspace, solve};
 use thermokin_io::units::{degrees, joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
-use thermokin_io::{RobotOptions, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
+use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
 
@@ -156,12 +157,15 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
         return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
     }
     let chain = loaded.robot.chain();
-    let prog = program(&a.targets)?;
     let start = match &a.seed {
         Some(s) => joints(chain, "seed", s)?,
         None => vec![0.0; chain.dof()],
     };
     let settings = RunSettings { semantics: loaded.semantics.clone(), ik: Params::default(), start };
+    if a.stream {
+        return compensate_streamed(&a, &loaded, &table, settings);
+    }
+    let prog = program(&a.targets)?;
     let started = std::time::Instant::now();
     let (run, transient) = match &a.robot.profile {
         None | Some(TimeProfile::Static) => {
@@ -183,8 +187,67 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
         }
     };
     write_outputs(&a, &loaded, &run, transient)?;
-    print_summary(&run, a.json);
+    print_summary(&run.summary, a.json);
     Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
+}
+
+/// `compensate --stream`: the static run in chunks, --out written as it goes (atomically: a temporary file
+/// renamed at the end, removed on an error).
+fn compensate_streamed(
+    a: &CompensateArgs,
+    loaded: &Loaded,
+    table: &thermokin_deform::DeviationTable,
+    settings: RunSettings,
+) -> Result<u8, Failure> {
+    if a.robot.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static) {
+        return Err(Failure::input(anyhow!("--stream runs the static case: drop --profile")));
+    }
+    if a.format != ResultsFormat::Joints {
+        return Err(Failure::input(anyhow!("--stream writes the joints only: add --format joints")));
+    }
+    if a.joints_out.is_some() || a.program.is_some() || a.plot.is_some() {
+        return Err(Failure::input(anyhow!("--stream writes --out only: drop --joints-out, --program and --plot")));
+    }
+    let file = std::fs::File::open(&a.targets)
+        .with_context(|| format!("{}: cannot open", a.targets.display()))
+        .map_err(Failure::input)?;
+    let mut targets = TargetReader::new(&a.targets, std::io::BufReader::new(file)).map_err(Failure::input)?;
+    let stream = StreamSettings::new(settings);
+    let started = std::time::Instant::now();
+    let bar = indicatif::ProgressBar::hidden();
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{spinner} compensating: {human_pos} targets, {per_sec}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+    );
+    let mut failure: Option<thermokin_compensate::CompensateError> = None;
+    let mut summary = None;
+    let written = write_atomic_with(&a.out, |w| {
+        let run = compensate_static_stream(loaded.robot.chain(), table, &mut targets, w, &stream, |done| {
+            if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
+                bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            }
+            bar.set_position(done as u64);
+        });
+        match run {
+            Ok(s) => {
+                summary = Some(s);
+                Ok(())
+            }
+            Err(e) => {
+                let message = e.to_string();
+                failure = Some(e);
+                Err(std::io::Error::other(message))
+            }
+        }
+    });
+    bar.finish_and_clear();
+    if let Some(e) = failure {
+        return Err(Failure::input(e));
+    }
+    written.map_err(Failure::internal)?;
+    let Some(summary) = summary else { return Err(Failure::internal(anyhow!("the streamed run returned nothing"))) };
+    print_summary(&summary, a.json);
+    Ok(if summary.failures > 0 { exit::PARTIAL } else { exit::OK })
 }
 
 fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient: bool) -> Result<(), Failure> {
@@ -192,6 +255,7 @@ fn write_outputs(a: &CompensateArgs, loaded: &Loaded, run: &RunOutput, transient
         ResultsFormat::Authors => write_atomic_with(&a.out, |w| write_results_csv(w, run, transient)),
         ResultsFormat::Long => write_atomic_with(&a.out, |w| write_long_csv(w, run)),
         ResultsFormat::Json => write_atomic_with(&a.out, |w| write_results_json(w, run)),
+        ResultsFormat::Joints => write_atomic_with(&a.out, |w| write_joint_csv(w, run)),
     }
     .map_err(Failure::internal)?;
     if let Some(p) = &a.joints_out {
@@ -258,8 +322,8 @@ fn robot_programs(
         .collect())
 }
 
-fn print_summary(run: &RunOutput, as_json: bool) {
-    let s = &thermokin_compensate::SummaryOut::of(&run.summary);
+fn print_summary(summary: &Summary, as_json: bool) {
+    let s = &SummaryOut::of(summary);
     if as_json {
         println!("{}", serde_json::to_string(s).unwrap_or_default());
         return;

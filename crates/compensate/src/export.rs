@@ -5,7 +5,7 @@
 use std::io::{self, Write};
 
 use serde::Serialize;
-use thermokin_chain::{quaternion_wxyz, xyz_angles_for_output};
+use thermokin_chain::{JointKind, quaternion_wxyz, xyz_angles_for_output};
 use thermokin_io::units::{degrees, degrees3, joint_value_out, rounded};
 
 use crate::run::{Axes, RunOutput, Summary, TargetResult};
@@ -127,13 +127,23 @@ pub fn write_results_csv(out: &mut impl Write, run: &RunOutput, with_time: bool)
 
 /// The compensated joint targets: `time_min,label,A1..An` (degrees), one row per target and time.
 pub fn write_joint_csv(out: &mut impl Write, run: &RunOutput) -> io::Result<()> {
-    let n = run.kinds.len();
-    let joints: Vec<String> = (1..=n).map(|i| format!("A{i}")).collect();
-    writeln!(out, "time_min,label,{},status", joints.join(","))?;
+    write_joint_header(out, run.kinds.len())?;
     for r in &run.rows {
-        writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join_joints(&joints_out(run, r)), r.status)?;
+        write_joint_row(out, &run.kinds, r)?;
     }
     Ok(())
+}
+
+/// The header of the joint CSV for `n` joints.
+pub(crate) fn write_joint_header(out: &mut impl Write, n: usize) -> io::Result<()> {
+    let joints: Vec<String> = (1..=n).map(|i| format!("A{i}")).collect();
+    writeln!(out, "time_min,label,{},status", joints.join(","))
+}
+
+/// One row of the joint CSV: the joints in degrees (mm for prismatic joints).
+pub(crate) fn write_joint_row(out: &mut impl Write, kinds: &[JointKind], r: &TargetResult) -> io::Result<()> {
+    let joints: Vec<f64> = kinds.iter().zip(&r.joints).map(|(&k, &v)| joint_value_out(k, v)).collect();
+    writeln!(out, "{},{},{},{:?}", meaningful(r.time_min), r.label, join_joints(&joints), r.status)
 }
 
 /// The results in long format for notebooks and databases: one header row, then one row per target,

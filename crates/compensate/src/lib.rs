@@ -14,6 +14,7 @@
 mod export;
 mod program;
 mod run;
+mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use program::{AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, programs};
@@ -21,6 +22,7 @@ pub use run::{
     Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error,
 };
+pub use stream::{StreamSettings, compensate_static_stream};
 pub use thermokin_chain::Target;
 
 /// Errors of a compensation run (per-target failures are records, not errors).
@@ -52,4 +54,13 @@ pub enum CompensateError {
     /// A robot program could not be written.
     #[error(transparent)]
     Program(#[from] crate::program::ProgramError),
+    /// A streamed program's targets could not be read.
+    #[error(transparent)]
+    Read(#[from] thermokin_io::IoError),
+    /// A streamed run's output could not be written.
+    #[error("writing the results: {source}")]
+    Write {
+        /// The I/O error.
+        source: std::io::Error,
+    },
 }

@@ -98,15 +98,65 @@ pub struct Axes {
 }
 
 impl Axes {
-    fn of(values: impl Iterator<Item = [f64; 3]>) -> Axes {
-        let mut a = Axes { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
-        for v in values {
-            for k in 0..3 {
-                a.min[k] = a.min[k].min(v[k]);
-                a.max[k] = a.max[k].max(v[k]);
-            }
+    /// No value yet: +∞ minima, −∞ maxima.
+    const EMPTY: Axes = Axes { min: [f64::INFINITY; 3], max: [f64::NEG_INFINITY; 3] };
+
+    fn add(&mut self, v: [f64; 3]) {
+        for k in 0..3 {
+            self.min[k] = self.min[k].min(v[k]);
+            self.max[k] = self.max[k].max(v[k]);
         }
-        a
+    }
+}
+
+/// A summary built as rows arrive — one pass, constant memory but for the failed targets' names (at most
+/// `named` of them; the count is always exact). [`RunOutput`]s and streamed runs share it.
+pub(crate) struct SummaryBuilder {
+    summary: Summary,
+    transient: bool,
+    named: usize,
+}
+
+impl SummaryBuilder {
+    pub(crate) fn new(transient: bool, named: usize) -> Self {
+        let summary = Summary {
+            solves: 0,
+            failures: 0,
+            failed: Vec::new(),
+            position_mm: Axes::EMPTY,
+            orientation_rad: Axes::EMPTY,
+            max_position_error_mm: 0.0,
+            max_orientation_error_rad: 0.0,
+            max_uncompensated_error_mm: 0.0,
+        };
+        Self { summary, transient, named }
+    }
+
+    pub(crate) fn add(&mut self, r: &TargetResult) {
+        let s = &mut self.summary;
+        s.solves += 1;
+        if !r.converged() {
+            s.failures += 1;
+            if s.failed.len() < self.named {
+                let at = if self.transient { format!(" @ {} min", r.time_min) } else { String::new() };
+                s.failed.push(format!("{}{at} ({:?})", r.label, r.status));
+            }
+            return;
+        }
+        s.position_mm.add(r.position_deviation_mm);
+        s.orientation_rad.add(r.orientation_deviation_rad);
+        s.max_position_error_mm = s.max_position_error_mm.max(Vector3::from(r.position_deviation_mm).norm());
+        s.max_orientation_error_rad =
+            s.max_orientation_error_rad.max(Vector3::from(r.orientation_deviation_rad).norm());
+        s.max_uncompensated_error_mm = s.max_uncompensated_error_mm.max(r.uncompensated_error_mm);
+    }
+
+    pub(crate) fn finish(mut self) -> Summary {
+        let s = &mut self.summary;
+        if s.failures > s.failed.len() {
+            s.failed.push(format!("… and {} more", s.failures - s.failed.len()));
+        }
+        self.summary
     }
 }
 
@@ -146,29 +196,10 @@ pub struct RunOutput {
 
 impl RunOutput {
     fn new(chain: &Chain, rows: Vec<TargetResult>) -> Self {
-        let ok: Vec<&TargetResult> = rows.iter().filter(|r| r.converged()).collect();
         let transient = rows.iter().any(|r| r.time_min != 0.0);
-        let summary = Summary {
-            solves: rows.len(),
-            failures: rows.len() - ok.len(),
-            failed: rows
-                .iter()
-                .filter(|r| !r.converged())
-                .map(|r| {
-                    let at = if transient { format!(" @ {} min", r.time_min) } else { String::new() };
-                    format!("{}{at} ({:?})", r.label, r.status)
-                })
-                .collect(),
-            position_mm: Axes::of(ok.iter().map(|r| r.position_deviation_mm)),
-            orientation_rad: Axes::of(ok.iter().map(|r| r.orientation_deviation_rad)),
-            max_position_error_mm: ok.iter().map(|r| Vector3::from(r.position_deviation_mm).norm()).fold(0.0, f64::max),
-            max_orientation_error_rad: ok
-                .iter()
-                .map(|r| Vector3::from(r.orientation_deviation_rad).norm())
-                .fold(0.0, f64::max),
-            max_uncompensated_error_mm: ok.iter().map(|r| r.uncompensated_error_mm).fold(0.0, f64::max),
-        };
-        Self { rows, kinds: chain.joints().iter().map(|j| j.kind).collect(), summary }
+        let mut summary = SummaryBuilder::new(transient, usize::MAX);
+        rows.iter().for_each(|r| summary.add(r));
+        Self { rows, kinds: chain.joints().iter().map(|j| j.kind).collect(), summary: summary.finish() }
     }
 }
 
@@ -176,7 +207,7 @@ fn to_goals(program: &[Target]) -> Vec<Goal> {
     program.iter().map(|t| Goal::Pose(t.pose)).collect()
 }
 
-fn record(
+pub(crate) fn record(
     deformed: &Chain,
     time_min: f64,
     target: &Target,

@@ -14,38 +14,54 @@ pub(crate) struct Record {
 /// Splits CSV text (LF or CRLF, any mix) into records, skipping blank lines. A file whose first line
 /// holds semicolons or tabs but no comma is refused as using the wrong delimiter.
 pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
-    if let Some(first) = text.lines().find(|l| !l.trim().is_empty())
-        && !first.contains(',')
-        && (first.contains(';') || first.contains('\t'))
-    {
-        return Err(IoError::input(path, Some(1), "delimiter", "expected commas; this file uses ';' or tabs"));
+    if let Some(first) = text.lines().find(|l| !l.trim().is_empty()) {
+        check_delimiter(path, first)?;
     }
     // Line by line: none of these formats has a quoted field spanning lines, and this keeps the line
     // numbers exact whatever the mix of CRLF and LF.
     let mut out = Vec::new();
     for (index, raw) in text.split('\n').enumerate() {
-        let line = index + 1;
-        let raw = raw.strip_suffix('\r').unwrap_or(raw);
-        if raw.trim().is_empty() || raw.trim_start().starts_with('#') {
-            continue; // blank lines and `#` comment lines (the fixtures carry their provenance so)
+        if let Some(r) = record(path, index + 1, raw)? {
+            out.push(r);
         }
-        let mut reader = csv::ReaderBuilder::new()
-            .has_headers(false)
-            .flexible(true)
-            .buffer_capacity(raw.len() + 16)
-            .from_reader(raw.as_bytes());
-        let mut record = csv::StringRecord::new();
-        match reader.read_record(&mut record) {
-            Ok(_) => {}
-            Err(e) => return Err(IoError::input(path, Some(line), "csv", e.to_string())),
-        }
-        let cells: Vec<String> = record.iter().map(|c| c.trim().to_string()).collect();
-        if cells.iter().all(|c| c.is_empty()) {
-            continue;
-        }
-        out.push(Record { line, cells });
     }
     Ok(out)
+}
+
+/// Refuses a first line that holds semicolons or tabs but no comma (the wrong delimiter).
+pub(crate) fn check_delimiter(path: &Path, first: &str) -> Result<(), IoError> {
+    if !first.contains(',') && (first.contains(';') || first.contains('\t')) {
+        return Err(IoError::input(path, Some(1), "delimiter", "expected commas; this file uses ';' or tabs"));
+    }
+    Ok(())
+}
+
+/// One line (without or with its `\r`) as a record; `None` for blank lines and `#` comment lines (the
+/// fixtures carry their provenance so).
+pub(crate) fn record(path: &Path, line: usize, raw: &str) -> Result<Option<Record>, IoError> {
+    let raw = raw.strip_suffix('\r').unwrap_or(raw);
+    if raw.trim().is_empty() || raw.trim_start().starts_with('#') {
+        return Ok(None);
+    }
+    // Fast path: a line without quotes is its comma-separated cells (what the csv crate would give).
+    if !raw.contains('"') {
+        let cells: Vec<String> = raw.split(',').map(|c| c.trim().to_string()).collect();
+        return Ok((!cells.iter().all(|c| c.is_empty())).then_some(Record { line, cells }));
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .buffer_capacity(raw.len() + 16)
+        .from_reader(raw.as_bytes());
+    let mut rec = csv::StringRecord::new();
+    if let Err(e) = reader.read_record(&mut rec) {
+        return Err(IoError::input(path, Some(line), "csv", e.to_string()));
+    }
+    let cells: Vec<String> = rec.iter().map(|c| c.trim().to_string()).collect();
+    if cells.iter().all(|c| c.is_empty()) {
+        return Ok(None);
+    }
+    Ok(Some(Record { line, cells }))
 }
 
 /// Parses a finite number from a cell; the error names the column.

@@ -22,7 +22,7 @@ pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{
     JointRatings, LinkMass, Robot, RobotOptions, parse_robot_toml, read_robot, read_robot_with, robot_to_toml,
 };
-pub use targets::{DEFAULT_ORIENTATION_DEG, Target, parse_targets, read_targets};
+pub use targets::{DEFAULT_ORIENTATION_DEG, Target, TargetReader, parse_targets, read_targets};
 pub use thermokin_chain::JointKind;
 pub use units::Orientation;
 pub use write::{write_atomic, write_atomic_with};

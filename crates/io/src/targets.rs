@@ -6,12 +6,13 @@
 //!
 //! Without orientation columns every target gets X-Y-Z Euler (0, 90, 0), the orientation of Table 12.
 
-use std::path::Path;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, Vector3};
 pub use thermokin_chain::Target;
 
-use crate::csvtext::{column, expect_fields, number, records};
+use crate::csvtext::{Record, check_delimiter, column, expect_fields, number, record, records};
 use crate::{IoError, Orientation, read_text};
 
 /// The orientation of every target of Table 12, degrees (X-Y-Z Euler: the tool Z axis along world +X).
@@ -29,51 +30,133 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected the header ,X,Y,Z"));
     };
-    let find = |name: &str| column(header, name);
-    let pos: Vec<usize> = ["X", "Y", "Z"]
-        .iter()
-        .map(|n| find(n).ok_or_else(|| IoError::input(path, Some(header.line), *n, format!("missing column `{n}`"))))
-        .collect::<Result<_, _>>()?;
-    let conventions = [
-        (Orientation::XyzEuler, &["RX", "RY", "RZ"][..]),
-        (Orientation::Rpy, &["ROLL", "PITCH", "YAW"][..]),
-        (Orientation::Quaternion, &["QW", "QX", "QY", "QZ"][..]),
-    ];
-    let mut orientation: Option<(Orientation, &[&str], Vec<usize>)> = None;
-    for (convention, names) in conventions {
-        let cols: Vec<Option<usize>> = names.iter().map(|n| find(n)).collect();
-        if cols.iter().all(Option::is_none) {
-            continue;
-        }
-        if cols.iter().any(Option::is_none) {
-            return Err(IoError::input(
-                path,
-                Some(header.line),
-                names.join(","),
-                "give all the columns of an orientation or none",
-            ));
-        }
-        if let Some((_, other, _)) = &orientation {
-            return Err(IoError::input(
-                path,
-                Some(header.line),
-                names.join(","),
-                format!("two orientations given ({} and {})", other.join(","), names.join(",")),
-            ));
-        }
-        orientation = Some((convention, names, cols.into_iter().flatten().collect()));
+    let layout = Layout::of(path, header)?;
+    let out = rows.iter().enumerate().map(|(i, r)| layout.target(path, r, i)).collect::<Result<Vec<_>, _>>()?;
+    if out.is_empty() {
+        return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));
     }
-    let orientation_cols: &[usize] = orientation.as_ref().map_or(&[], |(_, _, c)| c.as_slice());
-    let label_col = (0..header.cells.len()).find(|i| !pos.contains(i) && !orientation_cols.contains(i));
-    let mut out = Vec::with_capacity(rows.len());
-    for r in rows {
-        expect_fields(path, r, header.cells.len())?;
+    Ok(out)
+}
+
+/// A targets CSV read in chunks, for programs too large to hold: memory stays that of one chunk whatever
+/// the file's length. The same columns, conventions and errors as [`read_targets`].
+pub struct TargetReader<R> {
+    path: PathBuf,
+    lines: std::io::Lines<R>,
+    line: usize,
+    layout: Layout,
+    count: usize,
+}
+
+impl<R: BufRead> TargetReader<R> {
+    /// Reads the header of `input` (named `path` in messages).
+    pub fn new(path: &Path, input: R) -> Result<Self, IoError> {
+        let mut lines = input.lines();
+        let mut line = 0;
+        let mut checked = false;
+        let header = loop {
+            line += 1;
+            let Some(raw) = lines.next() else {
+                return Err(IoError::input(path, Some(line), "header", "empty file: expected the header ,X,Y,Z"));
+            };
+            let raw = raw.map_err(|e| IoError::input(path, Some(line), "file", e.to_string()))?;
+            if !checked && !raw.trim().is_empty() {
+                check_delimiter(path, &raw)?;
+                checked = true;
+            }
+            if let Some(r) = record(path, line, &raw)? {
+                break r;
+            }
+        };
+        let layout = Layout::of(path, &header)?;
+        Ok(Self { path: path.to_path_buf(), lines, line, layout, count: 0 })
+    }
+
+    /// The next at most `max` targets; empty at the end of the file. A file with a header and no target
+    /// is an error, as for [`read_targets`].
+    pub fn next_chunk(&mut self, max: usize) -> Result<Vec<Target>, IoError> {
+        let mut out = Vec::with_capacity(max.min(1 << 16));
+        while out.len() < max {
+            let Some(raw) = self.lines.next() else { break };
+            self.line += 1;
+            let raw = raw.map_err(|e| IoError::input(&self.path, Some(self.line), "file", e.to_string()))?;
+            if let Some(r) = record(&self.path, self.line, &raw)? {
+                out.push(self.layout.target(&self.path, &r, self.count)?);
+                self.count += 1;
+            }
+        }
+        if out.is_empty() && self.count == 0 {
+            return Err(IoError::input(&self.path, Some(self.line + 1), "rows", "no targets after the header"));
+        }
+        Ok(out)
+    }
+
+    /// Targets read so far.
+    pub fn count(&self) -> usize {
+        self.count
+    }
+}
+
+/// Where a targets file keeps its columns, from its header.
+struct Layout {
+    columns: usize,
+    position: [usize; 3],
+    orientation: Option<(Orientation, &'static [&'static str], Vec<usize>)>,
+    label: Option<usize>,
+}
+
+impl Layout {
+    fn of(path: &Path, header: &Record) -> Result<Self, IoError> {
+        let find = |name: &str| column(header, name);
+        let mut position = [0; 3];
+        for (slot, n) in position.iter_mut().zip(["X", "Y", "Z"]) {
+            *slot =
+                find(n).ok_or_else(|| IoError::input(path, Some(header.line), n, format!("missing column `{n}`")))?;
+        }
+        const CONVENTIONS: [(Orientation, &[&str]); 3] = [
+            (Orientation::XyzEuler, &["RX", "RY", "RZ"]),
+            (Orientation::Rpy, &["ROLL", "PITCH", "YAW"]),
+            (Orientation::Quaternion, &["QW", "QX", "QY", "QZ"]),
+        ];
+        let mut orientation: Option<(Orientation, &'static [&'static str], Vec<usize>)> = None;
+        for (convention, names) in CONVENTIONS {
+            let cols: Vec<Option<usize>> = names.iter().map(|n| find(n)).collect();
+            if cols.iter().all(Option::is_none) {
+                continue;
+            }
+            if cols.iter().any(Option::is_none) {
+                return Err(IoError::input(
+                    path,
+                    Some(header.line),
+                    names.join(","),
+                    "give all the columns of an orientation or none",
+                ));
+            }
+            if let Some((_, other, _)) = &orientation {
+                return Err(IoError::input(
+                    path,
+                    Some(header.line),
+                    names.join(","),
+                    format!("two orientations given ({} and {})", other.join(","), names.join(",")),
+                ));
+            }
+            orientation = Some((convention, names, cols.into_iter().flatten().collect()));
+        }
+        let orientation_cols: &[usize] = orientation.as_ref().map_or(&[], |(_, _, c)| c.as_slice());
+        let label = (0..header.cells.len()).find(|i| !position.contains(i) && !orientation_cols.contains(i));
+        Ok(Self { columns: header.cells.len(), position, orientation, label })
+    }
+
+    /// Row `r`, the `index`-th target of the file (0-based, for the default label `P{index + 1}`).
+    fn target(&self, path: &Path, r: &Record, index: usize) -> Result<Target, IoError> {
+        expect_fields(path, r, self.columns)?;
+        let [x, y, z] = self.position;
         let p = Vector3::new(
-            number(path, r.line, "X", &r.cells[pos[0]])?,
-            number(path, r.line, "Y", &r.cells[pos[1]])?,
-            number(path, r.line, "Z", &r.cells[pos[2]])?,
+            number(path, r.line, "X", &r.cells[x])?,
+            number(path, r.line, "Y", &r.cells[y])?,
+            number(path, r.line, "Z", &r.cells[z])?,
         );
-        let rotation = match &orientation {
+        let rotation = match &self.orientation {
             Some((convention, names, cols)) => {
                 let values: Vec<f64> = names
                     .iter()
@@ -86,15 +169,12 @@ pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
                 .rotation(&DEFAULT_ORIENTATION_DEG)
                 .map_err(|m| IoError::input(path, Some(r.line), "RX,RY,RZ", m))?,
         };
-        let label = label_col
+        let label = self
+            .label
             .map(|c| r.cells[c].clone())
             .filter(|s| !s.is_empty())
-            .unwrap_or_else(|| format!("P{}", out.len() + 1));
+            .unwrap_or_else(|| format!("P{}", index + 1));
         let pose = Isometry3::from_parts(Translation3::from(p), rotation);
-        out.push(Target { label, pose, line: Some(r.line) });
+        Ok(Target { label, pose, line: Some(r.line) })
     }
-    if out.is_empty() {
-        return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));
-    }
-    Ok(out)
 }

@@ -738,3 +738,79 @@ fn every_readme_command_works_from_another_directory() {
     assert_eq!(compared, 25);
     assert!(dir.join("warmup_t200.src").exists() && dir.join("warmup_t0.src").exists());
 }
+
+#[test]
+fn compensate_stream_writes_the_joints_and_refuses_what_it_cannot_do() {
+    // 5,000 targets generated here — FK of seeded configurations of the nominal IRB 140 away from its
+    // singularities (wrist centre over axis 1, stretched arm, straight wrist), which the deformed robot
+    // may not reach in either mode — one made unreachable, and one malformed in a second file.
+    let chain = thermokin_io::read_robot(&workspace(ROBOT)).unwrap().chain().clone();
+    let mut csv = String::from("label,X,Y,Z,QW,QX,QY,QZ\n");
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    let mut uniform = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..5000 {
+        let ranges_deg =
+            [(-120.0, 120.0), (-20.0, 50.0), (-60.0, 20.0), (-150.0, 150.0), (30.0, 100.0), (-300.0, 300.0)];
+        let q: Vec<f64> = ranges_deg.iter().map(|(lo, hi)| f64::to_radians(lo + (hi - lo) * uniform())).collect();
+        let pose = chain.tool_pose(&q).unwrap();
+        let (p, r) = (pose.translation.vector, pose.rotation);
+        let x = if k == 1234 { 5000.0 } else { p.x };
+        csv.push_str(&format!("T{k},{x},{},{},{},{},{},{}\n", p.y, p.z, r.w, r.i, r.j, r.k));
+    }
+    let targets = tmp("stream-targets.csv");
+    std::fs::write(&targets, &csv).unwrap();
+    let out = tmp("stream-joints.csv");
+    let args = |extra: &[&str]| {
+        let mut v = vec![
+            "compensate",
+            "--robot",
+            ROBOT,
+            "--deformation",
+            TABLE,
+            "--targets",
+            targets.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--stream",
+            "--json",
+        ];
+        v.extend_from_slice(extra);
+        v.into_iter().map(String::from).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str]| {
+        let a = args(extra);
+        thermokin(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let o = run(&["--format", "joints"]);
+    assert_eq!(o.status.code(), Some(3), "one target is unreachable: {}", stderr(&o));
+    let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!((s["solves"].as_u64(), s["failures"].as_u64()), (Some(5000), Some(1)));
+    assert!(s["max_position_error_mm"].as_f64().unwrap() < 1e-6);
+    let text = std::fs::read_to_string(&out).unwrap();
+    assert_eq!(text.lines().count(), 5001);
+    assert!(text.lines().any(|l| l.starts_with("0,T1234,") && l.ends_with("Unreachable")));
+    no_partial(&out);
+    // What the streamed mode cannot do is refused with a reason, before anything is written.
+    for (extra, says) in [
+        (&["--format", "long"][..], "--format joints"),
+        (&["--format", "joints", "--profile", "linear:180"][..], "drop --profile"),
+        (&["--format", "joints", "--program", "x.mod"][..], "--out only"),
+    ] {
+        let o = run(extra);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}");
+        assert!(stderr(&o).contains(says), "{extra:?}: {}", stderr(&o));
+    }
+    // A malformed row fails the run with its line, and leaves the previous output intact.
+    std::fs::write(&targets, format!("{csv}T9,1,oops,3,1,0,0,0\n")).unwrap();
+    std::fs::write(&out, "previous\n").unwrap();
+    let o = run(&["--format", "joints"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("5002") && stderr(&o).contains('Y'), "{}", stderr(&o));
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
+    no_partial(&out);
+}
