@@ -8,11 +8,11 @@ use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
     AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, StreamSettings, Summary, SummaryOut,
-    compensate_static, compensate_static_stream, compensate_transient, programs, write_joint_csv, write_long_csv,
-    write_results_csv, write_results_json,
+    compensate_static, compensate_static_stream, compensate_transient, confdata, kuka_turn, programs, write_joint_csv,
+    write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
-use thermokin_ik::{Goal, Params, Workspace, solve};
+use thermokin_ik::{Goal, Params, Workspace, solve, solve_branches};
 use thermokin_io::units::{degrees, joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
@@ -121,6 +121,9 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
         }
         Goal::Pose(pose(&a.pose, "pose", a.robot.orientation)?)
     };
+    if a.branches {
+        return ik_branches(&a, &chain, &target);
+    }
     let seed = match &a.seed {
         Some(s) => joints(&chain, "seed", s)?,
         None => vec![0.0; chain.dof()],
@@ -148,6 +151,66 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
         );
     }
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
+}
+
+/// `ik --branches`: every configuration of a closed-form arm, refined on the working robot.
+fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> {
+    let Goal::Pose(goal) = target else {
+        return Err(Failure::input(anyhow!("--branches needs a full pose (drop --position-only)")));
+    };
+    let mut ws = Workspace::new(chain.dof());
+    let Some(found) = solve_branches(chain, goal, &Params::default(), &mut ws).map_err(Failure::input)? else {
+        return Err(Failure::input(anyhow!(
+            "--branches: this robot has no closed form (it needs six revolute joints, axes 2 and 3 parallel and a spherical wrist)"
+        )));
+    };
+    let rows: Vec<serde_json::Value> = found
+        .iter()
+        .map(|(_, s)| {
+            let deg = joints_to_external(chain, &s.q);
+            let conf = confdata(chain, &s.q);
+            json!({
+                // ABB's cfx bits, in words: where the wrist centre is against axis 1 and the lower arm,
+                // and the sign of axis 5.
+                "wrist_centre_vs_axis1": if conf[3] & 4 != 0 { "behind" } else { "in front" },
+                "wrist_centre_vs_lower_arm": if conf[3] & 2 != 0 { "behind" } else { "in front" },
+                "axis5": if conf[3] & 1 != 0 { "negative" } else { "positive" },
+                "status": format!("{:?}", s.status),
+                "joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(),
+                "abb_confdata": conf,
+                "kuka_turn": kuka_turn(&s.q),
+                "position_error_mm": s.position_error_mm,
+            })
+        })
+        .collect();
+    if a.json {
+        println!("{}", serde_json::Value::Array(rows));
+    } else {
+        println!(
+            "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} turn",
+            "vs axis 1", "vs arm", "axis 5", "status", "joints_deg", "confdata"
+        );
+        for r in &rows {
+            let joints: Vec<String> = r["joints_deg"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .map(|v| format!("{:.4}", v.as_f64().unwrap_or(f64::NAN)))
+                .collect();
+            println!(
+                "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} {}",
+                r["wrist_centre_vs_axis1"].as_str().unwrap_or(""),
+                r["wrist_centre_vs_lower_arm"].as_str().unwrap_or(""),
+                r["axis5"].as_str().unwrap_or(""),
+                r["status"].as_str().unwrap_or(""),
+                joints.join(","),
+                r["abb_confdata"].to_string(),
+                r["kuka_turn"]
+            );
+        }
+    }
+    let any = found.iter().any(|(_, s)| s.converged());
+    Ok(if any { exit::OK } else { exit::PARTIAL })
 }
 
 fn compensate(a: CompensateArgs) -> Result<u8, Failure> {

@@ -251,6 +251,12 @@ pub fn confdata(chain: &Chain, q: &[f64]) -> [i64; 4] {
     [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
 }
 
+/// KUKA's Turn of joint values `q` (radians): bit `i` set when axis `i + 1` is negative (KUKA's
+/// definition; it tells apart configurations that differ by whole turns of an axis).
+pub fn kuka_turn(q: &[f64]) -> u8 {
+    q.iter().take(6).enumerate().fold(0u8, |t, (i, &v)| if v < 0.0 { t | (1 << i) } else { t })
+}
+
 fn kuka(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
     let program = identifier(name, 24);
     let approx = if s.zone.eq_ignore_ascii_case("fine") { String::new() } else { format!(" {}", s.zone) };

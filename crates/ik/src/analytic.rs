@@ -40,17 +40,13 @@ const WRIST_TOL_MM: f64 = 5.0;
 /// Axes whose directions are closer than this (|cos| above it) cannot carry a subproblem.
 const DISTINCT_COS: f64 = 0.999;
 
-/// One closed-form solution: the six joint values and the branch they lie on.
+/// One closed-form solution: the six joint values of one branch (one root of each of the `q₁`, `q₃` and
+/// `q₅` equations). Which configuration it is in a controller's terms (ABB's confdata, KUKA's Status) is
+/// read from the joint values, not from the order of the roots.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Branch {
     /// Joint values, radians, each in (−π, π].
     pub q: [f64; 6],
-    /// The wrist centre lies behind joint 1's axis (the second solution of `q₁`).
-    pub shoulder_back: bool,
-    /// The elbow solution taken second (`q₃` with the minus sign).
-    pub elbow_down: bool,
-    /// The wrist solution taken second (`q₅` with the minus sign: the flipped wrist).
-    pub wrist_flipped: bool,
     /// Every equation on the way had an exact solution: on the ideal geometry this branch reaches the
     /// pose. `false` when one was out of range (the pose is out of this branch's reach, e.g. behind the
     /// shoulder) and its nearest solution was taken.
@@ -112,7 +108,7 @@ impl SphericalWrist {
         let mut out = Vec::with_capacity(8);
         // q₁: a₂ · (p₁ + R(a₁, −q₁)(w − p₁)) = a₂ · c.
         let (q1s, exact1) = solve_projection(&a[1], &a[0], &(w - p[0]), a[1].dot(&(c - p[0])));
-        for (i1, &t1) in q1s.iter().enumerate() {
+        for &t1 in &q1s {
             let q1 = -t1;
             let r1 = rot(&a[0], q1);
             let w1 = p[0] + r1.transpose() * (w - p[0]);
@@ -120,7 +116,7 @@ impl SphericalWrist {
             let (l, u) = (p[2] - p[1], c - p[2]);
             let target = ((w1 - p[1]).norm_squared() - l.norm_squared() - u.norm_squared()) / 2.0;
             let (q3s, exact3) = solve_projection(&l, &a[2], &u, target);
-            for (i3, &q3) in q3s.iter().enumerate() {
+            for &q3 in &q3s {
                 let r3 = rot(&a[2], q3);
                 let y = l + r3 * u;
                 let q2 = rotation_onto(&a[1], &y, &(w1 - p[1]));
@@ -128,17 +124,11 @@ impl SphericalWrist {
                 let rw = r123.transpose() * rt.matrix() * r0.matrix().transpose();
                 let (x, k, v) = (&a[3], &a[4], &a[5]);
                 let (q5s, exact5) = solve_projection(x, k, v, x.dot(&(rw * v)));
-                for (i5, &q5) in q5s.iter().enumerate() {
+                for &q5 in &q5s {
                     let r5 = rot(k, q5);
                     let q4 = rotation_onto(x, &(r5 * v), &(rw * v));
                     let q6 = -rotation_onto(v, &(r5.transpose() * x), &(rw.transpose() * x));
-                    out.push(Branch {
-                        q: [q1, q2, q3, q4, q5, q6].map(wrap),
-                        shoulder_back: i1 == 1,
-                        elbow_down: i3 == 1,
-                        wrist_flipped: i5 == 1,
-                        exact: exact1 && exact3 && exact5,
-                    });
+                    out.push(Branch { q: [q1, q2, q3, q4, q5, q6].map(wrap), exact: exact1 && exact3 && exact5 });
                 }
             }
         }

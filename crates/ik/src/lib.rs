@@ -23,7 +23,7 @@ pub use analytic::{Branch, SphericalWrist};
 pub use batch::{Seeds, solve_batch};
 pub use lm::Workspace;
 pub use params::{Backend, Goal, LimitPolicy, Params, RestartSeeds, Solution, Status};
-pub use solve::solve;
+pub use solve::{solve, solve_branches};
 
 /// Errors of the solver's inputs (failures to converge are a [`Status`], not an error).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -66,6 +66,44 @@ fn nearest_turn(chain: &Chain, q: &mut [f64], seed: &[f64], policy: LimitPolicy)
     }
 }
 
+/// Every arm configuration that reaches `goal` on `chain`, for arms with a closed form
+/// ([`SphericalWrist`]): each exact branch of the ideal geometry (up to 8) refined on the chain itself
+/// from that branch alone (no restarts, at most 0.5 rad from it, so that the refinement keeps the
+/// branch), with its solution — `Converged`, or why not (a joint limit). Branches the pose is out of
+/// reach for are left out. `None` when the chain has no closed form. A user choosing a configuration
+/// (ABB's confdata, KUKA's Status/Turn) picks from these.
+pub fn solve_branches(
+    chain: &Chain,
+    goal: &nalgebra::Isometry3<f64>,
+    params: &Params,
+    ws: &mut Workspace,
+) -> Result<Option<Vec<(crate::Branch, Solution)>>, IkError> {
+    let Some(wrist) = SphericalWrist::detect(chain) else { return Ok(None) };
+    let local = Params { restarts: 0, max_distance_from_seed: Some(0.5), ..params.clone() };
+    let mut out = Vec::new();
+    let target = Goal::Pose(*goal);
+    for (k, mut branch) in wrist.branches(goal).into_iter().filter(|b| b.exact).enumerate() {
+        nearest_turn(chain, &mut branch.q, &[0.0; 6], params.limits);
+        let solution = if params.limits == LimitPolicy::Enforce && !chain.within_limits(&branch.q) {
+            // The configuration exists but needs a joint beyond its limit: reported as such, with the
+            // branch's own joint values (refining it inside the limits would land on another branch).
+            let (position_error_mm, orientation_error_rad) = independent_error(chain, &branch.q, &target);
+            Solution {
+                q: branch.q.to_vec(),
+                status: Status::JointLimit,
+                iterations: 0,
+                restarts: 0,
+                position_error_mm,
+                orientation_error_rad,
+            }
+        } else {
+            solve(chain, &target, &branch.q, &local, ws, k as u64)?
+        };
+        out.push((branch, solution));
+    }
+    Ok(Some(out))
+}
+
 /// The closed-form solutions of the chain's ideal geometry for a pose goal ([`SphericalWrist`]), moved by
 /// whole turns toward the seed, those inside the limits (when they bind), nearest to the seed first. Empty
 /// for position goals and for chains without a closed form.

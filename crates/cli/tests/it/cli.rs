@@ -814,3 +814,45 @@ fn compensate_stream_writes_the_joints_and_refuses_what_it_cannot_do() {
     assert_eq!(std::fs::read_to_string(&out).unwrap(), "previous\n");
     no_partial(&out);
 }
+
+#[test]
+fn ik_branches_lists_every_configuration_with_its_confdata() {
+    let o = thermokin(&["ik", "--robot", ROBOT, "--pose", "641,21,473,0,90,0", "--branches", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let rows: Vec<serde_json::Value> = serde_json::from_str(stdout(&o).trim()).unwrap();
+    assert_eq!(rows.len(), 8, "2 × 2 × 2 configurations of the IRB 140");
+    let confs: std::collections::HashSet<String> = rows.iter().map(|r| r["abb_confdata"].to_string()).collect();
+    assert_eq!(confs.len(), 8, "every configuration has its own confdata");
+    let chain = thermokin_io::read_robot(&workspace(ROBOT)).unwrap().chain().clone();
+    let mut converged = 0;
+    for r in &rows {
+        let q: Vec<f64> =
+            r["joints_deg"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap().to_radians()).collect();
+        // Every listed configuration reaches the pose (the chain's own FK), inside the limits or not.
+        let p = chain.tool_pose(&q).unwrap().translation.vector;
+        assert!((p - nalgebra::Vector3::new(641.0, 21.0, 473.0)).norm() < 1e-6, "{r}");
+        if r["status"] == "Converged" {
+            converged += 1;
+            assert!(chain.within_limits(&q), "{r}");
+        } else {
+            assert_eq!(r["status"], "JointLimit", "{r}");
+            assert!(!chain.within_limits(&q), "{r}");
+        }
+    }
+    assert_eq!(converged, 4, "four configurations inside the IRB 140's limits");
+    // No closed form, or no orientation: a reasoned refusal.
+    let o = thermokin(&[
+        "ik",
+        "--robot",
+        "fixtures/urdf/ur5.urdf",
+        "--tip",
+        "tool0",
+        "--pose",
+        "400,100,300,0,90,0",
+        "--branches",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("no closed form"), "{}", stderr(&o));
+    let o = thermokin(&["ik", "--robot", ROBOT, "--pose", "641,21,473", "--position-only", "--branches"]);
+    assert_eq!(o.status.code(), Some(2));
+}
