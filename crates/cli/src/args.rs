@@ -283,6 +283,12 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Write the identified robot — the final model fitted on all measurements: registration (as the
+    /// base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
+    /// deviations — as a robot TOML (or URDF if FILE ends in .urdf) that fk, ik and compensate accept.
+    /// Compliance and thermal drift depend on the load and on time and are left out (named when so).
+    #[arg(long, value_name = "FILE")]
+    pub export: Option<PathBuf>,
 }
 
 /// `--format` of the results.

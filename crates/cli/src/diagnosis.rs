@@ -42,6 +42,30 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     let report = thermokin_diagnose::diagnose(&robot, &data, holdout.as_ref(), &config).map_err(Failure::input)?;
     print_report(&report);
+    if let Some(p) = &a.export {
+        let calibrated = robot.with_chain(report.calibrated.clone()).map_err(Failure::internal)?.renamed(format!(
+            "{} (calibrated on {})",
+            robot.name(),
+            a.measurements.display()
+        ));
+        let text = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+            thermokin_urdf::export_robot(&calibrated)
+        } else {
+            thermokin_io::robot_to_toml(&calibrated)
+        };
+        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+        println!(
+            "
+identified robot → {}",
+            p.display()
+        );
+        if !report.not_in_calibrated.is_empty() {
+            println!(
+                "  left out (they depend on the load or on time, a robot file cannot hold them): {}",
+                report.not_in_calibrated.join(", ")
+            );
+        }
+    }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;

@@ -325,8 +325,11 @@ pub fn diagnose(
     reports.sort_by(|a, b| (b.heldout_rms_without_mm).total_cmp(&a.heldout_rms_without_mm));
     let nominal_model = ctx.model(&effects[..always], &all)?;
     let nominal_fit = fit(robot, &nominal_model, data, &all, &ctx.pre)?;
+    let (calibrated, left_out) = model.calibrated_chain(robot, &final_fit.theta)?;
     Ok(Report {
         nominal,
+        calibrated,
+        not_in_calibrated: left_out.iter().map(Effect::label).collect(),
         validation,
         effects: reports,
         additive,

@@ -338,6 +338,48 @@ impl Model {
         (ft / fr, ds)
     }
 
+    /// The robot's chain with this model's static effects at `theta` — base frame and registration (as
+    /// the base row: FK then gives the measurement frame), tool point, joint offsets, link deviations —
+    /// and the effects a robot file cannot hold because they depend on the pose's load or on time
+    /// (gravity compliance, thermal drift), which are left out.
+    pub fn calibrated_chain(&self, robot: &Robot, theta: &[f64]) -> Result<(Chain, Vec<Effect>), DiagnoseError> {
+        let chain = robot.chain();
+        let mut base_err = chain.base().error;
+        let mut tool_err = chain.tool().error;
+        let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
+        let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
+        let mut left_out = Vec::new();
+        let six = |o: usize| {
+            ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
+        };
+        for (e, &o) in self.effects.iter().zip(&self.offsets) {
+            match *e {
+                Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
+                Effect::ToolPoint | Effect::ToolFrame => {
+                    tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
+                }
+                Effect::JointOffset(j) => zeros[j.index()] += theta[o],
+                Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
+                Effect::JointCompliance(_) | Effect::ThermalDrift(..) => left_out.push(*e),
+            }
+        }
+        let c = chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?;
+        Ok((self.registered(c)?, left_out))
+    }
+
+    /// `chain` with the registration's starting pose in its base row's nominal pose (its parameters are
+    /// small corrections on top, in the row's error).
+    fn registered(&self, chain: Chain) -> Result<Chain, DiagnoseError> {
+        if self.registration == Isometry3::identity() {
+            return Ok(chain);
+        }
+        let mut row = chain.base().clone();
+        let nominal = self.registration * row.nominal();
+        row.translation = nominal.translation.vector;
+        row.rotation = nominal.rotation;
+        Ok(chain.with_base(row)?)
+    }
+
     /// Predicted TCP position of one measurement and, if asked, its 3 × len Jacobian.
     pub fn predict(
         &self,
@@ -390,16 +432,7 @@ impl Model {
         let registered: &Chain = match cache {
             Some(c) if !per_measurement => c,
             _ => {
-                let mut c = chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?;
-                if self.registration != Isometry3::identity() {
-                    // The registration's large rotation sits in the base row's nominal pose; its
-                    // parameters are small corrections on top.
-                    let mut row = c.base().clone();
-                    let nominal = self.registration * row.nominal();
-                    row.translation = nominal.translation.vector;
-                    row.rotation = nominal.rotation;
-                    c = c.with_base(row)?;
-                }
+                let c = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
                 if per_measurement {
                     built = c;
                     &built

@@ -106,6 +106,13 @@ pub struct Breakdown {
 pub struct Report {
     /// The nominal model (with the always-estimated blocks) on held-out data.
     pub nominal: Stats,
+    /// The robot as identified: its chain with the final model's static effects fitted on all
+    /// measurements (registration as the base row, tool, base, offsets, link deviations) — what
+    /// `diagnose --export` writes. Not in the JSON: it is the robot file.
+    #[serde(skip)]
+    pub calibrated: thermokin_chain::Chain,
+    /// Effects of the final model the calibrated robot cannot hold (compliance, thermal drift).
+    pub not_in_calibrated: Vec<String>,
     /// How held-out errors were obtained.
     pub validation: String,
     /// Effects of the final model, main cause first.

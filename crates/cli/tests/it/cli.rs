@@ -394,6 +394,7 @@ fn simulate_then_diagnose() {
     assert!(o.status.success(), "{}", stderr(&o));
     let report = tmp("report.json");
     let plots = tmp("dplots");
+    let calibrated = tmp("calibrated.toml");
     let o = thermokin(&[
         "diagnose",
         "--robot",
@@ -404,9 +405,20 @@ fn simulate_then_diagnose() {
         report.to_str().unwrap(),
         "--plot",
         plots.to_str().unwrap(),
+        "--export",
+        calibrated.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("effects, main cause first:"));
+    // The exported robot carries the identified offset: joint 2's zero moved by ~0.05°, so FK at the
+    // same joints differs from the nominal robot's, and fk accepts the file.
+    let text = std::fs::read_to_string(&calibrated).unwrap();
+    let robot = thermokin_io::parse_robot_toml(&calibrated, &text).unwrap();
+    let zero2 = robot.chain().joints()[1].zero.to_degrees();
+    assert!((zero2 - 0.05).abs() < 0.002, "joint 2's zero offset {zero2}°");
+    let ours = fk_position(&["fk", "--robot", calibrated.to_str().unwrap(), "--joints", "0,30,10,0,-40,0", "--json"]);
+    let nominal = fk_position(&["fk", "--robot", ROBOT, "--joints", "0,30,10,0,-40,0", "--json"]);
+    assert!(!close(&ours, &nominal), "the export changed nothing");
     let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
     assert!(v["nominal"]["heldout_rms_mm"].as_f64().unwrap() > 0.1);
     assert_eq!(v["effects"][0]["effect"], "joint_offset");
