@@ -26,6 +26,14 @@ pub struct Dataset {
 }
 
 impl Dataset {
+    /// The measurements at `rows` (in that order), with the same temperature columns.
+    pub fn subset(&self, rows: &[usize]) -> Dataset {
+        Dataset {
+            measurements: rows.iter().filter_map(|&i| self.measurements.get(i).cloned()).collect(),
+            temperature_names: self.temperature_names.clone(),
+        }
+    }
+
     /// Number of measurements.
     pub fn len(&self) -> usize {
         self.measurements.len()

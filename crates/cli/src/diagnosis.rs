@@ -79,8 +79,28 @@ identified robot → {}",
 }
 
 fn print_report(r: &Report) {
-    println!("validation: {}", r.validation);
-    println!("\nheld-out error as effects are added (mm):");
+    let line = |what: &str, s: &thermokin_diagnose::Stats| {
+        println!("  {what:<44} {:>9.4} {:>9.4} {:>9.4}", s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm)
+    };
+    if let Some(n) = &r.nested {
+        println!(
+            "held-out error of the whole diagnosis, nested {}-fold (each outer test fold unseen by the selection), mm:",
+            n.outer_folds
+        );
+        println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
+        line("nominal", &n.nominal);
+        line("the effects each outer selection chose", &n.selected);
+        for (k, chosen) in n.selections.iter().enumerate() {
+            let chosen = if chosen.is_empty() { "none".to_string() } else { chosen.join(", ") };
+            println!("    outer fold {}: {chosen}", k + 1);
+        }
+    }
+    if let Some(h) = &r.holdout {
+        println!("\nexplicit hold-out set (fitted on all measurements; never used to choose), mm:");
+        line("nominal", &h.nominal);
+        line("the effects chosen below", &h.selected);
+    }
+    println!("\nselection: {} — scores that chose the effects (optimistic):", r.validation);
     println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
     for row in &r.additive {
         println!(

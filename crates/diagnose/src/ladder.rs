@@ -6,11 +6,12 @@ use serde::Serialize;
 use thermokin_chain::Robot;
 
 use crate::fit::{fit, observability, residuals};
-use crate::model::{DriftShape, Effect, JointIndex, prepare};
+use crate::model::{DriftShape, Effect, JointIndex, prepare_against};
 use crate::report::{
-    EffectReport, Identifiability, ParameterValue, Report, Stats, TableRow, breakdown, static_equivalents,
+    EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow, breakdown,
+    static_equivalents,
 };
-use crate::validation::{Ctx, Scored, forward_chained, kfold};
+use crate::validation::{Ctx, Scored, kfold};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -48,6 +49,22 @@ pub struct Config {
     pub max_effects: usize,
     /// Seed of the fold assignment.
     pub seed: u64,
+    /// How the reported held-out error of the whole procedure is obtained.
+    pub validation: Validation,
+}
+
+/// How the diagnosis's own held-out error is measured.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Validation {
+    /// Nested cross-validation: the whole selection (the ladder, with its inner folds) is rerun on the
+    /// training part of each of `outer` folds, and the model it picks is scored on that fold's test part,
+    /// which the selection never saw. The default.
+    Nested {
+        /// Outer folds.
+        outer: usize,
+    },
+    /// Only the selection's own cross-validation (optimistic: the same scores chose the effects). Faster.
+    SelectionOnly,
 }
 
 impl Default for Config {
@@ -60,6 +77,7 @@ impl Default for Config {
             parsimony: 0.9,
             max_effects: 8,
             seed: 0xd1a6,
+            validation: Validation::Nested { outer: 5 },
         }
     }
 }
@@ -95,7 +113,12 @@ fn candidates(robot: &Robot, data: &Dataset, config: &Config) -> Result<Vec<Effe
     Ok(c)
 }
 
-/// Runs the diagnosis of `data` against `base`. `holdout`, when given, replaces cross-validation.
+/// Runs the diagnosis of `data` against `robot`.
+///
+/// The effects are chosen by cross-validation on `data` (the additive and leave-one-out tables: the
+/// selection's scores, optimistic because they chose). The held-out error reported for the procedure
+/// itself comes from nested cross-validation ([`Validation::Nested`], the default: [`Report::nested`]),
+/// and from `holdout` when given ([`Report::holdout`]) — which never influences the selection.
 ///
 /// ```
 /// use thermokin_diagnose::{Config, Effect, HiddenEffect, JointIndex, Robot, SimulationConfig, diagnose, simulate};
@@ -107,6 +130,8 @@ fn candidates(robot: &Robot, data: &Dataset, config: &Config) -> Result<Vec<Effe
 /// let data = simulate(&robot, &hidden, &SimulationConfig { poses: 120, ..SimulationConfig::default() })?;
 /// let report = diagnose(&robot, &data, None, &Config::default())?;
 /// assert_eq!(report.effects[0].label, "joint_offset[2]");
+/// // On outer folds the selection never saw, the chosen model is at the noise (5 µm per axis).
+/// assert!(report.nested.unwrap().selected.heldout_rms_mm < 0.015);
 /// # Ok::<(), thermokin_diagnose::DiagnoseError>(())
 /// ```
 pub fn diagnose(
@@ -116,27 +141,89 @@ pub fn diagnose(
     config: &Config,
 ) -> Result<Report, DiagnoseError> {
     let n = robot.chain().dof();
-    let needed = 2 * config.folds.max(2);
-    if data.len() < needed {
-        return Err(DiagnoseError::TooFewMeasurements { count: data.len(), folds: config.folds, needed });
-    }
     let sets = [("training", Some(data)), ("hold-out", holdout)];
     for (set, d) in sets.iter().filter_map(|(s, d)| d.map(|d| (*s, d))) {
         if let Some((i, m)) = d.measurements.iter().enumerate().find(|(_, m)| m.q.len() != n) {
             return Err(DiagnoseError::JointCount { set, measurement: i + 1, got: m.q.len(), expected: n });
         }
     }
-    let ctx = Ctx {
-        robot,
-        data,
-        pre: prepare(robot, data),
-        holdout: holdout.map(|h| (h, prepare(robot, h))),
-        folds: kfold(data, config.folds, config.seed),
-        forward: forward_chained(data, config.folds),
-    };
-    let validation = if holdout.is_some() {
-        "explicit hold-out set (model fitted on all measurements)".to_string()
-    } else if data.time_span() > 0.0 {
+    let (mut report, effects) = select(robot, data, config)?;
+    let always = always_estimated(config);
+    if let Validation::Nested { outer } = config.validation {
+        report.nested = Some(nested(robot, data, config, outer)?);
+    }
+    if let Some(h) = holdout {
+        // Fitted on all of `data`, scored on `holdout`: the selection above never saw it.
+        let ctx = Ctx::new(robot, data, config);
+        let score = |e: &[Effect]| -> Result<Stats, DiagnoseError> {
+            let (model, f) = ctx.full_fit(e)?;
+            let rows: Vec<usize> = (0..h.len()).collect();
+            let (r, _) = residuals(robot, &model, &f.theta, h, &rows, &prepare_against(robot, h, data), false)?;
+            Ok(Stats::of(&r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()).collect::<Vec<_>>()))
+        };
+        report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)? });
+    }
+    Ok(report)
+}
+
+/// The blocks every model estimates (never reported as causes): the tracker registration and an unknown
+/// tool point.
+fn always_estimated(config: &Config) -> Vec<Effect> {
+    let mut effects = Vec::new();
+    if config.frame == FrameMode::Tracker {
+        effects.push(Effect::Registration);
+    }
+    if config.tool == ToolMode::Unknown {
+        effects.push(Effect::ToolPoint);
+    }
+    effects
+}
+
+/// Nested cross-validation of the whole procedure: for each outer fold, the selection runs on the
+/// training part only, the model it picks is fitted there and scored on the fold's test part; the
+/// nominal model (the always-estimated blocks) is scored the same way.
+fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Result<Nested, DiagnoseError> {
+    let folds = kfold(data, outer, config.seed ^ 0x0e7e_5eed);
+    let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
+    let always = always_estimated(config);
+    let mut nominal_norms = Vec::new();
+    let mut selected_norms = Vec::new();
+    let mut selections = Vec::new();
+    for (train, test) in &folds {
+        if train.is_empty() || test.is_empty() {
+            continue;
+        }
+        let subset = data.subset(train);
+        let (_, effects) = select(robot, &subset, &inner)?;
+        selections.push(effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect());
+        let ctx = Ctx::new(robot, &subset, &inner);
+        let test_set = data.subset(test);
+        let test_pre = prepare_against(robot, &test_set, &subset);
+        let rows: Vec<usize> = (0..test.len()).collect();
+        for (e, norms) in [(&always, &mut nominal_norms), (&effects, &mut selected_norms)] {
+            let (model, f) = ctx.full_fit(e)?;
+            let (r, _) = residuals(robot, &model, &f.theta, &test_set, &rows, &test_pre, false)?;
+            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
+        }
+    }
+    Ok(Nested {
+        outer_folds: outer,
+        nominal: Stats::of(&nominal_norms),
+        selected: Stats::of(&selected_norms),
+        selections,
+    })
+}
+
+/// The ladder on `data`: candidates chosen by cross-validation, the final model fitted on all of it. The
+/// report's held-out figures here are the selection's own (optimistic) scores.
+fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec<Effect>), DiagnoseError> {
+    let n = robot.chain().dof();
+    let needed = 2 * config.folds.max(2);
+    if data.len() < needed {
+        return Err(DiagnoseError::TooFewMeasurements { count: data.len(), folds: config.folds, needed });
+    }
+    let ctx = Ctx::new(robot, data, config);
+    let validation = if data.time_span() > 0.0 {
         format!(
             "{}-fold cross-validation, folds grouped in time; time-dependent effects also forward-chained",
             config.folds
@@ -236,7 +323,7 @@ pub fn diagnose(
         for cand in eligible {
             let mut with = effects.clone();
             with.push(cand.0);
-            if cand.0.is_time_dependent() && ctx.holdout.is_none() {
+            if cand.0.is_time_dependent() {
                 let before = ctx.heldout(&effects, &ctx.forward)?;
                 let after = ctx.heldout(&with, &ctx.forward)?;
                 if after.heldout_rms_mm >= before.heldout_rms_mm {
@@ -326,8 +413,10 @@ pub fn diagnose(
     let nominal_model = ctx.model(&effects[..always], &all)?;
     let nominal_fit = fit(robot, &nominal_model, data, &all, &ctx.pre)?;
     let (calibrated, left_out) = model.calibrated_chain(robot, &final_fit.theta)?;
-    Ok(Report {
+    let report = Report {
         nominal,
+        nested: None,
+        holdout: None,
         calibrated,
         not_in_calibrated: left_out.iter().map(Effect::label).collect(),
         validation,
@@ -338,5 +427,6 @@ pub fn diagnose(
         residuals_before: breakdown(robot, data, &nominal_model, &nominal_fit.theta, &ctx.pre)?,
         residuals_after: breakdown(robot, data, &model, &final_fit.theta, &ctx.pre)?,
         bic,
-    })
+    };
+    Ok((report, effects))
 }

@@ -516,9 +516,15 @@ pub(crate) type Pre = (Vec<Vec<f64>>, Vec<f64>);
 
 /// Per-measurement quantities that do not depend on the parameters: gravity torques and temperature rise.
 pub(crate) fn prepare(robot: &Robot, data: &Dataset) -> Pre {
+    prepare_against(robot, data, data)
+}
+
+/// As [`prepare`], the temperature rise taken from the earliest measurement of `reference` (the data a
+/// model was fitted on, when `data` is a test set scored with it).
+pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset) -> Pre {
     let torques = data.measurements.iter().map(|m| gravity_torques(robot.chain(), robot.masses(), &m.q)).collect();
     let first: Option<Vec<f64>> =
-        data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
+        reference.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
     let rise = data
         .measurements
         .iter()

@@ -101,11 +101,40 @@ pub struct Breakdown {
     pub per_measurement_mm: Vec<f64>,
 }
 
+/// The held-out error of the whole procedure by nested cross-validation: selection rerun on each outer
+/// fold's training part, the chosen model scored on its test part.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Nested {
+    /// Outer folds.
+    pub outer_folds: usize,
+    /// The nominal model (always-estimated blocks only) on the outer test parts.
+    pub nominal: Stats,
+    /// The model each outer selection chose, on its outer test part.
+    pub selected: Stats,
+    /// What each outer selection chose (how stable the choice is).
+    pub selections: Vec<Vec<String>>,
+}
+
+/// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct HoldoutStats {
+    /// The nominal model.
+    pub nominal: Stats,
+    /// The selected model.
+    pub selected: Stats,
+}
+
 /// The diagnosis.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
-    /// The nominal model (with the always-estimated blocks) on held-out data.
+    /// The nominal model (with the always-estimated blocks), the selection's cross-validation.
     pub nominal: Stats,
+    /// The held-out error of the whole procedure, by nested cross-validation (the honest figure; `None`
+    /// with [`crate::Validation::SelectionOnly`]).
+    pub nested: Option<Nested>,
+    /// Nominal and selected model on an explicit hold-out set, when one was given (it never influences
+    /// the selection).
+    pub holdout: Option<HoldoutStats>,
     /// The robot as identified: its chain with the final model's static effects fitted on all
     /// measurements (registration as the base row, tool, base, offsets, link deviations) — what
     /// `diagnose --export` writes. Not in the JSON: it is the robot file.

@@ -57,12 +57,22 @@ pub(crate) struct Ctx<'a> {
     pub(crate) robot: &'a Robot,
     pub(crate) data: &'a Dataset,
     pub(crate) pre: Pre,
-    pub(crate) holdout: Option<(&'a Dataset, Pre)>,
     pub(crate) folds: Folds,
     pub(crate) forward: Folds,
 }
 
-impl Ctx<'_> {
+impl<'a> Ctx<'a> {
+    /// The folds and per-measurement quantities of `data`.
+    pub(crate) fn new(robot: &'a Robot, data: &'a Dataset, config: &crate::Config) -> Self {
+        Self {
+            robot,
+            data,
+            pre: crate::model::prepare(robot, data),
+            folds: kfold(data, config.folds, config.seed),
+            forward: forward_chained(data, config.folds),
+        }
+    }
+
     /// The model of `effects`, its registration started from the measurements `rows` (Kabsch).
     pub(crate) fn model(&self, effects: &[Effect], rows: &[usize]) -> Result<Model, DiagnoseError> {
         let m = Model::new(self.robot, effects.to_vec())?;
@@ -74,18 +84,9 @@ impl Ctx<'_> {
         })
     }
 
-    /// Held-out statistics of a model: the hold-out set when given, else cross-validation on `folds`.
+    /// Held-out statistics of a model by cross-validation on `folds`.
     pub(crate) fn heldout(&self, effects: &[Effect], folds: &Folds) -> Result<Stats, DiagnoseError> {
         let mut norms = Vec::new();
-        if let Some((hold, hpre)) = &self.holdout {
-            let all: Vec<usize> = (0..self.data.len()).collect();
-            let model = self.model(effects, &all)?;
-            let f = fit(self.robot, &model, self.data, &all, &self.pre)?;
-            let rows: Vec<usize> = (0..hold.len()).collect();
-            let (r, _) = residuals(self.robot, &model, &f.theta, hold, &rows, hpre, false)?;
-            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
-            return Ok(Stats::of(&norms));
-        }
         for (train, test) in folds {
             if train.is_empty() || test.is_empty() {
                 continue;

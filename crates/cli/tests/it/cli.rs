@@ -538,7 +538,8 @@ fn diagnose_with_an_explicit_holdout() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
-    assert!(out.contains("validation: explicit hold-out set"), "{out}");
+    assert!(out.contains("explicit hold-out set (fitted on all measurements; never used to choose)"), "{out}");
+    assert!(out.contains("nested 5-fold"), "{out}");
     assert!(out.contains("tool_frame"), "{out}");
     assert!(out.contains("where the nominal model's residuals lie"), "{out}");
 }

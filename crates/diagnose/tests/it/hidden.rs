@@ -128,3 +128,23 @@ fn an_effect_on_a_joint_the_robot_lacks_cannot_be_made_or_used() {
     let hidden = [HiddenEffect { effect: Effect::BaseFrame, values: vec![0.0; 3] }];
     assert!(simulate(&robot, &hidden, &SimulationConfig { poses: 10, ..SimulationConfig::default() }).is_err());
 }
+
+#[test]
+fn a_holdout_set_changes_nothing_in_the_selection() {
+    let robot = base();
+    let hidden = [HiddenEffect { effect: Effect::JointOffset(joint(1)), values: vec![deg(0.05)] }];
+    let sim = |seed| {
+        simulate(&robot, &hidden, &SimulationConfig { poses: 80, minutes: 0.0, seed, ..SimulationConfig::default() })
+            .unwrap()
+    };
+    let (train, test) = (sim(3), sim(4));
+    let config = Config { validation: thermokin_diagnose::Validation::SelectionOnly, ..Config::default() };
+    let without = diagnose(&robot, &train, None, &config).unwrap();
+    let with = diagnose(&robot, &train, Some(&test), &config).unwrap();
+    assert_eq!(without.additive, with.additive);
+    assert_eq!(without.effects, with.effects);
+    let h = with.holdout.unwrap();
+    eprintln!("hold-out: nominal {:.4} → selected {:.4} mm", h.nominal.heldout_rms_mm, h.selected.heldout_rms_mm);
+    assert!(h.selected.heldout_rms_mm < 1.5 * NOISE * 3f64.sqrt());
+    assert!(without.holdout.is_none() && without.nested.is_none());
+}
