@@ -61,7 +61,7 @@ pub enum Command {
     Diagnose(DiagnoseArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
     #[command(
-        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, thermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees,\nminutes and degrees per N·m (default: a seeded random effect of typical size)."
+        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
     )]
     Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the

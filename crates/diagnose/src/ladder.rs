@@ -101,6 +101,13 @@ fn candidates(robot: &Robot, data: &Dataset, config: &Config) -> Result<Vec<Effe
             c.push(Effect::JointCompliance(j));
         }
     }
+    // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity).
+    for &j in &joints {
+        if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Revolute {
+            c.push(Effect::JointScale(j));
+            c.push(Effect::Periodic(j));
+        }
+    }
     if data.time_span() > 0.0 {
         for &j in &joints {
             c.push(Effect::ThermalDrift(j, DriftShape::Linear));

@@ -87,17 +87,24 @@ pub enum Effect {
     LinkDeviation(JointIndex),
     /// Gravity compliance of a joint: Δq = k · τ_gravity(q) (1).
     JointCompliance(JointIndex),
+    /// A gear-ratio (scale) error of a revolute joint: Δq = s · q (1, dimensionless).
+    JointScale(JointIndex),
+    /// A cyclic encoder error of a revolute joint, once and twice per revolution:
+    /// Δq = a₁ sin q + b₁ cos q + a₂ sin 2q + b₂ cos 2q (4).
+    Periodic(JointIndex),
     /// A link deviation growing with operating time or temperature (6, +1 for τ).
     ThermalDrift(JointIndex, DriftShape),
 }
 
 /// The effect names of reports and flags, in catalogue order.
-pub const EFFECT_NAMES: [&str; 7] = [
+pub const EFFECT_NAMES: [&str; 9] = [
     "base_frame",
     "tool_frame",
     "joint_offset",
     "link_deviation",
     "joint_compliance",
+    "joint_scale",
+    "periodic",
     "thermal_drift",
     "thermal_drift_exp",
 ];
@@ -119,6 +126,8 @@ impl Effect {
             "joint_offset" => Ok(Effect::JointOffset(on(joint)?)),
             "link_deviation" => Ok(Effect::LinkDeviation(on(joint)?)),
             "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
+            "joint_scale" => Ok(Effect::JointScale(on(joint)?)),
+            "periodic" => Ok(Effect::Periodic(on(joint)?)),
             "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
             "thermal_drift_exp" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Exponential)),
             _ => Err(DiagnoseError::UnknownEffect { name: name.to_string() }),
@@ -131,6 +140,8 @@ impl Effect {
             Effect::JointOffset(j)
             | Effect::LinkDeviation(j)
             | Effect::JointCompliance(j)
+            | Effect::JointScale(j)
+            | Effect::Periodic(j)
             | Effect::ThermalDrift(j, _) => Some(j),
             Effect::Registration | Effect::ToolPoint | Effect::BaseFrame | Effect::ToolFrame => None,
         }
@@ -152,7 +163,8 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
             Effect::ToolPoint | Effect::ToolFrame => 3,
-            Effect::JointOffset(_) | Effect::JointCompliance(_) => 1,
+            Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::JointScale(_) => 1,
+            Effect::Periodic(_) => 4,
         }
     }
 
@@ -171,6 +183,8 @@ impl Effect {
             Effect::JointOffset(_) => "joint_offset",
             Effect::LinkDeviation(_) => "link_deviation",
             Effect::JointCompliance(_) => "joint_compliance",
+            Effect::JointScale(_) => "joint_scale",
+            Effect::Periodic(_) => "periodic",
             Effect::ThermalDrift(..) => "thermal_drift",
         }
     }
@@ -197,12 +211,27 @@ impl Effect {
             Effect::ToolPoint | Effect::ToolFrame => six[..3].iter().map(|n| format!("{prefix}.{n}")).collect(),
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
+            Effect::JointScale(_) => vec![format!("{prefix}.scale")],
+            Effect::Periodic(_) => {
+                ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
+            }
             Effect::ThermalDrift(_, DriftShape::Exponential) => {
                 let mut v: Vec<String> = six.iter().map(|n| format!("{prefix}.{n}")).collect();
                 v.push(format!("{prefix}.tau_min"));
                 v
             }
             _ => six.iter().map(|n| format!("{prefix}.{n}")).collect(),
+        }
+    }
+
+    /// The functions of the commanded joint value whose weighted sum is the joint error Δq, for the
+    /// effects that act on the joint variable itself: `q` for a scale error, `sin q, cos q, sin 2q,
+    /// cos 2q` for a cyclic one. Empty for the others.
+    pub fn joint_basis(&self, q: f64) -> Vec<f64> {
+        match self {
+            Effect::JointScale(_) => vec![q],
+            Effect::Periodic(_) => vec![q.sin(), q.cos(), (2.0 * q).sin(), (2.0 * q).cos()],
+            _ => Vec::new(),
         }
     }
 
@@ -221,7 +250,8 @@ impl Effect {
     /// sides.
     pub fn is_angle(&self, k: usize) -> bool {
         match (self, k) {
-            (Effect::JointOffset(_) | Effect::JointCompliance(_), _) => true,
+            (Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::Periodic(_), _) => true,
+            (Effect::JointScale(_), _) => false,
             (Effect::ToolPoint | Effect::ToolFrame, _) => false,
             (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,
             (_, 3..=5) => true,
@@ -360,7 +390,9 @@ impl Model {
                 }
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
-                Effect::JointCompliance(_) | Effect::ThermalDrift(..) => left_out.push(*e),
+                Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..) => {
+                    left_out.push(*e)
+                }
             }
         }
         let c = chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?;
@@ -416,6 +448,10 @@ impl Model {
                     let j = j.index();
                     q[j] += theta[o] * torques[j];
                 }
+                Effect::JointScale(j) | Effect::Periodic(j) => {
+                    let j = j.index();
+                    q[j] += e.joint_basis(m.q[j]).iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
+                }
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
                     let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
@@ -464,6 +500,13 @@ impl Model {
                         let j = j.index();
                         let scale = if chain.joints()[j].kind == JointKind::Revolute { torques[j] } else { 0.0 };
                         copy(o, layout.zero(j), scale);
+                    }
+                    Effect::JointScale(j) | Effect::Periodic(j) => {
+                        // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
+                        let j = j.index();
+                        for (k, b) in e.joint_basis(m.q[j]).iter().enumerate() {
+                            copy(o + k, layout.zero(j), *b);
+                        }
                     }
                     Effect::ThermalDrift(j, shape) => {
                         let j = j.index();
