@@ -119,7 +119,9 @@ fn print_report(r: &Report) {
     }
     println!("\neffects, main cause first:");
     if r.effects.is_empty() {
-        println!("  none: no candidate lowers the held-out error by 2 % or more");
+        println!(
+            "  none: no candidate lowers the held-out mean squared error by more than one standard error of the paired difference"
+        );
     }
     for e in &r.effects {
         println!(

@@ -11,7 +11,7 @@ use crate::report::{
     EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow, breakdown,
     static_equivalents,
 };
-use crate::validation::{Ctx, Scored, kfold};
+use crate::validation::{Ctx, Scored, kfold, significantly_better};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -41,8 +41,10 @@ pub struct Config {
     pub frame: FrameMode,
     /// Tool point.
     pub tool: ToolMode,
-    /// A candidate must lower the held-out RMS by at least this fraction.
-    pub min_improvement: f64,
+    /// A candidate is accepted only if it lowers the held-out mean squared error by more than this many
+    /// standard errors of the paired per-measurement difference (1: the one-standard-error rule). The
+    /// same rule keeps a linear drift where the exponential is not significantly better.
+    pub gate_standard_errors: f64,
     /// Among candidates within this fraction of the best improvement, the smallest block wins.
     pub parsimony: f64,
     /// Most effects added.
@@ -73,7 +75,7 @@ impl Default for Config {
             folds: 5,
             frame: FrameMode::Base,
             tool: ToolMode::Known,
-            min_improvement: 0.02,
+            gate_standard_errors: 1.0,
             parsimony: 0.9,
             max_effects: 8,
             seed: 0xd1a6,
@@ -246,8 +248,9 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
         effects.push(Effect::ToolPoint);
     }
     let always = effects.len();
-    let nominal = ctx.heldout(&effects, &ctx.folds)?;
+    let (nominal, nominal_errors) = ctx.heldout_errors(&effects, &ctx.folds)?;
     let mut current = nominal;
+    let mut current_errors = nominal_errors;
     let mut additive = vec![TableRow { model: "nominal".into(), stats: nominal }];
     let mut bic = vec![ctx.bic(&effects)?];
     let mut before_after: Vec<(f64, f64)> = Vec::new();
@@ -264,7 +267,8 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
             }
             let mut with = effects.clone();
             with.push(*c);
-            Ok(Some((*c, new, ctx.heldout(&with, &ctx.folds)?)))
+            let (stats, errors) = ctx.heldout_errors(&with, &ctx.folds)?;
+            Ok(Some((*c, new, stats, errors)))
         };
         let is_exp = |c: &Effect| matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential));
         let first: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
@@ -310,14 +314,20 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
             }
         }
         pool = still;
-        let Some(best) = results.iter().map(|r| r.2.heldout_rms_mm).min_by(f64::total_cmp) else { break };
-        let gain = current.heldout_rms_mm - best;
-        if gain < config.min_improvement * current.heldout_rms_mm {
+        let Some(best) = results.iter().min_by(|a, b| a.2.heldout_rms_mm.total_cmp(&b.2.heldout_rms_mm)) else {
+            break;
+        };
+        if !significantly_better(&current_errors, &best.3, config.gate_standard_errors) {
             break;
         }
-        // Parsimony: the smallest block within `parsimony` of the best gain; then the lowest error.
-        let mut eligible: Vec<&(Effect, usize, Stats)> =
-            results.iter().filter(|r| current.heldout_rms_mm - r.2.heldout_rms_mm >= config.parsimony * gain).collect();
+        let gain = current.heldout_rms_mm - best.2.heldout_rms_mm;
+        // Parsimony: the smallest block within `parsimony` of the best gain, itself significant; then the
+        // lowest error.
+        let mut eligible: Vec<&(Effect, usize, Stats, Vec<f64>)> = results
+            .iter()
+            .filter(|r| current.heldout_rms_mm - r.2.heldout_rms_mm >= config.parsimony * gain)
+            .filter(|r| significantly_better(&current_errors, &r.3, config.gate_standard_errors))
+            .collect();
         // Ties between blocks of one size go to the conventional one (base_frame, tool_frame,
         // joint_offset), which the report names; its equivalents are listed beside it.
         let conventional = |e: &Effect| matches!(e, Effect::BaseFrame | Effect::ToolFrame | Effect::JointOffset(_));
@@ -341,27 +351,28 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
             if b >= *bic.last().unwrap_or(&f64::INFINITY) {
                 continue;
             }
-            chosen = Some((cand.0, cand.2, b));
+            chosen = Some((cand.0, cand.2, cand.3.clone(), b));
             break;
         }
-        let Some((effect, stats, b)) = chosen else { break };
+        let Some((effect, stats, errors, b)) = chosen else { break };
         before_after.push((current.heldout_rms_mm, stats.heldout_rms_mm));
         effects.push(effect);
         pool.retain(|c| *c != effect);
         current = stats;
+        current_errors = errors;
         additive.push(TableRow { model: format!("+ {}", effect.label()), stats });
         bic.push(b);
     }
-    // An exponential drift whose linear twin does as well on held-out data (within the improvement gate)
-    // is reported as the linear one: the smaller model.
+    // An exponential drift that is not significantly better than its linear twin on held-out data (the
+    // same gate) is reported as the linear one: the smaller model.
     for k in always..effects.len() {
         if let Effect::ThermalDrift(j, DriftShape::Exponential) = effects[k] {
             let mut swapped = effects.clone();
             swapped[k] = Effect::ThermalDrift(j, DriftShape::Linear);
-            let s = ctx.heldout(&swapped, &ctx.folds)?;
-            if s.heldout_rms_mm <= current.heldout_rms_mm * (1.0 + config.min_improvement) {
+            let (_, errors) = ctx.heldout_errors(&swapped, &ctx.folds)?;
+            if !significantly_better(&errors, &current_errors, config.gate_standard_errors) {
                 effects = swapped;
-                current = s;
+                current_errors = errors;
                 if let Some(row) = additive.get_mut(k - always + 1) {
                     row.model = format!("+ {} (replaces the exponential)", effects[k].label());
                 }

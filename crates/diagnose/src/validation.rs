@@ -12,7 +12,7 @@ use crate::report::Stats;
 use crate::{Dataset, DiagnoseError};
 
 /// A scored candidate: the effect, its newly identifiable parameters, its held-out statistics.
-pub(crate) type Scored = Result<Option<(Effect, usize, Stats)>, DiagnoseError>;
+pub(crate) type Scored = Result<Option<(Effect, usize, Stats, Vec<f64>)>, DiagnoseError>;
 pub(crate) type Folds = Vec<(Vec<usize>, Vec<usize>)>;
 
 /// Folds grouped in time when the data span time — the time-ordered measurements cut into chunks, fold
@@ -86,6 +86,12 @@ impl<'a> Ctx<'a> {
 
     /// Held-out statistics of a model by cross-validation on `folds`.
     pub(crate) fn heldout(&self, effects: &[Effect], folds: &Folds) -> Result<Stats, DiagnoseError> {
+        Ok(self.heldout_errors(effects, folds)?.0)
+    }
+
+    /// Held-out statistics and every held-out error (3-D norm, mm, in fold order: the same order for any
+    /// model on the same folds, so that two models' errors pair up measurement by measurement).
+    pub(crate) fn heldout_errors(&self, effects: &[Effect], folds: &Folds) -> Result<(Stats, Vec<f64>), DiagnoseError> {
         let mut norms = Vec::new();
         for (train, test) in folds {
             if train.is_empty() || test.is_empty() {
@@ -96,7 +102,7 @@ impl<'a> Ctx<'a> {
             let (r, _) = residuals(self.robot, &model, &f.theta, self.data, test, &self.pre, false)?;
             norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
         }
-        Ok(Stats::of(&norms))
+        Ok((Stats::of(&norms), norms))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
@@ -131,4 +137,19 @@ impl<'a> Ctx<'a> {
         let k = f.free.iter().filter(|&&x| x).count() as f64;
         Ok(m * (f.ssr / m).max(1e-300).ln() + k * m.ln())
     }
+}
+
+/// Whether model `b` has a lower held-out mean squared error than model `a`, by more than `z` standard
+/// errors of the paired difference (errors `a[i]`, `b[i]` of the same measurement): the acceptance rule
+/// of the ladder. With `z = 1` this is the one-standard-error rule: an improvement smaller than its own
+/// uncertainty over the measurements is not taken.
+pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64) -> bool {
+    let n = a.len().min(b.len());
+    if n < 2 {
+        return false;
+    }
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x * x - y * y).collect();
+    let mean = d.iter().sum::<f64>() / n as f64;
+    let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64;
+    mean > z * (var / n as f64).sqrt()
 }
