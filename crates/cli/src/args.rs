@@ -183,7 +183,8 @@ pub struct IkArgs {
     #[arg(long, default_value_t = 100)]
     pub restarts: usize,
     /// List every arm configuration that reaches the pose instead of one solution: for arms with a
-    /// closed form (axes 2 and 3 parallel, spherical wrist — the IRB 140, most ABB/KUKA/Fanuc arms), the
+    /// closed form (axes 2 and 3 parallel and a spherical wrist — the IRB 140, most ABB/KUKA/Fanuc arms —
+    /// or axes 2, 3, 4 parallel — the UR family), the
     /// up to 8 branches (shoulder front/back, elbow up/down, wrist flip), each refined on the robot as
     /// loaded, with ABB confdata [cf1,cf4,cf6,cfx], KUKA Turn and whether it is reachable in the limits.
     #[arg(long)]

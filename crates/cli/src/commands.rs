@@ -161,7 +161,7 @@ fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> 
     let mut ws = Workspace::new(chain.dof());
     let Some(found) = solve_branches(chain, goal, &Params::default(), &mut ws).map_err(Failure::input)? else {
         return Err(Failure::input(anyhow!(
-            "--branches: this robot has no closed form (it needs six revolute joints, axes 2 and 3 parallel and a spherical wrist)"
+            "--branches: this robot has no closed form (it needs six revolute joints with axes 2 and 3 parallel and a spherical wrist, or axes 2, 3, 4 parallel)"
         )));
     };
     let rows: Vec<serde_json::Value> = found

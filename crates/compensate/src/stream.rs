@@ -6,7 +6,7 @@
 //! natural order, one branch throughout), every target here is solved on its own from
 //! [`RunSettings::start`]: targets are independent, so a chunk runs in parallel and the output does not
 //! depend on the chunk size or the number of threads (each target's restart generator is keyed by its
-//! index in the file). For an arm with a closed form ([`SphericalWrist`]) the nominal solution is the
+//! index in the file). For an arm with a closed form ([`ClosedForm`]) the nominal solution is the
 //! exact branch inside the limits nearest to `start` — the same configuration for every target, chosen
 //! without iterating — checked by the solver like any other answer; otherwise the solver runs from
 //! `start`. The compensated solution is then solved on the deformed robot from the nominal one.
@@ -17,7 +17,7 @@ use nalgebra::Isometry3;
 use rayon::prelude::*;
 use thermokin_chain::Chain;
 use thermokin_deform::DeviationTable;
-use thermokin_ik::{Goal, SphericalWrist, Workspace, solve};
+use thermokin_ik::{ClosedForm, Goal, Workspace, solve};
 use thermokin_io::TargetReader;
 
 use crate::CompensateError;
@@ -80,7 +80,7 @@ pub fn compensate_static_stream<R: BufRead + Send, W: Write>(
     let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
     let mut summary = SummaryBuilder::new(false, settings.named_failures);
     write_joint_header(out, kinds.len()).map_err(|source| CompensateError::Write { source })?;
-    let wrist = SphericalWrist::detect(chain);
+    let wrist = ClosedForm::detect(chain);
     let chunk_size = settings.chunk.max(1);
     let mut done = 0usize;
     let mut chunk = targets.next_chunk(chunk_size)?;
@@ -121,7 +121,7 @@ pub fn compensate_static_stream<R: BufRead + Send, W: Write>(
 
 /// The exact closed-form branch inside the limits nearest to `start` (∞-norm over joints, whole turns
 /// moved toward `start` where the limits allow).
-fn nearest_branch(chain: &Chain, wrist: &SphericalWrist, pose: &Isometry3<f64>, start: &[f64]) -> Option<Vec<f64>> {
+fn nearest_branch(chain: &Chain, wrist: &ClosedForm, pose: &Isometry3<f64>, start: &[f64]) -> Option<Vec<f64>> {
     let tau = std::f64::consts::TAU;
     wrist
         .branches(pose)

@@ -1,6 +1,8 @@
-//! Closed-form branches of six-joint arms with a spherical wrist — the IRB 140 and most ABB, KUKA and
-//! Fanuc arms — used as seeds: all (up to 8) analytic solutions of the chain's *ideal* geometry, which the
-//! Levenberg–Marquardt loop then refines on the actual (deformed) chain.
+//! Closed-form branches of six-joint arms — with a spherical wrist (the IRB 140 and most ABB, KUKA and
+//! Fanuc arms) or with three parallel axes 2, 3, 4 (the UR family) — used as seeds: all (up to 8)
+//! analytic solutions of the chain's *ideal* geometry, which the Levenberg–Marquardt loop then refines on
+//! the actual (deformed) chain. The spherical case is derived below; the parallel one at
+//! [`ClosedForm`]'s `parallel` step.
 //!
 //! # The math
 //! Any serial chain is a product of exponentials (Brockett): with each joint's axis line `(a_i, p_i)` at
@@ -22,8 +24,8 @@
 //! A deformed chain is only near this geometry (its axes tilt by its error parameters): the branches are
 //! computed on the ideal geometry closest to it (axis 3 made parallel to axis 2, the wrist centre the
 //! point nearest to the three wrist axes), where an equation has no exact solution its nearest one is
-//! taken, and the refinement does the rest. Chains that are not near this geometry (the UR family, a
-//! seven-joint arm, prismatic joints) get no branches: the solver falls back to its restarts.
+//! taken, and the refinement does the rest. Chains near neither geometry (a seven-joint arm, prismatic
+//! joints, an offset wrist) get no branches: the solver falls back to its restarts.
 
 use std::f64::consts::{PI, TAU};
 
@@ -53,18 +55,31 @@ pub struct Branch {
     pub exact: bool,
 }
 
-/// The zero-configuration geometry of an arm whose closed form exists.
+/// Which closed form an arm's geometry allows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Family {
+    /// Axes 2 ∥ 3 and axes 4, 5, 6 through one point (the IRB 140, most ABB, KUKA, Fanuc arms).
+    SphericalWrist,
+    /// Axes 2 ∥ 3 ∥ 4 and axes 5, 6 meeting (the UR family).
+    ParallelTriple,
+}
+
+/// The zero-configuration geometry of an arm whose closed form exists: its axis lines, the point its
+/// last joints leave fixed (the wrist centre, or where axes 5 and 6 meet), the TCP pose at zero.
 #[derive(Clone, Debug)]
-pub struct SphericalWrist {
+pub struct ClosedForm {
+    family: Family,
     axes: [Vector3<f64>; 6],
     points: [Vector3<f64>; 6],
+    /// `sᵢ` with `aᵢ = sᵢ a₂` for the axes made parallel to axis 2 (the others 1).
+    senses: [f64; 6],
     centre: Vector3<f64>,
     tcp_at_zero: Isometry3<f64>,
 }
 
-impl SphericalWrist {
-    /// The ideal geometry nearest to `chain`, or `None` when the chain is not a six-revolute-joint arm
-    /// with axes 2 ∥ 3 and a spherical wrist (within [`PARALLEL_TOL`] and [`WRIST_TOL_MM`]).
+impl ClosedForm {
+    /// The ideal geometry nearest to `chain`, or `None` when the chain is not a six-revolute-joint arm of
+    /// a [`Family`] (within [`PARALLEL_TOL`] and [`WRIST_TOL_MM`]).
     pub fn detect(chain: &Chain) -> Option<Self> {
         if chain.dof() != 6 || chain.joints().iter().any(|j| j.kind != JointKind::Revolute) {
             return None;
@@ -78,24 +93,43 @@ impl SphericalWrist {
             axes[i] = f.rotation * j.axis.into_inner();
             points[i] = f.translation.vector;
         }
+        let parallel_to_2 = |k: usize| axes[1].dot(&axes[k]).abs() >= PARALLEL_TOL.cos();
+        let distinct = |a: usize, b: usize| axes[a].dot(&axes[b]).abs() <= DISTINCT_COS;
         // Axes 2 and 3 parallel (either sense); axis 1 not parallel to them.
-        let cos23 = axes[1].dot(&axes[2]);
-        if cos23.abs() < PARALLEL_TOL.cos() || axes[0].dot(&axes[1]).abs() > DISTINCT_COS {
+        if !parallel_to_2(2) || !distinct(0, 1) {
             return None;
         }
-        axes[2] = axes[1] * cos23.signum();
-        // Wrist axes distinct from axis 5, meeting (nearly) in one point.
-        if axes[3].dot(&axes[4]).abs() > DISTINCT_COS || axes[5].dot(&axes[4]).abs() > DISTINCT_COS {
+        let meeting = |ks: &[usize]| -> Option<Vector3<f64>> {
+            let lines: Vec<_> = ks.iter().map(|&k| (points[k], axes[k])).collect();
+            let c = nearest_point(&lines)?;
+            let on_all = ks.iter().all(|&k| {
+                let off = c - points[k];
+                (off - axes[k] * axes[k].dot(&off)).norm() <= WRIST_TOL_MM
+            });
+            on_all.then_some(c)
+        };
+        let mut senses = [1.0; 6];
+        let mut make_parallel = |axes: &mut [Vector3<f64>; 6], k: usize| {
+            senses[k] = axes[1].dot(&axes[k]).signum();
+            axes[k] = axes[1] * senses[k];
+        };
+        let (family, centre) = if distinct(3, 4) && distinct(5, 4) && !parallel_to_2(3) {
+            (Family::SphericalWrist, meeting(&[3, 4, 5])?)
+        } else if parallel_to_2(3) && distinct(4, 1) && distinct(5, 4) {
+            (Family::ParallelTriple, meeting(&[4, 5])?)
+        } else {
             return None;
+        };
+        make_parallel(&mut axes, 2);
+        if family == Family::ParallelTriple {
+            make_parallel(&mut axes, 3);
         }
-        let centre = nearest_point(&[(points[3], axes[3]), (points[4], axes[4]), (points[5], axes[5])])?;
-        for k in 3..6 {
-            let off = centre - points[k];
-            if (off - axes[k] * axes[k].dot(&off)).norm() > WRIST_TOL_MM {
-                return None;
-            }
-        }
-        Some(Self { axes, points, centre, tcp_at_zero })
+        Some(Self { family, axes, points, senses, centre, tcp_at_zero })
+    }
+
+    /// The geometry found.
+    pub fn family(&self) -> Family {
+        self.family
     }
 
     /// Every closed-form solution for the TCP pose `goal` (up to 8), in branch order. Where the ideal
@@ -103,36 +137,82 @@ impl SphericalWrist {
     pub fn branches(&self, goal: &Isometry3<f64>) -> Vec<Branch> {
         let (a, p, c) = (&self.axes, &self.points, self.centre);
         let w = (goal * self.tcp_at_zero.inverse() * Point3::from(c)).coords;
-        let rt = goal.rotation.to_rotation_matrix();
-        let r0 = self.tcp_at_zero.rotation.to_rotation_matrix();
-        let mut out = Vec::with_capacity(8);
-        // q₁: a₂ · (p₁ + R(a₁, −q₁)(w − p₁)) = a₂ · c.
+        // q₁ (both families): rotations about lines parallel to a₂ keep a₂·x, and the last joints keep c:
+        // a₂ · (p₁ + R(a₁, −q₁)(w − p₁)) = a₂ · c.
         let (q1s, exact1) = solve_projection(&a[1], &a[0], &(w - p[0]), a[1].dot(&(c - p[0])));
+        let mut out = Vec::with_capacity(8);
         for &t1 in &q1s {
-            let q1 = -t1;
-            let r1 = rot(&a[0], q1);
-            let w1 = p[0] + r1.transpose() * (w - p[0]);
-            // q₃: |(p₃ − p₂) + R(a₃, q₃)(c − p₃)|² = |w₁ − p₂|².
-            let (l, u) = (p[2] - p[1], c - p[2]);
-            let target = ((w1 - p[1]).norm_squared() - l.norm_squared() - u.norm_squared()) / 2.0;
-            let (q3s, exact3) = solve_projection(&l, &a[2], &u, target);
-            for &q3 in &q3s {
-                let r3 = rot(&a[2], q3);
-                let y = l + r3 * u;
-                let q2 = rotation_onto(&a[1], &y, &(w1 - p[1]));
-                let r123 = r1 * rot(&a[1], q2) * r3;
-                let rw = r123.transpose() * rt.matrix() * r0.matrix().transpose();
-                let (x, k, v) = (&a[3], &a[4], &a[5]);
-                let (q5s, exact5) = solve_projection(x, k, v, x.dot(&(rw * v)));
-                for &q5 in &q5s {
-                    let r5 = rot(k, q5);
-                    let q4 = rotation_onto(x, &(r5 * v), &(rw * v));
-                    let q6 = -rotation_onto(v, &(r5.transpose() * x), &(rw.transpose() * x));
-                    out.push(Branch { q: [q1, q2, q3, q4, q5, q6].map(wrap), exact: exact1 && exact3 && exact5 });
-                }
+            match self.family {
+                Family::SphericalWrist => self.spherical(goal, -t1, w, exact1, &mut out),
+                Family::ParallelTriple => self.parallel(goal, -t1, exact1, &mut out),
             }
         }
         out
+    }
+
+    /// `q₂ … q₆` of a spherical-wrist arm for one `q₁` (see the module documentation).
+    fn spherical(&self, goal: &Isometry3<f64>, q1: f64, w: Vector3<f64>, exact1: bool, out: &mut Vec<Branch>) {
+        let (a, p, c) = (&self.axes, &self.points, self.centre);
+        let rt = goal.rotation.to_rotation_matrix();
+        let r0 = self.tcp_at_zero.rotation.to_rotation_matrix();
+        let r1 = rot(&a[0], q1);
+        let w1 = p[0] + r1.transpose() * (w - p[0]);
+        // q₃: |(p₃ − p₂) + R(a₃, q₃)(c − p₃)|² = |w₁ − p₂|².
+        let (l, u) = (p[2] - p[1], c - p[2]);
+        let target = ((w1 - p[1]).norm_squared() - l.norm_squared() - u.norm_squared()) / 2.0;
+        let (q3s, exact3) = solve_projection(&l, &a[2], &u, target);
+        for &q3 in &q3s {
+            let r3 = rot(&a[2], q3);
+            let y = l + r3 * u;
+            let q2 = rotation_onto(&a[1], &y, &(w1 - p[1]));
+            let r123 = r1 * rot(&a[1], q2) * r3;
+            let rw = r123.transpose() * rt.matrix() * r0.matrix().transpose();
+            let (x, k, v) = (&a[3], &a[4], &a[5]);
+            let (q5s, exact5) = solve_projection(x, k, v, x.dot(&(rw * v)));
+            for &q5 in &q5s {
+                let r5 = rot(k, q5);
+                let q4 = rotation_onto(x, &(r5 * v), &(rw * v));
+                let q6 = -rotation_onto(v, &(r5.transpose() * x), &(rw.transpose() * x));
+                out.push(Branch { q: [q1, q2, q3, q4, q5, q6].map(wrap), exact: exact1 && exact3 && exact5 });
+            }
+        }
+    }
+
+    /// `q₂ … q₆` of an arm with axes 2 ∥ 3 ∥ 4 and axes 5, 6 meeting in `c`, for one `q₁`: the rotation
+    /// `M = R₁ᵀ R_t R₀ᵀ = R₂₃₄ R₅ R₆`, where `R₂₃₄` keeps `a₂`, gives `q₅` from `a₂·M a₆ = a₂·R₅ a₆` and
+    /// `q₆` from `R₆ᵀR₅ᵀ a₂ = Mᵀ a₂`; then axis 4's point `p₄` (which `e₄` keeps) must reach
+    /// `e₁⁻¹ g g₀⁻¹ e₆⁻¹ e₅⁻¹ p₄`: the planar two-link problem of the spherical case for `q₂`, `q₃`, and
+    /// `q₄` closes the angle of `R₂₃₄`.
+    fn parallel(&self, goal: &Isometry3<f64>, q1: f64, exact1: bool, out: &mut Vec<Branch>) {
+        let (a, p, s) = (&self.axes, &self.points, &self.senses);
+        let rt = goal.rotation.to_rotation_matrix();
+        let r0 = self.tcp_at_zero.rotation.to_rotation_matrix();
+        let r1 = rot(&a[0], q1);
+        let m = r1.transpose() * rt.matrix() * r0.matrix().transpose();
+        let (q5s, exact5) = solve_projection(&a[1], &a[4], &a[5], a[1].dot(&(m * a[5])));
+        for &q5 in &q5s {
+            let r5 = rot(&a[4], q5);
+            let q6 = -rotation_onto(&a[5], &(r5.transpose() * a[1]), &(m.transpose() * a[1]));
+            let r6 = rot(&a[5], q6);
+            let r234 = m * r6.transpose() * r5.transpose();
+            let across = a[1].cross(&a[0]).normalize();
+            let angle234 = rotation_onto(&a[1], &across, &(r234 * across));
+            // Where axis 4's point must go, seen from after joint 1.
+            let x5 = p[4] + r5.transpose() * (p[3] - p[4]);
+            let x6 = p[5] + r6.transpose() * (x5 - p[5]);
+            let w4 = (goal * self.tcp_at_zero.inverse() * Point3::from(x6)).coords;
+            let w41 = p[0] + r1.transpose() * (w4 - p[0]);
+            let (l, u) = (p[2] - p[1], p[3] - p[2]);
+            let target = ((w41 - p[1]).norm_squared() - l.norm_squared() - u.norm_squared()) / 2.0;
+            let (q3s, exact3) = solve_projection(&l, &a[2], &u, target);
+            for &q3 in &q3s {
+                let y = l + rot(&a[2], q3) * u;
+                let q2 = rotation_onto(&a[1], &y, &(w41 - p[1]));
+                // R₂₃₄ turns about a₂ by q₂ + s₃q₃ + s₄q₄.
+                let q4 = s[3] * (angle234 - q2 - s[2] * q3);
+                out.push(Branch { q: [q1, q2, q3, q4, q5, q6].map(wrap), exact: exact1 && exact3 && exact5 });
+            }
+        }
     }
 }
 

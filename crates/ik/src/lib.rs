@@ -19,7 +19,7 @@ mod lm;
 mod params;
 mod solve;
 
-pub use analytic::{Branch, SphericalWrist};
+pub use analytic::{Branch, ClosedForm, Family};
 pub use batch::{Seeds, solve_batch};
 pub use lm::Workspace;
 pub use params::{Backend, Goal, LimitPolicy, Params, RestartSeeds, Solution, Status};

@@ -48,7 +48,7 @@ pub enum LimitPolicy {
 /// both at 100 % success — most random first attempts land on a branch outside the limits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum RestartSeeds {
-    /// The closed-form solutions of the chain's ideal geometry ([`crate::SphericalWrist`]) inside the
+    /// The closed-form solutions of the chain's ideal geometry ([`crate::ClosedForm`]) inside the
     /// limits, nearest to the seed first, then seeded random ones. Chains without a closed form go
     /// straight to the random ones.
     BranchesThenRandom,

@@ -9,7 +9,7 @@ use thermokin_chain::{Chain, JointKind, rotation_angle};
 use crate::IkError;
 use std::time::Instant;
 
-use crate::analytic::SphericalWrist;
+use crate::analytic::ClosedForm;
 use crate::lm::{Eval, Workspace, attempt, past};
 use crate::params::{Goal, LimitPolicy, Params, RestartSeeds, Solution, Status};
 
@@ -67,7 +67,7 @@ fn nearest_turn(chain: &Chain, q: &mut [f64], seed: &[f64], policy: LimitPolicy)
 }
 
 /// Every arm configuration that reaches `goal` on `chain`, for arms with a closed form
-/// ([`SphericalWrist`]): each exact branch of the ideal geometry (up to 8) refined on the chain itself
+/// ([`ClosedForm`]): each exact branch of the ideal geometry (up to 8) refined on the chain itself
 /// from that branch alone (no restarts, at most 0.5 rad from it, so that the refinement keeps the
 /// branch), with its solution — `Converged`, or why not (a joint limit). Branches the pose is out of
 /// reach for are left out. `None` when the chain has no closed form. A user choosing a configuration
@@ -78,7 +78,7 @@ pub fn solve_branches(
     params: &Params,
     ws: &mut Workspace,
 ) -> Result<Option<Vec<(crate::Branch, Solution)>>, IkError> {
-    let Some(wrist) = SphericalWrist::detect(chain) else { return Ok(None) };
+    let Some(wrist) = ClosedForm::detect(chain) else { return Ok(None) };
     let local = Params { restarts: 0, max_distance_from_seed: Some(0.5), ..params.clone() };
     let mut out = Vec::new();
     let target = Goal::Pose(*goal);
@@ -104,7 +104,7 @@ pub fn solve_branches(
     Ok(Some(out))
 }
 
-/// The closed-form solutions of the chain's ideal geometry for a pose goal ([`SphericalWrist`]), moved by
+/// The closed-form solutions of the chain's ideal geometry for a pose goal ([`ClosedForm`]), moved by
 /// whole turns toward the seed, those inside the limits (when they bind), nearest to the seed first. Empty
 /// for position goals and for chains without a closed form.
 fn branch_seeds(chain: &Chain, goal: &Goal, seed: &[f64], params: &Params) -> std::vec::IntoIter<Vec<f64>> {
@@ -112,7 +112,7 @@ fn branch_seeds(chain: &Chain, goal: &Goal, seed: &[f64], params: &Params) -> st
     if params.restart_seeds == RestartSeeds::RandomOnly {
         return Vec::new().into_iter();
     }
-    let Some(wrist) = SphericalWrist::detect(chain) else { return Vec::new().into_iter() };
+    let Some(wrist) = ClosedForm::detect(chain) else { return Vec::new().into_iter() };
     let mut seeds: Vec<(bool, Vec<f64>)> = wrist
         .branches(pose)
         .into_iter()

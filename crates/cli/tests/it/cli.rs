@@ -853,13 +853,13 @@ fn ik_branches_lists_every_configuration_with_its_confdata() {
         }
     }
     assert_eq!(converged, 4, "four configurations inside the IRB 140's limits");
-    // No closed form, or no orientation: a reasoned refusal.
+    // No closed form (a seven-joint arm), or no orientation: a reasoned refusal.
     let o = thermokin(&[
         "ik",
         "--robot",
-        "fixtures/urdf/ur5.urdf",
+        "fixtures/urdf/panda.urdf",
         "--tip",
-        "tool0",
+        "panda_hand_tcp",
         "--pose",
         "400,100,300,0,90,0",
         "--branches",
