@@ -8,8 +8,8 @@ use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
     AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, StreamSettings, Summary, SummaryOut,
-    compensate_static, compensate_static_stream, compensate_transient, confdata, kuka_turn, programs, write_joint_csv,
-    write_long_csv, write_results_csv, write_results_json,
+    compensate_static, compensate_static_stream, compensate_transient, confdata, kuka_status, kuka_turn, programs,
+    write_joint_csv, write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Goal, Params, Workspace, solve, solve_branches};
@@ -178,6 +178,7 @@ fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> 
                 "status": format!("{:?}", s.status),
                 "joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(),
                 "abb_confdata": conf,
+                "kuka_status": kuka_status(chain, &s.q),
                 "kuka_turn": kuka_turn(&s.q),
                 "position_error_mm": s.position_error_mm,
             })
@@ -187,7 +188,7 @@ fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> 
         println!("{}", serde_json::Value::Array(rows));
     } else {
         println!(
-            "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} turn",
+            "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} S  T",
             "vs axis 1", "vs arm", "axis 5", "status", "joints_deg", "confdata"
         );
         for r in &rows {
@@ -198,13 +199,14 @@ fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> 
                 .map(|v| format!("{:.4}", v.as_f64().unwrap_or(f64::NAN)))
                 .collect();
             println!(
-                "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} {}",
+                "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} {:<2} {}",
                 r["wrist_centre_vs_axis1"].as_str().unwrap_or(""),
                 r["wrist_centre_vs_lower_arm"].as_str().unwrap_or(""),
                 r["axis5"].as_str().unwrap_or(""),
                 r["status"].as_str().unwrap_or(""),
                 joints.join(","),
                 r["abb_confdata"].to_string(),
+                r["kuka_status"],
                 r["kuka_turn"]
             );
         }

@@ -17,7 +17,9 @@ mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
-pub use program::{AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, kuka_turn, programs};
+pub use program::{
+    AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, kuka_status, kuka_turn, programs,
+};
 pub use run::{
     Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error,

@@ -251,6 +251,16 @@ pub fn confdata(chain: &Chain, q: &[f64]) -> [i64; 4] {
     [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
 }
 
+/// KUKA's Status of joint values `q` (radians) on a six-joint arm, read with the same geometry as
+/// [`confdata`]'s cfx: bit 0 the wrist centre behind axis 1 (KUKA's overhead area), bit 1 the wrist
+/// centre behind the lower arm (KUKA's A3 beyond the stretched-arm angle), bit 2 axis 5 at or below 0.
+/// Pinned by tests to the branch it names; not checked against a KUKA controller.
+pub fn kuka_status(chain: &Chain, q: &[f64]) -> u8 {
+    let cfx = confdata(chain, q)[3];
+    let axis5_not_positive = q.get(4).is_some_and(|&v| v <= 0.0);
+    (u8::from(cfx & 4 != 0)) | (u8::from(cfx & 2 != 0) << 1) | (u8::from(axis5_not_positive) << 2)
+}
+
 /// KUKA's Turn of joint values `q` (radians): bit `i` set when axis `i + 1` is negative (KUKA's
 /// definition; it tells apart configurations that differ by whole turns of an axis).
 pub fn kuka_turn(q: &[f64]) -> u8 {

@@ -836,6 +836,8 @@ fn ik_branches_lists_every_configuration_with_its_confdata() {
     assert_eq!(rows.len(), 8, "2 × 2 × 2 configurations of the IRB 140");
     let confs: std::collections::HashSet<String> = rows.iter().map(|r| r["abb_confdata"].to_string()).collect();
     assert_eq!(confs.len(), 8, "every configuration has its own confdata");
+    let status: std::collections::HashSet<u64> = rows.iter().map(|r| r["kuka_status"].as_u64().unwrap()).collect();
+    assert_eq!(status.len(), 8, "and its own KUKA Status");
     let chain = thermokin_io::read_robot(&workspace(ROBOT)).unwrap().chain().clone();
     let mut converged = 0;
     for r in &rows {
