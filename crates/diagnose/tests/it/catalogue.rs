@@ -3,41 +3,10 @@
 //! diagnosis's model): the diagnosis must name each with its joint, and the model it picks must be at the
 //! noise on outer folds it never saw (nested cross-validation).
 
-use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use thermokin_chain::Chain;
-use thermokin_diagnose::{Config, Dataset, Measurement, diagnose};
+use thermokin_diagnose::{Config, diagnose};
 use thermokin_testdata::workspace;
 
-const NOISE_MM: f64 = 0.005;
-
-/// `n` poses 10 % inside the limits: the commanded joints are recorded, the robot stands at
-/// `actual(commanded)`, measured with Gaussian noise.
-fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Vec<f64>) -> Dataset {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
-    let measurements = (0..n)
-        .map(|_| {
-            let q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
-            let p = chain.tool_pose(&actual(&q)).unwrap().translation.vector;
-            let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
-            Measurement { time_min: 0.0, q, position_mm: p + noise, temps: Vec::new() }
-        })
-        .collect();
-    Dataset { measurements, temperature_names: Vec::new() }
-}
+use crate::tracker::{NOISE_MM, measure};
 
 fn check(actual: impl Fn(&[f64]) -> Vec<f64>, expect: &str) {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();

@@ -3,14 +3,11 @@
 //! set of poses, and the robot it identifies checked on another set it never saw, also after a round
 //! trip through the robot file `diagnose --export` writes.
 
-use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
-use thermokin_diagnose::{Config, Dataset, Measurement, Robot, diagnose};
+use thermokin_diagnose::{Config, Dataset, Robot, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
-const NOISE_MM: f64 = 0.005;
+use crate::tracker::{NOISE_MM, measure};
 
 fn nominal() -> Robot {
     thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap()
@@ -27,32 +24,6 @@ fn truth(chain: &Chain) -> Chain {
         .unwrap()
 }
 
-/// `n` poses 10 % inside the limits, measured on `robot` with Gaussian noise (Box–Muller).
-fn measure(robot: &Chain, n: usize, seed: u64) -> Dataset {
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
-    let measurements = (0..n)
-        .map(|_| {
-            let q: Vec<f64> = robot
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
-            let p = robot.tool_pose(&q).unwrap().translation.vector;
-            let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
-            Measurement { time_min: 0.0, q, position_mm: p + noise, temps: Vec::new() }
-        })
-        .collect();
-    Dataset { measurements, temperature_names: Vec::new() }
-}
-
 fn rms(chain: &Chain, data: &Dataset) -> f64 {
     let sum: f64 = data
         .measurements
@@ -66,8 +37,8 @@ fn rms(chain: &Chain, data: &Dataset) -> f64 {
 fn the_identified_robot_predicts_poses_it_never_saw() {
     let robot = nominal();
     let truth = truth(robot.chain());
-    let train = measure(&truth, 150, 21);
-    let unseen = measure(&truth, 200, 22);
+    let train = measure(&truth, 150, 21, <[f64]>::to_vec);
+    let unseen = measure(&truth, 200, 22, <[f64]>::to_vec);
     let report = diagnose(&robot, &train, None, &Config::default()).unwrap();
     let labels: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
     eprintln!("effects {labels:?}; not in the robot file: {:?}", report.not_in_calibrated);

@@ -5,3 +5,4 @@ mod catalogue;
 mod export;
 mod hidden;
 mod real_data;
+mod tracker;
