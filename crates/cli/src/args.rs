@@ -284,6 +284,10 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// The measurement noise per axis (one standard deviation, mm) — your tracker's specification, e.g.
+    /// 0.01. The verdict then says whether what remains is that noise or an effect the catalogue lacks.
+    #[arg(long, value_name = "MM")]
+    pub noise: Option<f64>,
     /// Write the identified robot — the final model fitted on all measurements: registration (as the
     /// base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
     /// deviations — as a robot TOML (or URDF if FILE ends in .urdf) that fk, ik and compensate accept.

@@ -33,7 +33,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         Some(p) => Some(read_measurements(p, &kinds).map_err(Failure::input)?),
         None => None,
     };
+    if a.noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
+        return Err(Failure::input(anyhow!("--noise must be a positive standard deviation in mm")));
+    }
     let config = Config {
+        noise_mm: a.noise,
         folds: a.folds,
         frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },
         tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
@@ -79,6 +83,9 @@ identified robot → {}",
 }
 
 fn print_report(r: &Report) {
+    for w in &r.warnings {
+        println!("warning: {w}");
+    }
     let line = |what: &str, s: &thermokin_diagnose::Stats| {
         println!("  {what:<44} {:>9.4} {:>9.4} {:>9.4}", s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm)
     };
@@ -133,9 +140,26 @@ fn print_report(r: &Report) {
             if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
         );
         for (name, v) in &e.parameters {
-            println!("      {name:<44} {:>12.6} ± {:.6}", v.value, v.std);
+            match (&v.fixed, v.std) {
+                (Some(why), _) => println!("      {name:<44} {:>12.6}   fixed, not fitted: {why}", v.value),
+                (None, Some(sd)) => println!("      {name:<44} {:>12.6} ± {sd:.6}", v.value),
+                (None, None) => {
+                    println!("      {name:<44} {:>12.6}   (no uncertainty: singular normal matrix)", v.value)
+                }
+            }
         }
     }
+    if let Some(reg) = &r.frames.registration {
+        let [x, y, z] = reg.position_mm;
+        let [a, b, c] = reg.xyz_euler_deg;
+        println!(
+            "\nfitted registration (measurement frame ← base): {x:.4}, {y:.4}, {z:.4} mm; {a:.5}, {b:.5}, {c:.5}° (X-Y-Z Euler)"
+        );
+    }
+    if let Some([x, y, z]) = r.frames.tool_point_mm {
+        println!("fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm");
+    }
+    println!("\nverdict: {}", r.verdict);
     println!("\nwhere the nominal model's residuals lie (RMS, mm; → after the effects found):");
     let (b, a) = (&r.residuals_before, &r.residuals_after);
     for (j, (qb, qa)) in b.by_joint.iter().zip(&a.by_joint).enumerate() {

@@ -46,12 +46,16 @@ pub struct TableRow {
 }
 
 /// A fitted parameter in report units (mm, degrees, minutes, degrees per N·m).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ParameterValue {
-    /// Value.
+    /// Value: the fitted one, or for a parameter fixed as unidentifiable its starting value (0, or an
+    /// exponential drift's starting τ).
     pub value: f64,
-    /// One standard deviation (NaN when fixed as unidentifiable).
-    pub std: f64,
+    /// One standard deviation; `None` when the parameter is fixed.
+    pub std: Option<f64>,
+    /// Why the parameter was fixed instead of fitted (the block it duplicates, or that the data do not
+    /// move it); `None` when it was fitted.
+    pub fixed: Option<String>,
 }
 
 /// One effect of the final model.
@@ -158,6 +162,31 @@ pub struct Report {
     pub residuals_after: Breakdown,
     /// Bayesian information criterion of each model in the additive table (full-data fits).
     pub bic: Vec<f64>,
+    /// The always-estimated blocks as fitted on all measurements: the registration (the measurement
+    /// frame's pose of the robot base) and the tool point, where they were estimated.
+    pub frames: FittedFrames,
+    /// What the data look like they got wrong (units, frame), said rather than absorbed.
+    pub warnings: Vec<String>,
+    /// Whether the effects found explain the data, against the measurement noise when it is stated.
+    pub verdict: String,
+}
+
+/// A pose for reports: position (mm) and X-Y-Z Euler angles (degrees).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseReport {
+    /// Position, mm.
+    pub position_mm: [f64; 3],
+    /// X-Y-Z Euler angles (`R = Rx·Ry·Rz`), degrees.
+    pub xyz_euler_deg: [f64; 3],
+}
+
+/// The fitted registration and tool point.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FittedFrames {
+    /// `measurement_frame_from_base`, when the measurements are in a tracker frame.
+    pub registration: Option<PoseReport>,
+    /// The tool point in the flange's same-orientation frame, mm, when it was unknown.
+    pub tool_point_mm: Option<[f64; 3]>,
 }
 
 pub(crate) fn breakdown(

@@ -50,3 +50,47 @@ fn finds_a_cyclic_encoder_error() {
         "periodic[3]",
     );
 }
+
+#[test]
+fn an_effect_outside_the_catalogue_is_not_explained() {
+    // Joint 1's error three times per revolution (the catalogue's cyclic error has once and twice).
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let data = measure(robot.chain(), 200, 41, |q| {
+        let mut a = q.to_vec();
+        a[0] += 0.05f64.to_radians() * (3.0 * q[0]).sin();
+        a
+    });
+    let config = Config { noise_mm: Some(NOISE_MM), ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    eprintln!("{:?}: {}", report.effects.iter().map(|e| &e.label).collect::<Vec<_>>(), report.verdict);
+    assert!(report.verdict.starts_with("not explained"), "{}", report.verdict);
+    // The same data with the effect removed is explained.
+    let clean = measure(robot.chain(), 200, 41, <[f64]>::to_vec);
+    let report = diagnose(&robot, &clean, None, &config).unwrap();
+    assert!(report.verdict.starts_with("explained"), "{}", report.verdict);
+}
+
+#[test]
+fn radians_and_unregistered_tracker_frames_are_warned_about() {
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let config = Config { validation: thermokin_diagnose::Validation::SelectionOnly, ..Config::default() };
+    // A file written in radians, read as degrees: every joint value becomes 57.3 times too small.
+    let mut radians = measure(robot.chain(), 60, 43, <[f64]>::to_vec);
+    for m in &mut radians.measurements {
+        m.q.iter_mut().for_each(|v| *v = v.to_radians());
+    }
+    let report = diagnose(&robot, &radians, None, &config).unwrap();
+    assert!(report.warnings.iter().any(|w| w.contains("radians")), "{:?}", report.warnings);
+    // Tracker-frame positions run as base-frame data.
+    let mut tracker = measure(robot.chain(), 60, 44, <[f64]>::to_vec);
+    let tracker_from_base =
+        nalgebra::Isometry3::new(nalgebra::Vector3::new(2500.0, -800.0, 300.0), nalgebra::Vector3::new(0.0, 0.0, 1.2));
+    for m in &mut tracker.measurements {
+        m.position_mm = (tracker_from_base * nalgebra::Point3::from(m.position_mm)).coords;
+    }
+    let report = diagnose(&robot, &tracker, None, &config).unwrap();
+    assert!(report.warnings.iter().any(|w| w.contains("tracker frame")), "{:?}", report.warnings);
+    // Clean data: no warning.
+    let clean = measure(robot.chain(), 60, 45, <[f64]>::to_vec);
+    assert!(diagnose(&robot, &clean, None, &config).unwrap().warnings.is_empty());
+}

@@ -76,6 +76,9 @@ fn rokae_robot_b_additive_table() {
         nested.selections
     );
     assert_eq!(nested.nominal.heldout_count, 30, "every pose is tested once");
+    // The always-estimated blocks are reported: where the tracker saw the base, and the probe.
+    eprintln!("registration {:?}; tool point {:?} mm", report.frames.registration, report.frames.tool_point_mm);
+    assert!(report.frames.registration.is_some() && report.frames.tool_point_mm.is_some());
     assert!(nested.selected.heldout_mean_mm < nested.nominal.heldout_mean_mm);
     // The independent fit, 5-fold held-out: 2.22 mm nominal (registration and tool fitted) → 0.22 mm with
     // joint offsets → 0.125 mm with full geometry. Those are mean errors: our nominal held-out mean is
