@@ -407,9 +407,12 @@ fn simulate_then_diagnose() {
         plots.to_str().unwrap(),
         "--export",
         calibrated.to_str().unwrap(),
+        "--noise",
+        "0.005",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stdout(&o).contains("effects, main cause first:"));
+    assert!(stdout(&o).contains("verdict: explained"), "{}", stdout(&o));
     // The exported robot carries the identified offset: joint 2's zero moved by ~0.05°, so FK at the
     // same joints differs from the nominal robot's, and fk accepts the file.
     let text = std::fs::read_to_string(&calibrated).unwrap();
