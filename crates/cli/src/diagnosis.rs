@@ -138,6 +138,11 @@ fn print_report(r: &Report) {
             e.heldout_rms_after_mm,
             e.heldout_rms_without_mm,
             if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
+                + &if e.contained_in.is_empty() {
+                    String::new()
+                } else {
+                    format!("; contained in: {}", e.contained_in.join(", "))
+                }
         );
         for (name, v) in &e.parameters {
             match (&v.fixed, v.std) {

@@ -91,7 +91,7 @@ pub(crate) fn residuals(
 /// Relative residual below which a scaled column counts as a combination of earlier ones: well above the
 /// ~1e-13 of rounding in a 720-row Gram–Schmidt, well below the ~1e-3 of a weakly but truly identifiable
 /// parameter of a 30-pose data set.
-const DEPENDENT: f64 = 1e-6;
+pub(crate) const DEPENDENT: f64 = 1e-6;
 
 /// Ordered Gram–Schmidt on the column-scaled Jacobian: earlier (conventional, smaller) blocks win, a later
 /// column that is (nearly) a combination of accepted ones is fixed, and the reason names the accepted

@@ -9,9 +9,9 @@ use crate::fit::{fit, observability, residuals};
 use crate::model::{DriftShape, Effect, JointIndex, prepare_against};
 use crate::report::{
     EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, ParameterValue, PoseReport, Report, Stats,
-    TableRow, breakdown, static_equivalents,
+    TableRow, breakdown,
 };
-use crate::validation::{Ctx, Scored, kfold, significantly_better};
+use crate::validation::{Ctx, Relation, Scored, kfold, significantly_better};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -295,7 +295,6 @@ fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Resul
 /// The ladder on `data`: candidates chosen by cross-validation, the final model fitted on all of it. The
 /// report's held-out figures here are the selection's own (optimistic) scores.
 fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec<Effect>), DiagnoseError> {
-    let n = robot.chain().dof();
     let needed = 2 * config.folds.max(2);
     if data.len() < needed {
         return Err(DiagnoseError::TooFewMeasurements { count: data.len(), folds: config.folds, needed });
@@ -324,7 +323,8 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
     let mut bic = vec![ctx.bic(&effects)?];
     let mut before_after: Vec<(f64, f64)> = Vec::new();
     let mut skipped: Vec<(String, String)> = Vec::new();
-    let mut pool = candidates(robot, data, config)?;
+    let catalogue = candidates(robot, data, config)?;
+    let mut pool = catalogue.clone();
     while effects.len() - always < config.max_effects && !pool.is_empty() {
         // Identifiability gate, then held-out error of each remaining candidate (in parallel). An
         // exponential drift refines the linear one of its joint: it is scored only where the linear drift
@@ -466,7 +466,7 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
     let mut reports: Vec<EffectReport> = reported
         .iter()
         .enumerate()
-        .map(|(r, &k)| {
+        .map(|(r, &k)| -> Result<EffectReport, DiagnoseError> {
             let e = effects[k];
             let o = model.offsets()[k];
             let parameters = (0..e.len())
@@ -478,11 +478,15 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
                     (names[o + p].clone(), ParameterValue { value: e.to_report_units(p, v), std, fixed })
                 })
                 .collect();
-            let mut equivalent = static_equivalents(&e, n);
+            let relations = ctx.relations(e, &catalogue)?;
+            let mut equivalent: Vec<String> =
+                relations.iter().filter(|(_, r)| *r == Relation::Equivalent).map(|(b, _)| b.label()).collect();
+            let contained_in: Vec<String> =
+                relations.iter().filter(|(_, r)| *r == Relation::ContainedIn).map(|(b, _)| b.label()).collect();
             equivalent.extend(skipped.iter().filter(|(_, why)| why.contains(&e.label())).map(|(c, _)| c.clone()));
             equivalent.sort();
             equivalent.dedup();
-            EffectReport {
+            Ok(EffectReport {
                 effect: e.kind_name().to_string(),
                 label: e.label(),
                 joints: e.joint().map(|j| vec![j.number()]).unwrap_or_default(),
@@ -491,9 +495,10 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
                 heldout_rms_without_mm: without[r],
                 parameters,
                 equivalent,
-            }
+                contained_in,
+            })
         })
-        .collect();
+        .collect::<Result<Vec<_>, DiagnoseError>>()?;
     // Main cause first: the effect whose removal hurts most.
     reports.sort_by(|a, b| (b.heldout_rms_without_mm).total_cmp(&a.heldout_rms_without_mm));
     let nominal_model = ctx.model(&effects[..always], &all)?;

@@ -7,7 +7,7 @@ use serde::Serialize;
 use thermokin_chain::Robot;
 
 use crate::fit::{FixedParameter, Observability, residuals};
-use crate::model::{Effect, Model, Pre};
+use crate::model::{Model, Pre};
 use crate::{Dataset, DiagnoseError};
 
 /// Held-out error statistics of the 3-D position residual, mm.
@@ -75,8 +75,12 @@ pub struct EffectReport {
     pub heldout_rms_without_mm: f64,
     /// Fitted parameters.
     pub parameters: BTreeMap<String, ParameterValue>,
-    /// Blocks that span the same directions.
+    /// Blocks that span the same parameter directions on these data (rank test on the Jacobians), and
+    /// candidates skipped as adding nothing identifiable next to this one.
     pub equivalent: Vec<String>,
+    /// Larger blocks that contain this one's directions on these data: they would explain the same and
+    /// more; this one was preferred as the smaller.
+    pub contained_in: Vec<String>,
 }
 
 /// Identifiability of the final model.
@@ -230,14 +234,4 @@ pub(crate) fn breakdown(
         if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
     let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();
     Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time, per_measurement_mm })
-}
-
-/// The equivalences that hold by construction in the same-orientation convention.
-pub(crate) fn static_equivalents(e: &Effect, dof: usize) -> Vec<String> {
-    match e {
-        Effect::BaseFrame => vec!["link_deviation[1]".into()],
-        Effect::ToolFrame => vec![format!("link_deviation[{dof}] (translation)")],
-        Effect::JointOffset(j) => vec![format!("link_deviation[{}] (rotation about its own axis)", j.number())],
-        _ => Vec::new(),
-    }
 }

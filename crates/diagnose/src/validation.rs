@@ -153,3 +153,80 @@ pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64) -> bool {
     let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64;
     mean > z * (var / n as f64).sqrt()
 }
+
+impl Ctx<'_> {
+    /// How effect `e`'s parameter directions relate to each of `others` on these data: `Equivalent` when
+    /// the two blocks' Jacobian columns span the same space, `ContainedIn` when `e`'s lie in the other's
+    /// span (the other block can do all `e` does, and more), decided by rank with [`crate::fit`]'s
+    /// tolerance: a direction within 1e-6 (relative) of a span belongs to it. Linearised at the nominal
+    /// model (every parameter zero) over all measurements.
+    pub(crate) fn relations(&self, e: Effect, others: &[Effect]) -> Result<Vec<(Effect, Relation)>, DiagnoseError> {
+        let all: Vec<usize> = (0..self.data.len()).collect();
+        let mut out = Vec::new();
+        for &b in others {
+            if b == e || b.is_reported() != e.is_reported() {
+                continue;
+            }
+            let model = self.model(&[e, b], &all)?;
+            let (_, jac) = residuals(self.robot, &model, &model.initial(), self.data, &all, &self.pre, true)?;
+            let cols = |range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
+                range.map(|c| (0..jac.nrows()).map(|r| jac[(r, c)]).collect()).collect()
+            };
+            let (ce, cb) = (cols(0..e.len()), cols(e.len()..e.len() + b.len()));
+            let e_in_b = within_span(&ce, &cb);
+            let b_in_e = within_span(&cb, &ce);
+            match (e_in_b, b_in_e) {
+                (true, true) => out.push((b, Relation::Equivalent)),
+                (true, false) => out.push((b, Relation::ContainedIn)),
+                _ => {}
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// How one block's parameter directions relate to another's on the data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Relation {
+    /// The same column space.
+    Equivalent,
+    /// Inside the other's column space.
+    ContainedIn,
+}
+
+/// Whether every non-zero column of `a` lies in the span of `b` (Gram–Schmidt, twice, on unit columns).
+fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for col in b {
+        let n0 = norm(col);
+        if n0 < 1e-12 {
+            continue;
+        }
+        let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
+        for _ in 0..2 {
+            for u in &basis {
+                let d: f64 = v.iter().zip(u).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(u).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+        let n = norm(&v);
+        if n >= crate::fit::DEPENDENT {
+            basis.push(v.iter().map(|x| x / n).collect());
+        }
+    }
+    a.iter().all(|col| {
+        let n0 = norm(col);
+        if n0 < 1e-12 {
+            return true;
+        }
+        let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
+        for _ in 0..2 {
+            for u in &basis {
+                let d: f64 = v.iter().zip(u).map(|(x, y)| x * y).sum();
+                v.iter_mut().zip(u).for_each(|(x, y)| *x -= d * y);
+            }
+        }
+        norm(&v) < crate::fit::DEPENDENT
+    })
+}

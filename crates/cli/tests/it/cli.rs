@@ -271,12 +271,15 @@ fn transient_compensation_with_plot() {
     assert!(std::fs::read_to_string(&out).unwrap().starts_with(",,Programmed coordinate"));
 }
 
+/// No temporary file of `path` (`.name.tmp-<pid>`) beside it. Only this file's: other tests of this
+/// process write their own outputs into the same directory at the same time.
 fn no_partial(path: &Path) {
     let dir = path.parent().unwrap();
+    let prefix = format!(".{}.tmp-", path.file_name().unwrap().to_string_lossy());
     let leftovers: Vec<_> = std::fs::read_dir(dir)
         .unwrap()
         .filter_map(Result::ok)
-        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .filter(|e| e.file_name().to_string_lossy().starts_with(&prefix))
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
