@@ -284,6 +284,9 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Unit of the measurement files' revolute joint columns: deg (default) or rad (ROS, robot SDKs).
+    #[arg(long, value_enum, default_value_t = JointUnitsArg::Deg)]
+    pub joint_units: JointUnitsArg,
     /// The measurement noise per axis (one standard deviation, mm) — your tracker's specification, e.g.
     /// 0.01. The verdict then says whether what remains is that noise or an effect the catalogue lacks.
     #[arg(long, value_name = "MM")]
@@ -294,6 +297,15 @@ pub struct DiagnoseArgs {
     /// Compliance and thermal drift depend on the load and on time and are left out (named when so).
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,
+}
+
+/// `--joint-units` of measurement files.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointUnitsArg {
+    /// Degrees.
+    Deg,
+    /// Radians.
+    Rad,
 }
 
 /// `--format` of the results.

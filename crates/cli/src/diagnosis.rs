@@ -10,9 +10,9 @@ use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{
     Config, DriftShape, Effect, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
 };
-use thermokin_io::{read_measurements, write_atomic, write_atomic_with, write_measurements};
+use thermokin_io::{JointUnits, read_measurements_with, write_atomic, write_atomic_with, write_measurements};
 
-use crate::args::{DiagnoseArgs, FrameArg, SimulateArgs, ToolArg};
+use crate::args::{DiagnoseArgs, FrameArg, JointUnitsArg, SimulateArgs, ToolArg};
 use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
@@ -28,9 +28,10 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
     let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
-    let data = read_measurements(&a.measurements, &kinds).map_err(Failure::input)?;
+    let units = if a.joint_units == JointUnitsArg::Rad { JointUnits::Radians } else { JointUnits::Degrees };
+    let data = read_measurements_with(&a.measurements, &kinds, units).map_err(Failure::input)?;
     let holdout = match &a.holdout {
-        Some(p) => Some(read_measurements(p, &kinds).map_err(Failure::input)?),
+        Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(Failure::input)?),
         None => None,
     };
     if a.noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {

@@ -28,6 +28,32 @@ pub(crate) fn records(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
     Ok(out)
 }
 
+/// Records of a tracker export in any of the three dialects they come in, told apart by the first line
+/// that is not a comment: commas (decimal points); semicolons (decimal commas, as spreadsheets in most of
+/// Europe write them: `1,5` is read 1.5); or whitespace (tabs or runs of spaces, decimal points).
+pub(crate) fn records_any_dialect(path: &Path, text: &str) -> Result<Vec<Record>, IoError> {
+    let first = text.lines().map(str::trim).find(|l| !l.is_empty() && !l.starts_with('#')).unwrap_or("");
+    if first.contains(',') && !first.contains(';') {
+        return records(path, text);
+    }
+    let semicolons = first.contains(';');
+    let mut out = Vec::new();
+    for (index, raw) in text.split('\n').enumerate() {
+        let raw = raw.strip_suffix('\r').unwrap_or(raw);
+        let trimmed = raw.trim();
+        if trimmed.is_empty() || trimmed.starts_with('#') {
+            continue;
+        }
+        let cells: Vec<String> = if semicolons {
+            trimmed.split(';').map(|c| c.trim().replace(',', ".")).collect()
+        } else {
+            trimmed.split_whitespace().map(str::to_string).collect()
+        };
+        out.push(Record { line: index + 1, cells });
+    }
+    Ok(out)
+}
+
 /// Refuses a first line that holds semicolons or tabs but no comma (the wrong delimiter).
 pub(crate) fn check_delimiter(path: &Path, first: &str) -> Result<(), IoError> {
     if !first.contains(',') && (first.contains(';') || first.contains('\t')) {

@@ -1,13 +1,15 @@
-//! Measurement sets for identification and diagnosis: `time_min` (optional), `q1..qn` (degrees), `x,y,z`
-//! (mm), optional `rx,ry,rz` (degrees, read and checked, not used: positions drive the diagnosis), optional
-//! `temp_<name>` (°C). The authors' results files are accepted too (their joints and reached coordinates).
+//! Measurement sets for identification and diagnosis: `time_min` (optional), `q1..qn` (degrees, or radians
+//! with [`JointUnits::Radians`]), `x,y,z` (mm), optional `rx,ry,rz` (degrees, read and checked, not used:
+//! positions drive the diagnosis), optional `temp_<name>` (°C). Comma-separated, semicolon-separated
+//! with decimal commas, or whitespace-separated, as tracker software exports them. The authors' results
+//! files are accepted too (their joints and reached coordinates).
 
 use std::path::Path;
 
 use nalgebra::Vector3;
 use thermokin_chain::{Dataset, JointKind, Measurement};
 
-use crate::csvtext::{column, expect_fields, number, records};
+use crate::csvtext::{column, expect_fields, number, records_any_dialect};
 use crate::units::{joint_value_in, joint_value_out};
 use crate::{IoError, parse_paper_results, read_text};
 
@@ -17,9 +19,35 @@ pub fn read_measurements(path: &Path, kinds: &[JointKind]) -> Result<Dataset, Io
     parse_measurements(path, &text, kinds)
 }
 
+/// The unit of a measurement file's revolute joint columns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum JointUnits {
+    /// Degrees (the paper's, and this project's files).
+    #[default]
+    Degrees,
+    /// Radians (what ROS and many robot SDKs log).
+    Radians,
+}
+
+/// Reads a measurement set whose revolute joints are in `units`.
+pub fn read_measurements_with(path: &Path, kinds: &[JointKind], units: JointUnits) -> Result<Dataset, IoError> {
+    let text = read_text(path)?;
+    parse_measurements_with(path, &text, kinds, units)
+}
+
 /// Parses a measurement set's text for a robot whose joints are of `kinds` (one per joint): joint columns
 /// are degrees for revolute joints and mm for prismatic ones.
 pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Result<Dataset, IoError> {
+    parse_measurements_with(path, text, kinds, JointUnits::Degrees)
+}
+
+/// As [`parse_measurements`], revolute joint columns in `units`.
+pub fn parse_measurements_with(
+    path: &Path,
+    text: &str,
+    kinds: &[JointKind],
+    units: JointUnits,
+) -> Result<Dataset, IoError> {
     let dof = kinds.len();
     if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
         // The authors' results files hold the six joint angles of a revolute arm.
@@ -40,7 +68,7 @@ pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Resul
             .collect();
         return Ok(Dataset { measurements, temperature_names: Vec::new() });
     }
-    let recs = records(path, text)?;
+    let recs = records_any_dialect(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
     };
@@ -74,7 +102,10 @@ pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Resul
             .enumerate()
             .map(|(k, &c)| {
                 let kind = kinds.get(k).copied().unwrap_or(JointKind::Revolute);
-                number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(|v| joint_value_in(kind, v))
+                number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(|v| match (kind, units) {
+                    (JointKind::Revolute, JointUnits::Radians) => v,
+                    _ => joint_value_in(kind, v),
+                })
             })
             .collect::<Result<Vec<_>, _>>()?;
         let p = Vector3::new(

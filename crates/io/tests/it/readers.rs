@@ -103,3 +103,32 @@ fn measurements_convert_per_joint_kind() {
             .unwrap();
     assert_eq!(again, data);
 }
+
+#[test]
+fn tracker_exports_in_every_dialect_and_unit_read_alike() {
+    use thermokin_io::{JointKind, JointUnits, parse_measurements, parse_measurements_with};
+    let kinds = [JointKind::Revolute, JointKind::Prismatic];
+    let path = std::path::Path::new("m.csv");
+    let commas = "time_min,q1,q2,x,y,z,temp_j1\n0,90,250,1.5,2,3,20.25\n5,-45,10.5,4,-5.125,6,21\n";
+    let reference = parse_measurements(path, commas, &kinds).unwrap();
+    // A European spreadsheet: semicolons, decimal commas.
+    let semicolons = "time_min;q1;q2;x;y;z;temp_j1\r\n0;90;250;1,5;2;3;20,25\r\n5;-45;10,5;4;-5,125;6;21\r\n";
+    assert_eq!(parse_measurements(path, semicolons, &kinds).unwrap(), reference);
+    // A whitespace-separated tracker report (tabs and runs of spaces), with a comment line.
+    let spaces = "# exported by the tracker\ntime_min\tq1  q2 x y z temp_j1\n0 90 250   1.5 2 3 20.25\n5\t-45 10.5 4 -5.125 6 21\n";
+    assert_eq!(parse_measurements(path, spaces, &kinds).unwrap(), reference);
+    // Radians by flag: the revolute column only (the prismatic one stays millimetres).
+    let radians = format!(
+        "time_min,q1,q2,x,y,z,temp_j1\n0,{},250,1.5,2,3,20.25\n5,{},10.5,4,-5.125,6,21\n",
+        std::f64::consts::FRAC_PI_2,
+        -std::f64::consts::FRAC_PI_4
+    );
+    let read = parse_measurements_with(path, &radians, &kinds, JointUnits::Radians).unwrap();
+    for (a, b) in read.measurements.iter().zip(&reference.measurements) {
+        assert!((a.q[0] - b.q[0]).abs() < 1e-15 && a.q[1] == b.q[1] && a.position_mm == b.position_mm);
+    }
+    // A bad number in a semicolon file is located like any other.
+    let bad = "q1;q2;x;y;z\n1;2;3;4;5\n1;2;drei;4;5\n";
+    let e = parse_measurements(path, bad, &kinds).unwrap_err().to_string();
+    assert!(e.contains("m.csv:3") && e.contains('x'), "{e}");
+}
