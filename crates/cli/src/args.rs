@@ -284,6 +284,11 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// How poses are grouped into validation folds: time (default; time-grouped, or shuffled for a static
+    /// set), region (leave one workspace quadrant out) or configuration (leave one arm branch out) — the
+    /// latter two test whether an effect transfers to poses unlike those it was fitted on.
+    #[arg(long, value_enum, default_value_t = FoldsByArg::Time)]
+    pub folds_by: FoldsByArg,
     /// Unit of the measurement files' revolute joint columns: deg (default) or rad (ROS, robot SDKs).
     #[arg(long, value_enum, default_value_t = JointUnitsArg::Deg)]
     pub joint_units: JointUnitsArg,
@@ -297,6 +302,17 @@ pub struct DiagnoseArgs {
     /// Compliance and thermal drift depend on the load and on time and are left out (named when so).
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,
+}
+
+/// `--folds-by`.
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FoldsByArg {
+    /// Time-grouped folds (or a seeded shuffle).
+    Time,
+    /// Leave one workspace region out.
+    Region,
+    /// Leave one arm configuration out.
+    Configuration,
 }
 
 /// `--joint-units` of measurement files.

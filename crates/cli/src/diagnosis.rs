@@ -8,11 +8,11 @@ use plotters::prelude::*;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{
-    Config, DriftShape, Effect, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
+    Config, DriftShape, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
 };
 use thermokin_io::{JointUnits, read_measurements_with, write_atomic, write_atomic_with, write_measurements};
 
-use crate::args::{DiagnoseArgs, FrameArg, JointUnitsArg, SimulateArgs, ToolArg};
+use crate::args::{DiagnoseArgs, FoldsByArg, FrameArg, JointUnitsArg, SimulateArgs, ToolArg};
 use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
@@ -38,6 +38,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         return Err(Failure::input(anyhow!("--noise must be a positive standard deviation in mm")));
     }
     let config = Config {
+        folds_by: match a.folds_by {
+            FoldsByArg::Time => FoldGrouping::Time,
+            FoldsByArg::Region => FoldGrouping::WorkspaceRegion,
+            FoldsByArg::Configuration => FoldGrouping::JointConfiguration,
+        },
         noise_mm: a.noise,
         folds: a.folds,
         frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },

@@ -11,7 +11,7 @@ use crate::report::{
     EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, ParameterValue, PoseReport, Report, Stats,
     TableRow, breakdown,
 };
-use crate::validation::{Ctx, Relation, Scored, kfold, significantly_better};
+use crate::validation::{Ctx, Relation, Scored, folds_for, significantly_better};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -53,9 +53,25 @@ pub struct Config {
     pub seed: u64,
     /// How the reported held-out error of the whole procedure is obtained.
     pub validation: Validation,
+    /// How measurements are grouped into folds, for the selection and for the nested validation.
+    pub folds_by: FoldGrouping,
     /// The measurement noise per axis (standard deviation, mm), when known — a tracker's specification:
     /// the verdict compares the held-out error with it. `None`: the verdict says it cannot.
     pub noise_mm: Option<f64>,
+}
+
+/// How measurements are grouped into cross-validation folds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum FoldGrouping {
+    /// `folds` folds grouped in time when the data span time, a seeded shuffle otherwise (the default).
+    #[default]
+    Time,
+    /// One fold per workspace quadrant (reach × height against their medians): held-out poses lie in a
+    /// region the fit never saw.
+    WorkspaceRegion,
+    /// One fold per arm configuration (elbow against its median × wrist sign): held-out poses are on a
+    /// branch the fit never saw.
+    JointConfiguration,
 }
 
 /// How the diagnosis's own held-out error is measured.
@@ -84,6 +100,7 @@ impl Default for Config {
             seed: 0xd1a6,
             validation: Validation::Nested { outer: 5 },
             noise_mm: None,
+            folds_by: FoldGrouping::Time,
         }
     }
 }
@@ -261,7 +278,7 @@ fn always_estimated(config: &Config) -> Vec<Effect> {
 /// training part only, the model it picks is fitted there and scored on the fold's test part; the
 /// nominal model (the always-estimated blocks) is scored the same way.
 fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Result<Nested, DiagnoseError> {
-    let folds = kfold(data, outer, config.seed ^ 0x0e7e_5eed);
+    let folds = folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by);
     let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
     let always = always_estimated(config);
     let mut nominal_norms = Vec::new();
@@ -300,7 +317,11 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
         return Err(DiagnoseError::TooFewMeasurements { count: data.len(), folds: config.folds, needed });
     }
     let ctx = Ctx::new(robot, data, config);
-    let validation = if data.time_span() > 0.0 {
+    let validation = if config.folds_by == FoldGrouping::WorkspaceRegion {
+        "leave one workspace region out (4 quadrants of reach × height)".to_string()
+    } else if config.folds_by == FoldGrouping::JointConfiguration {
+        "leave one arm configuration out (elbow × wrist)".to_string()
+    } else if data.time_span() > 0.0 {
         format!(
             "{}-fold cross-validation, folds grouped in time; time-dependent effects also forward-chained",
             config.folds

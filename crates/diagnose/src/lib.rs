@@ -16,7 +16,7 @@ mod simulate;
 mod validation;
 
 pub use fit::{FixedParameter, Observability};
-pub use ladder::{Config, FrameMode, ToolMode, Validation, diagnose};
+pub use ladder::{Config, FoldGrouping, FrameMode, ToolMode, Validation, diagnose};
 pub use model::{DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques};
 pub use report::{
     Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow,

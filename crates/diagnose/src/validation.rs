@@ -37,6 +37,45 @@ pub(crate) fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
         .collect()
 }
 
+/// The folds `config` asks for: [`kfold`] by default, or one fold per workspace region or joint
+/// configuration (leave one group out), so that an effect which only memorises a region or a branch
+/// scores worse than one that transfers.
+pub(crate) fn folds_for(data: &Dataset, k: usize, seed: u64, by: crate::FoldGrouping) -> Folds {
+    let groups: Vec<usize> = match by {
+        crate::FoldGrouping::Time => return kfold(data, k, seed),
+        crate::FoldGrouping::WorkspaceRegion => {
+            // Reach (distance from the base's Z axis) and height against their medians: four quadrants.
+            let reach: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.xy().norm()).collect();
+            let height: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.z).collect();
+            let (mr, mh) = (median(&reach), median(&height));
+            (0..data.len()).map(|i| usize::from(reach[i] > mr) * 2 + usize::from(height[i] > mh)).collect()
+        }
+        crate::FoldGrouping::JointConfiguration => {
+            // The arm's branch: the sign of each joint that decides one (elbow: joint 3 against its
+            // median; wrist: joint 5's sign) — ABB's cfx bits for the arms of this project.
+            let elbow: Vec<f64> = data.measurements.iter().map(|m| m.q.get(2).copied().unwrap_or(0.0)).collect();
+            let me = median(&elbow);
+            let wrist = |i: usize| data.measurements[i].q.get(4).is_some_and(|&v| v > 0.0);
+            (0..data.len()).map(|i| usize::from(elbow[i] > me) * 2 + usize::from(wrist(i))).collect()
+        }
+    };
+    let labels: std::collections::BTreeSet<usize> = groups.iter().copied().collect();
+    labels
+        .into_iter()
+        .map(|g| {
+            let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| groups[i] == g);
+            (train, test)
+        })
+        .filter(|(train, test)| !train.is_empty() && !test.is_empty())
+        .collect()
+}
+
+fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s.get(s.len() / 2).copied().unwrap_or(0.0)
+}
+
 /// Forward-chained folds: train on the earliest blocks, test on the next one.
 pub(crate) fn forward_chained(data: &Dataset, k: usize) -> Folds {
     let n = data.len();
@@ -68,7 +107,7 @@ impl<'a> Ctx<'a> {
             robot,
             data,
             pre: crate::model::prepare(robot, data),
-            folds: kfold(data, config.folds, config.seed),
+            folds: folds_for(data, config.folds, config.seed, config.folds_by),
             forward: forward_chained(data, config.folds),
         }
     }

@@ -94,3 +94,29 @@ fn radians_and_unregistered_tracker_frames_are_warned_about() {
     let clean = measure(robot.chain(), 60, 45, <[f64]>::to_vec);
     assert!(diagnose(&robot, &clean, None, &config).unwrap().warnings.is_empty());
 }
+
+#[test]
+fn folds_by_region_and_configuration_test_transfer() {
+    // A gear-ratio error transfers: fitted on three workspace quadrants (or three arm branches), it
+    // predicts the fourth at the noise.
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let data = measure(robot.chain(), 200, 47, |q| {
+        let mut a = q.to_vec();
+        a[1] *= 1.0 + 5e-4;
+        a
+    });
+    for by in [thermokin_diagnose::FoldGrouping::WorkspaceRegion, thermokin_diagnose::FoldGrouping::JointConfiguration]
+    {
+        let config = Config { folds_by: by, ..Config::default() };
+        let report = diagnose(&robot, &data, None, &config).unwrap();
+        let nested = report.nested.as_ref().unwrap();
+        eprintln!(
+            "{by:?}: {} — {:?}; nested {:.4} mm",
+            report.validation, nested.selections, nested.selected.heldout_rms_mm
+        );
+        assert!(report.validation.starts_with("leave one"), "{}", report.validation);
+        assert_eq!(nested.selections.len(), 4, "one outer fold per group");
+        assert_eq!(report.effects[0].label, "joint_scale[2]");
+        assert!(nested.selected.heldout_rms_mm <= 1.5 * NOISE_MM * 3f64.sqrt());
+    }
+}
