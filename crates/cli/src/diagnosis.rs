@@ -110,6 +110,9 @@ fn print_report(r: &Report) {
     }
     if let Some(h) = &r.holdout {
         println!("\nexplicit hold-out set (fitted on all measurements; never used to choose), mm:");
+        if !h.refitted.is_empty() {
+            println!("  (its own frame and probe: {} refitted on it, the effects kept)", h.refitted.join(", "));
+        }
         line("nominal", &h.nominal);
         line("the effects chosen below", &h.selected);
     }

@@ -188,8 +188,28 @@ pub(crate) fn fit(
     rows: &[usize],
     pre: &(Vec<Vec<f64>>, Vec<f64>),
 ) -> Result<Fit, DiagnoseError> {
+    let start = Start { theta: model.initial(), movable: vec![true; model.len()] };
+    fit_from(robot, model, data, rows, pre, &start)
+}
+
+/// Where a fit starts and what it may move: parameters with `movable[k] = false` keep `theta[k]`.
+pub(crate) struct Start {
+    pub(crate) theta: Vec<f64>,
+    pub(crate) movable: Vec<bool>,
+}
+
+/// [`fit`] from `start`, moving only its movable parameters (a transfer: the effects fitted on one
+/// file, only the frame and tool refitted on another).
+pub(crate) fn fit_from(
+    robot: &Robot,
+    model: &Model,
+    data: &Dataset,
+    rows: &[usize],
+    pre: &(Vec<Vec<f64>>, Vec<f64>),
+    start: &Start,
+) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
-    let mut theta = model.initial();
+    let mut theta = start.theta.clone();
     let (mut r, mut jac) = residuals(robot, model, &theta, data, rows, pre, true)?;
     let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut cost = ssr(&r);
@@ -201,7 +221,7 @@ pub(crate) fn fit(
     // Two passes: a parameter that acts only through another (an exponential drift's τ through its
     // amplitude, zero at the start) becomes identifiable once the first pass has moved the other.
     for _pass in 0..2 {
-        let (f, fx) = identifiable(&jac, &names, &vec![true; model.len()]);
+        let (f, fx) = identifiable(&jac, &names, &start.movable);
         if f == free {
             break;
         }

@@ -5,8 +5,8 @@ use rayon::prelude::*;
 use serde::Serialize;
 use thermokin_chain::Robot;
 
-use crate::fit::{fit, observability, residuals};
-use crate::model::{DriftShape, Effect, JointIndex, prepare_against};
+use crate::fit::{Start, fit, fit_from, initial_registration, observability, residuals};
+use crate::model::{DriftShape, Effect, JointIndex, Model, prepare_against};
 use crate::report::{
     EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, ParameterValue, PoseReport, Report, Stats,
     TableRow, breakdown,
@@ -183,15 +183,38 @@ pub fn diagnose(
         report.nested = Some(nested(robot, data, config, outer)?);
     }
     if let Some(h) = holdout {
-        // Fitted on all of `data`, scored on `holdout`: the selection above never saw it.
+        // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
+        // registration or the tool point is always estimated, the hold-out file may be in another tracker
+        // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
         let ctx = Ctx::new(robot, data, config);
+        let rows: Vec<usize> = (0..h.len()).collect();
+        let pre = prepare_against(robot, h, data);
         let score = |e: &[Effect]| -> Result<Stats, DiagnoseError> {
-            let (model, f) = ctx.full_fit(e)?;
-            let rows: Vec<usize> = (0..h.len()).collect();
-            let (r, _) = residuals(robot, &model, &f.theta, h, &rows, &prepare_against(robot, h, data), false)?;
+            let (trained, f) = ctx.full_fit(e)?;
+            let (model, theta) = if trained.effects().iter().any(|b| !b.is_reported()) {
+                let mut model = Model::new(robot, e.to_vec())?;
+                if model.has_registration() {
+                    model = model.with_registration(initial_registration(robot, h, &rows)?);
+                }
+                let mut theta = f.theta.clone();
+                let mut movable = vec![false; model.len()];
+                for (b, &o) in model.effects().iter().zip(model.offsets()) {
+                    if !b.is_reported() {
+                        // The frame blocks restart from the hold-out file's own registration.
+                        theta[o..o + b.len()].fill(0.0);
+                        movable[o..o + b.len()].fill(true);
+                    }
+                }
+                let refit = fit_from(robot, &model, h, &rows, &pre, &Start { theta, movable })?;
+                (model, refit.theta)
+            } else {
+                (trained, f.theta)
+            };
+            let (r, _) = residuals(robot, &model, &theta, h, &rows, &pre, false)?;
             Ok(Stats::of(&r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()).collect::<Vec<_>>()))
         };
-        report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)? });
+        let refitted = always.iter().map(Effect::label).collect();
+        report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
     }
     report.warnings = warnings(robot, data, config, &report);
     report.verdict = verdict(config, &report);

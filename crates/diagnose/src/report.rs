@@ -130,6 +130,9 @@ pub struct HoldoutStats {
     pub nominal: Stats,
     /// The selected model.
     pub selected: Stats,
+    /// The blocks refitted on the hold-out file (its own tracker frame, its own probe); the effects are
+    /// kept as fitted on the training file.
+    pub refitted: Vec<String>,
 }
 
 /// The diagnosis.

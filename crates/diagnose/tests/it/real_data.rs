@@ -134,3 +134,36 @@ fn paper_static_case_gap() {
     assert!(report.additive[1].stats.heldout_rms_mm < 0.01, "{:?}", report.additive[1]);
     assert!(after < 0.005, "{after}");
 }
+
+#[test]
+fn a_holdout_file_in_another_tracker_frame_is_refitted_not_misread() {
+    // Rokae robot B: 20 poses to diagnose, the other 10 as a hold-out file moved into another tracker
+    // frame (metres away, turned 70°): the registration and the probe are refitted on it, the effects
+    // kept — instead of reporting the frame change as thousands of millimetres of error.
+    let (robot, data) = rokae();
+    let train = data.subset(&(0..20).collect::<Vec<_>>());
+    let mut holdout = data.subset(&(20..30).collect::<Vec<_>>());
+    let other_from_tracker =
+        nalgebra::Isometry3::new(Vector3::new(-2400.0, 1300.0, 250.0), Vector3::new(0.1, -0.05, 1.2));
+    for m in &mut holdout.measurements {
+        m.position_mm = (other_from_tracker * nalgebra::Point3::from(m.position_mm)).coords;
+    }
+    let config = Config {
+        frame: FrameMode::Tracker,
+        tool: ToolMode::Unknown,
+        validation: thermokin_diagnose::Validation::SelectionOnly,
+        ..Config::default()
+    };
+    let report = diagnose(&robot, &train, Some(&holdout), &config).unwrap();
+    let h = report.holdout.unwrap();
+    eprintln!(
+        "hold-out in another frame: nominal {:.4} → selected {:.4} mm (mean), refitted {:?}; selection CV {:.4} mm",
+        h.nominal.heldout_mean_mm,
+        h.selected.heldout_mean_mm,
+        h.refitted,
+        report.additive.last().unwrap().stats.heldout_mean_mm
+    );
+    assert_eq!(h.refitted, vec!["registration".to_string(), "tool_point".to_string()]);
+    assert!(h.nominal.heldout_mean_mm > 1.0 && h.nominal.heldout_mean_mm < 10.0, "{}", h.nominal.heldout_mean_mm);
+    assert!(h.selected.heldout_mean_mm < 0.5 * h.nominal.heldout_mean_mm, "{}", h.selected.heldout_mean_mm);
+}
