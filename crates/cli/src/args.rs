@@ -186,7 +186,7 @@ pub struct IkArgs {
     /// closed form (axes 2 and 3 parallel and a spherical wrist — the IRB 140, most ABB/KUKA/Fanuc arms —
     /// or axes 2, 3, 4 parallel — the UR family), the
     /// up to 8 branches (shoulder front/back, elbow up/down, wrist flip), each refined on the robot as
-    /// loaded, with ABB confdata [cf1,cf4,cf6,cfx], KUKA Turn and whether it is reachable in the limits.
+    /// loaded, with ABB confdata (cf1, cf4, cf6, cfx), KUKA Status and Turn and whether it is reachable in the limits.
     #[arg(long)]
     pub branches: bool,
     /// Print JSON.

@@ -431,7 +431,7 @@ fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
 }
 
 /// The robot as TOML in the extended convention (what `read_robot` reads back), millimetres and
-/// degrees, numbers rounded to 1e-12 (see [`FILE_DECIMALS`]).
+/// degrees, numbers rounded to 1e-12 (`FILE_DECIMALS`).
 pub fn robot_to_toml(robot: &Robot) -> String {
     let mut s = format!(
         "# Written by thermokin: the same-orientation extended table, mm and degrees.\nname = {:?}\nconvention = \"extended\"\n",
