@@ -79,7 +79,7 @@ pub struct ClosedForm {
 
 impl ClosedForm {
     /// The ideal geometry nearest to `chain`, or `None` when the chain is not a six-revolute-joint arm of
-    /// a [`Family`] (within [`PARALLEL_TOL`] and [`WRIST_TOL_MM`]).
+    /// a [`Family`] (axes within 5° of parallel, wrist axes within 5 mm of their common point).
     pub fn detect(chain: &Chain) -> Option<Self> {
         if chain.dof() != 6 || chain.joints().iter().any(|j| j.kind != JointKind::Revolute) {
             return None;

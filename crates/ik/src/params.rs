@@ -145,7 +145,7 @@ pub enum Status {
     /// A solution was found, but farther from the seed than `max_distance_from_seed` allows.
     FarFromSeed,
     /// The solver's residual reached the tolerances but the independent recomputation of the pose error
-    /// (see [`solve`]) did not: the answer is not trusted. Never expected; a bug if seen.
+    /// (see [`crate::solve`]) did not: the answer is not trusted. Never expected; a bug if seen.
     Unverified,
 }
 

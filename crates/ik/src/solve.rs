@@ -136,7 +136,7 @@ fn distance(a: &[f64], b: &[f64]) -> f64 {
 /// Solves one target from `seed`. `index` only feeds the restart generator (batch determinism).
 ///
 /// `Converged` is a claim checked before it is made: the solver stops when its residual (matrix log of the
-/// rotation error, [`rotation_log`]) is within the tolerances, and the answer is then re-measured
+/// rotation error, [`thermokin_chain::rotation_log`]) is within the tolerances, and the answer is then re-measured
 /// independently — forward kinematics through [`Chain::tool_pose`] and the quaternion angle
 /// [`rotation_angle`]. Only when that too is within the tolerances is the status `Converged`; the errors
 /// reported in every [`Solution`] are the independent ones.

@@ -3,7 +3,7 @@
 //! This crate holds what is specific to reproducing *the paper* rather than to compensating a user's
 //! robot: [`reproduce`], both case studies rerun and compared side by side; [`scene`], the authors' CoppeliaSim scene identified from their files and replayed —
 //! why FK of their published static angles sat 0.45 mm from their published coordinates, and which
-//! explanations the data confirm or reject; and [`print`], the printed result tables as data, compared
+//! explanations the data confirm or reject; and [`mod@print`], the printed result tables as data, compared
 //! with the authors' files and with their angles on the replayed scene.
 //!
 //! Every number here is computed from the authors' files (`fixtures/paper/authors/`) and Table 9; none
