@@ -173,6 +173,14 @@ fn print_report(r: &Report) {
     if let Some([x, y, z]) = r.frames.tool_point_mm {
         println!("fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm");
     }
+    if !r.identifiability.correlated.is_empty() {
+        println!(
+            "\nnearly unidentifiable combinations (estimates correlated above 0.99: their combination is determined, not each):"
+        );
+        for c in &r.identifiability.correlated {
+            println!("  {} ~ {} (correlation {:+.4})", c.a, c.b, c.correlation);
+        }
+    }
     println!("\nverdict: {}", r.verdict);
     println!("\nwhere the nominal model's residuals lie (RMS, mm; → after the effects found):");
     let (b, a) = (&r.residuals_before, &r.residuals_after);

@@ -56,6 +56,25 @@ pub struct Fit {
     pub free: Vec<bool>,
     /// Sum of squared residuals, mm².
     pub ssr: f64,
+    /// Pairs of free parameters the data barely tell apart: correlation of their estimates above
+    /// [`NEARLY_DEPENDENT`] in magnitude.
+    pub correlated: Vec<CorrelatedPair>,
+}
+
+/// Correlation above which two estimates are reported as a nearly unidentifiable combination: at 0.99
+/// each one's standard deviation is inflated 7× (`1/√(1 − ρ²)`) over what it would be alone — the data
+/// determine their combination, not each.
+pub const NEARLY_DEPENDENT: f64 = 0.99;
+
+/// Two parameters whose estimates move together.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct CorrelatedPair {
+    /// First parameter.
+    pub a: String,
+    /// Second parameter.
+    pub b: String,
+    /// Correlation of the two estimates.
+    pub correlation: f64,
 }
 
 /// Residual rows `measured − predicted` (3 per measurement) and the Jacobian of `predicted`.
@@ -295,6 +314,7 @@ pub(crate) fn fit_from(
     let dof = (m - p as f64).max(1.0);
     let sigma2 = cost / dof;
     let mut std = vec![f64::NAN; model.len()];
+    let mut correlated = Vec::new();
     if p > 0
         && let Ok(llt) = last_a.llt(faer::Side::Lower)
     {
@@ -302,8 +322,20 @@ pub(crate) fn fit_from(
         for (k, &c) in cols.iter().enumerate() {
             std[c] = (sigma2 * inv[(k, k)]).max(0.0).sqrt() / scale[k];
         }
+        for i in 0..p {
+            for j in i + 1..p {
+                let rho = inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
+                if rho.abs() > NEARLY_DEPENDENT {
+                    correlated.push(CorrelatedPair {
+                        a: names[cols[i]].clone(),
+                        b: names[cols[j]].clone(),
+                        correlation: rho,
+                    });
+                }
+            }
+        }
     }
-    Ok(Fit { theta, std, fixed, free, ssr: cost })
+    Ok(Fit { theta, std, fixed, free, ssr: cost, correlated })
 }
 
 /// Closed-form rigid registration (Kabsch): the `T` minimising Σ |b_i − T a_i|².

@@ -573,7 +573,12 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
         effects: reports,
         additive,
         leave_one_out,
-        identifiability: Identifiability { observability, fixed: final_fit.fixed.clone(), skipped_candidates: skipped },
+        identifiability: Identifiability {
+            observability,
+            fixed: final_fit.fixed.clone(),
+            skipped_candidates: skipped,
+            correlated: final_fit.correlated.clone(),
+        },
         residuals_before: breakdown(robot, data, &nominal_model, &nominal_fit.theta, &ctx.pre)?,
         residuals_after: breakdown(robot, data, &model, &final_fit.theta, &ctx.pre)?,
         bic,

@@ -15,7 +15,7 @@ mod report;
 mod simulate;
 mod validation;
 
-pub use fit::{FixedParameter, Observability};
+pub use fit::{CorrelatedPair, FixedParameter, NEARLY_DEPENDENT, Observability};
 pub use ladder::{Config, FoldGrouping, FrameMode, ToolMode, Validation, diagnose};
 pub use model::{DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques};
 pub use report::{

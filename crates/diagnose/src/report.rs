@@ -92,6 +92,9 @@ pub struct Identifiability {
     pub fixed: Vec<FixedParameter>,
     /// Candidates skipped because they add nothing identifiable to the model: (candidate, reason).
     pub skipped_candidates: Vec<(String, String)>,
+    /// Nearly unidentifiable combinations of the final model: pairs of parameters whose estimates are
+    /// correlated above 0.99 (their combination is determined, not each).
+    pub correlated: Vec<crate::fit::CorrelatedPair>,
 }
 
 /// Residual RMS broken down by groups of measurements, mm.

@@ -79,6 +79,13 @@ fn rokae_robot_b_additive_table() {
     // The always-estimated blocks are reported: where the tracker saw the base, and the probe.
     eprintln!("registration {:?}; tool point {:?} mm", report.frames.registration, report.frames.tool_point_mm);
     assert!(report.frames.registration.is_some() && report.frames.tool_point_mm.is_some());
+    // With an unknown probe and positions only, the wrist row's rotations and translations trade against
+    // each other and the probe: the report must name those combinations.
+    assert!(!report.identifiability.correlated.is_empty(), "no nearly unidentifiable combination named");
+    for c in &report.identifiability.correlated {
+        eprintln!("nearly unidentifiable: {} ~ {} ({:+.4})", c.a, c.b, c.correlation);
+        assert!(c.correlation.abs() > thermokin_diagnose::NEARLY_DEPENDENT);
+    }
     assert!(nested.selected.heldout_mean_mm < nested.nominal.heldout_mean_mm);
     // The independent fit, 5-fold held-out: 2.22 mm nominal (registration and tool fitted) → 0.22 mm with
     // joint offsets → 0.125 mm with full geometry. Those are mean errors: our nominal held-out mean is
