@@ -258,10 +258,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("thermokin-deform", &["thermokin-chain"]),
     ("thermokin-ik", &["thermokin-chain"]),
     ("thermokin-urdf", &["thermokin-chain"]),
-    ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform"]),
     // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
     // deform) and knows no identification, IK or compensation.
     ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf"]),
+    // The diagnosis converts its report units through io's one unit boundary.
+    ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform", "thermokin-io", "thermokin-urdf"]),
     // The compensation's writers put results in degrees through io's one unit boundary.
     (
         "thermokin-compensate",
@@ -282,10 +283,10 @@ const ALLOWED: &[(&str, &[&str])] = &[
 ];
 
 /// File-format and CLI crates, allowed only where named.
-/// (`thermokin-paper` and `thermokin-compensate` see them only through `thermokin-io`.)
+/// (`thermokin-paper`, `thermokin-compensate` and `thermokin-diagnose` see them only through `thermokin-io`.)
 const FORMAT_CRATES: &[(&str, &[&str])] = &[
-    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-paper"]),
-    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-paper"]),
+    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper"]),
+    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper"]),
     ("clap", &[]),
 ];
 

@@ -1,7 +1,7 @@
 //! Measured poses: plain data, read from files by `thermokin-io` and fitted by `thermokin-diagnose`. They
 //! live in the core so that the readers sit below the algorithms that use them.
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
 /// One measured pose.
 #[derive(Clone, Debug, PartialEq)]
@@ -12,6 +12,9 @@ pub struct Measurement {
     pub q: Vec<f64>,
     /// Measured TCP position, mm.
     pub position_mm: Vector3<f64>,
+    /// Measured tool orientation in the same frame, when the probe measures one (a 6-D probe: T-Mac,
+    /// three reflectors); `None` for a position-only reflector.
+    pub orientation: Option<UnitQuaternion<f64>>,
     /// Temperatures, °C, in the order of [`Dataset::temperature_names`].
     pub temps: Vec<f64>,
 }
@@ -41,6 +44,10 @@ impl Dataset {
     /// `true` when there are none.
     pub fn is_empty(&self) -> bool {
         self.measurements.is_empty()
+    }
+    /// `true` when every measurement carries an orientation (the diagnosis then fits 6-D poses).
+    pub fn has_orientation(&self) -> bool {
+        !self.measurements.is_empty() && self.measurements.iter().all(|m| m.orientation.is_some())
     }
     /// The time span covered, minutes.
     pub fn time_span(&self) -> f64 {

@@ -296,6 +296,15 @@ pub struct DiagnoseArgs {
     /// 0.01. The verdict then says whether what remains is that noise or an effect the catalogue lacks.
     #[arg(long, value_name = "MM")]
     pub noise: Option<f64>,
+    /// Weight of measured orientations (rx, ry, rz columns: a 6-D probe) as a lever in mm: a rotation
+    /// error of δφ counts as the displacement lever·δφ it causes that far from the tool point. 0 fits
+    /// positions only. Ignored when the files carry no orientation.
+    #[arg(long, value_name = "MM", default_value_t = 100.0)]
+    pub orientation_lever: f64,
+    /// The orientation noise per axis of a 6-D probe (one standard deviation, degrees), e.g. 0.01: with
+    /// --noise, the verdict's noise floor then includes the orientations.
+    #[arg(long, value_name = "DEG")]
+    pub orientation_noise: Option<f64>,
     /// Write the identified robot — the final model fitted on all measurements: registration (as the
     /// base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
     /// deviations — as a robot TOML (or URDF if FILE ends in .urdf) that fk, ik and compensate accept.
@@ -383,6 +392,10 @@ pub struct SimulateArgs {
     /// Time span of the measurements, minutes.
     #[arg(long, default_value_t = 240.0)]
     pub minutes: f64,
+    /// Also measure the tool's orientation (a 6-D probe: rx, ry, rz columns), with this noise per axis
+    /// in degrees (standard deviation of a small random turn).
+    #[arg(long, value_name = "DEG")]
+    pub orientation_noise: Option<f64>,
     /// Seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,

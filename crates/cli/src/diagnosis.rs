@@ -37,6 +37,12 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
         return Err(Failure::input(anyhow!("--noise must be a positive standard deviation in mm")));
     }
+    if !(a.orientation_lever.is_finite() && a.orientation_lever >= 0.0) {
+        return Err(Failure::input(anyhow!("--orientation-lever must be ≥ 0 mm")));
+    }
+    if a.orientation_noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
+        return Err(Failure::input(anyhow!("--orientation-noise must be a positive standard deviation in degrees")));
+    }
     let config = Config {
         folds_by: match a.folds_by {
             FoldsByArg::Time => FoldGrouping::Time,
@@ -44,6 +50,8 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
             FoldsByArg::Configuration => FoldGrouping::JointConfiguration,
         },
         noise_mm: a.noise,
+        orientation_lever_mm: a.orientation_lever,
+        orientation_noise_deg: a.orientation_noise,
         folds: a.folds,
         frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },
         tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
@@ -91,6 +99,11 @@ identified robot → {}",
 fn print_report(r: &Report) {
     for w in &r.warnings {
         println!("warning: {w}");
+    }
+    if let Some(lever) = r.orientation_lever_mm {
+        println!(
+            "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²) (--orientation-lever)"
+        );
     }
     let line = |what: &str, s: &thermokin_diagnose::Stats| {
         println!("  {what:<44} {:>9.4} {:>9.4} {:>9.4}", s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm)
@@ -152,6 +165,7 @@ fn print_report(r: &Report) {
                 } else {
                     format!("; contained in: {}", e.contained_in.join(", "))
                 }
+                + &if e.contains.is_empty() { String::new() } else { format!("; contains: {}", e.contains.join(", ")) }
         );
         for (name, v) in &e.parameters {
             match (&v.fixed, v.std) {
@@ -172,6 +186,9 @@ fn print_report(r: &Report) {
     }
     if let Some([x, y, z]) = r.frames.tool_point_mm {
         println!("fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm");
+    }
+    if let Some([x, y, z]) = r.frames.tool_rotation_deg {
+        println!("fitted probe rotation (tool row's X-Y-Z error angles): {x:.5}, {y:.5}, {z:.5}°");
     }
     if !r.identifiability.correlated.is_empty() {
         println!(
@@ -295,6 +312,11 @@ fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Resu
     };
     let effect = Effect::named(robot, name, joint).map_err(|e| anyhow!("--effect {spec}: {e}"))?;
     let report_units: Vec<f64> = match values {
+        // A tool-frame error given as a point only (three values): no rotation.
+        Some(mut v) if effect == Effect::ToolFrame && v.len() == 3 => {
+            v.extend([0.0; 3]);
+            v
+        }
         Some(v) => {
             anyhow::ensure!(
                 v.len() == effect.len(),
@@ -327,6 +349,9 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     if !ok {
         return Err(Failure::input(anyhow!("--noise and --minutes must be ≥ 0 and --poses positive")));
     }
+    if a.orientation_noise.is_some_and(|n| !(n.is_finite() && n >= 0.0)) {
+        return Err(Failure::input(anyhow!("--orientation-noise must be ≥ 0 degrees")));
+    }
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
@@ -342,6 +367,7 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         minutes: a.minutes,
         noise_mm: a.noise,
         seed: a.seed,
+        orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),
         ..SimulationConfig::default()
     };
     let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(Failure::input)?;

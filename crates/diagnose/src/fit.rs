@@ -5,12 +5,12 @@
 use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::{DenseSolveCore, Solve};
 use faer::{Accum, Mat, Par};
-use nalgebra::{Isometry3, Matrix3, Matrix3xX, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix6xX, Vector3};
 use serde::Serialize;
 
-use thermokin_chain::Robot;
+use thermokin_chain::{Robot, rotation_log};
 
-use crate::model::Model;
+use crate::model::{Model, Pre};
 use crate::{Dataset, DiagnoseError};
 
 /// A parameter the data cannot identify, fixed at its starting value.
@@ -77,34 +77,58 @@ pub struct CorrelatedPair {
     pub correlation: f64,
 }
 
-/// Residual rows `measured − predicted` (3 per measurement) and the Jacobian of `predicted`.
+/// Residual rows `measured − predicted` and the Jacobian of `predicted`: per measurement the position
+/// (3 rows, mm) and, when [`Pre::lever_mm`] is set, the rotation `lever · log(R_measured · R_predictedᵀ)`
+/// (3 rows, mm at the lever; the Gauss–Newton Jacobian of that log is the angular twist, exact at zero
+/// residual).
 pub(crate) fn residuals(
     robot: &Robot,
     model: &Model,
     theta: &[f64],
     data: &Dataset,
     rows: &[usize],
-    pre: &(Vec<Vec<f64>>, Vec<f64>),
+    pre: &Pre,
     with_jacobian: bool,
 ) -> Result<(Vec<f64>, Mat<f64>), DiagnoseError> {
-    let mut r = Vec::with_capacity(rows.len() * 3);
-    let mut jac = if with_jacobian { Mat::zeros(rows.len() * 3, model.len()) } else { Mat::zeros(0, 0) };
-    let mut block = Matrix3xX::zeros(model.len());
+    let stride = pre.stride();
+    let mut r = Vec::with_capacity(rows.len() * stride);
+    let mut jac = if with_jacobian { Mat::zeros(rows.len() * stride, model.len()) } else { Mat::zeros(0, 0) };
+    let mut block = Matrix6xX::zeros(model.len());
     let mut cache = None;
     for (k, &i) in rows.iter().enumerate() {
         let m = &data.measurements[i];
-        let p = model.predict(robot, theta, m, pre.1[i], &pre.0[i], with_jacobian.then_some(&mut block), &mut cache)?;
+        let (p, rot) = model.predict(
+            robot,
+            theta,
+            m,
+            pre.rise[i],
+            &pre.torques[i],
+            with_jacobian.then_some(&mut block),
+            &mut cache,
+        )?;
         let d = m.position_mm - p;
         r.extend_from_slice(&[d.x, d.y, d.z]);
+        let lever = pre.lever_mm.unwrap_or(0.0);
+        if stride == 6 {
+            let measured = m.orientation.map(|o| o.to_rotation_matrix().into_inner()).unwrap_or(rot);
+            let e = rotation_log(&(measured * rot.transpose())) * lever;
+            r.extend_from_slice(&[e.x, e.y, e.z]);
+        }
         if with_jacobian {
             for c in 0..model.len() {
-                for a in 0..3 {
-                    jac[(3 * k + a, c)] = block[(a, c)];
+                for a in 0..stride {
+                    let w = if a < 3 { 1.0 } else { lever };
+                    jac[(stride * k + a, c)] = block[(a, c)] * w;
                 }
             }
         }
     }
     Ok((r, jac))
+}
+
+/// Per-measurement error norms of residual rows of `stride` rows each.
+pub(crate) fn norms(r: &[f64], stride: usize) -> Vec<f64> {
+    r.chunks(stride).map(|c| c.iter().map(|x| x * x).sum::<f64>().sqrt()).collect()
 }
 
 /// Relative residual below which a scaled column counts as a combination of earlier ones: well above the
@@ -131,10 +155,12 @@ pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> 
             continue;
         }
         let Some(v0) = unit(c) else {
-            fixed.push(FixedParameter {
-                parameter: names[c].clone(),
-                reason: "no effect on the measured positions".into(),
-            });
+            let reason = if names[c].starts_with("tool_frame.r") {
+                "moves no measured point: a tool's rotation is identified from measured orientations (rx, ry, rz)"
+            } else {
+                "no effect on the measurements"
+            };
+            fixed.push(FixedParameter { parameter: names[c].clone(), reason: reason.into() });
             continue;
         };
         let mut v = v0.clone();
@@ -205,7 +231,7 @@ pub(crate) fn fit(
     model: &Model,
     data: &Dataset,
     rows: &[usize],
-    pre: &(Vec<Vec<f64>>, Vec<f64>),
+    pre: &Pre,
 ) -> Result<Fit, DiagnoseError> {
     let start = Start { theta: model.initial(), movable: vec![true; model.len()] };
     fit_from(robot, model, data, rows, pre, &start)
@@ -224,7 +250,7 @@ pub(crate) fn fit_from(
     model: &Model,
     data: &Dataset,
     rows: &[usize],
-    pre: &(Vec<Vec<f64>>, Vec<f64>),
+    pre: &Pre,
     start: &Start,
 ) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
@@ -250,7 +276,7 @@ pub(crate) fn fit_from(
         let p = cols.len();
         scale = vec![1.0; p];
         let mut lambda = 1e-3;
-        let mut a = Mat::<f64>::zeros(rows.len() * 3, p);
+        let mut a = Mat::<f64>::zeros(rows.len() * pre.stride(), p);
         for _ in 0..100 {
             if p == 0 {
                 break;
@@ -310,7 +336,7 @@ pub(crate) fn fit_from(
     }
     let p = cols.len();
     // Uncertainty: σ̂² (AᵀA)⁻¹ on the scaled columns, unscaled.
-    let m = (rows.len() * 3) as f64;
+    let m = (rows.len() * pre.stride()) as f64;
     let dof = (m - p as f64).max(1.0);
     let sigma2 = cost / dof;
     let mut std = vec![f64::NAN; model.len()];
@@ -370,12 +396,13 @@ pub(crate) fn initial_registration(
     rows: &[usize],
 ) -> Result<Isometry3<f64>, DiagnoseError> {
     let model = Model::new(robot, vec![])?;
-    let pre = (vec![vec![0.0; robot.chain().dof()]; data.measurements.len()], vec![0.0; data.measurements.len()]);
+    let n = data.measurements.len();
+    let pre = Pre { torques: vec![vec![0.0; robot.chain().dof()]; n], rise: vec![0.0; n], lever_mm: None };
     let mut a = Vec::new();
     let mut b = Vec::new();
     for &i in rows {
         let m = &data.measurements[i];
-        if let Ok(p) = model.predict(robot, &[], m, pre.1[i], &pre.0[i], None, &mut None) {
+        if let Ok((p, _)) = model.predict(robot, &[], m, pre.rise[i], &pre.torques[i], None, &mut None) {
             a.push(p);
             b.push(m.position_mm);
         }

@@ -4,8 +4,9 @@
 use rayon::prelude::*;
 use serde::Serialize;
 use thermokin_chain::Robot;
+use thermokin_io::units;
 
-use crate::fit::{Start, fit, fit_from, initial_registration, observability, residuals};
+use crate::fit::{Start, fit, fit_from, initial_registration, norms, observability, residuals};
 use crate::model::{DriftShape, Effect, JointIndex, Model, prepare_against};
 use crate::report::{
     EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, ParameterValue, PoseReport, Report, Stats,
@@ -58,6 +59,15 @@ pub struct Config {
     /// The measurement noise per axis (standard deviation, mm), when known — a tracker's specification:
     /// the verdict compares the held-out error with it. `None`: the verdict says it cannot.
     pub noise_mm: Option<f64>,
+    /// The weight of measured orientations (6-D probes), as a lever: a rotation error of δφ radians
+    /// counts as the displacement `lever · δφ` mm it causes that far from the tool point, next to the
+    /// position error. 0 ignores orientations. The default, 100 mm, weighs 0.01° like 0.017 mm — the
+    /// ratio of a 6-D tracker probe's orientation and position accuracy. Every held-out error of a
+    /// diagnosis with orientations combines both: `√(|Δp|² + (lever · |δφ|)²)`.
+    pub orientation_lever_mm: f64,
+    /// The orientation noise per axis of a 6-D probe (standard deviation, degrees), when known: with
+    /// orientations fitted, the verdict's noise floor is `√(3σ² + 3(lever · σ_rot)²)`.
+    pub orientation_noise_deg: Option<f64>,
 }
 
 /// How measurements are grouped into cross-validation folds.
@@ -101,6 +111,8 @@ impl Default for Config {
             validation: Validation::Nested { outer: 5 },
             noise_mm: None,
             folds_by: FoldGrouping::Time,
+            orientation_lever_mm: 100.0,
+            orientation_noise_deg: None,
         }
     }
 }
@@ -178,7 +190,7 @@ pub fn diagnose(
         }
     }
     let (mut report, effects) = select(robot, data, config)?;
-    let always = always_estimated(config);
+    let always = always_estimated(config, data);
     if let Validation::Nested { outer } = config.validation {
         report.nested = Some(nested(robot, data, config, outer)?);
     }
@@ -188,7 +200,7 @@ pub fn diagnose(
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
         let ctx = Ctx::new(robot, data, config);
         let rows: Vec<usize> = (0..h.len()).collect();
-        let pre = prepare_against(robot, h, data);
+        let pre = prepare_against(robot, h, data, config.orientation_lever_mm);
         let score = |e: &[Effect]| -> Result<Stats, DiagnoseError> {
             let (trained, f) = ctx.full_fit(e)?;
             let (model, theta) = if trained.effects().iter().any(|b| !b.is_reported()) {
@@ -211,7 +223,7 @@ pub fn diagnose(
                 (trained, f.theta)
             };
             let (r, _) = residuals(robot, &model, &theta, h, &rows, &pre, false)?;
-            Ok(Stats::of(&r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()).collect::<Vec<_>>()))
+            Ok(Stats::of(&norms(&r, pre.stride())))
         };
         let refitted = always.iter().map(Effect::label).collect();
         report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
@@ -236,10 +248,10 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
     let largest = data.measurements.iter().flat_map(|m| revolute.iter().map(|&i| m.q[i].abs())).fold(0.0, f64::max);
     // 2π read as degrees is 0.11 rad: joint values that never leave ±6.3° over a calibration set were
     // most likely written in radians.
-    if data.len() >= 10 && !revolute.is_empty() && largest < std::f64::consts::TAU.to_radians() {
+    if data.len() >= 10 && !revolute.is_empty() && largest < units::radians(std::f64::consts::TAU) {
         out.push(format!(
             "every revolute joint value is within ±{:.2}°: were they written in radians? (files are read in degrees)",
-            largest.to_degrees()
+            units::degrees(largest)
         ));
     }
     // A nominal model off by more than 50 mm RMS in the base frame: the robot cannot be that wrong; the
@@ -254,8 +266,9 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
 }
 
 /// Whether what the effects leave is the noise: the nested held-out RMS (or the selection's own CV
-/// without nesting) against `√3 · σ` of the stated per-axis noise, with a factor 1.5 of margin (the
-/// 3-D RMS of Gaussian noise scatters by ~10 % over 100 poses; a model error shows as more).
+/// without nesting) against `√3 · σ` of the stated per-axis noise (`√(3σ² + 3(lever · σ_rot)²)` with
+/// orientations fitted), with a factor 1.5 of margin (the 3-D RMS of Gaussian noise scatters by ~10 %
+/// over 100 poses; a model error shows as more).
 fn verdict(config: &Config, report: &Report) -> String {
     let (held, how) = match &report.nested {
         Some(n) => (n.selected.heldout_rms_mm, "nested held-out"),
@@ -264,16 +277,26 @@ fn verdict(config: &Config, report: &Report) -> String {
             "cross-validated",
         ),
     };
-    match config.noise_mm {
+    let floor = match (config.noise_mm, report.orientation_lever_mm, config.orientation_noise_deg) {
+        (None, ..) => None,
+        (Some(sigma), None, _) => Some((sigma * 3f64.sqrt(), format!("σ = {sigma} mm per axis"))),
+        (Some(sigma), Some(lever), Some(rot)) => Some((
+            (3.0 * sigma * sigma + 3.0 * (lever * units::radians(rot)).powi(2)).sqrt(),
+            format!("σ = {sigma} mm and {rot}° per axis, lever {lever} mm"),
+        )),
+        (Some(_), Some(_), None) => {
+            return format!(
+                "{held:.4} mm RMS {how} remains (position and orientation combined); the orientation noise is not stated (--orientation-noise), so whether that is noise cannot be said"
+            );
+        }
+    };
+    match floor {
         None => format!(
             "{held:.4} mm RMS {how} remains; the measurement noise is not stated (--noise), so whether that is noise or an unexplained effect cannot be said"
         ),
-        Some(sigma) => {
-            let floor = sigma * 3f64.sqrt();
+        Some((floor, stated)) => {
             if held <= 1.5 * floor {
-                format!(
-                    "explained: {held:.4} mm RMS {how} is at the stated noise ({floor:.4} mm RMS for σ = {sigma} mm per axis)"
-                )
+                format!("explained: {held:.4} mm RMS {how} is at the stated noise ({floor:.4} mm RMS for {stated})")
             } else {
                 format!(
                     "not explained: {held:.4} mm RMS {how} remains, {:.1}× the stated noise ({floor:.4} mm RMS): an effect outside the catalogue, or more noise than stated",
@@ -286,13 +309,17 @@ fn verdict(config: &Config, report: &Report) -> String {
 
 /// The blocks every model estimates (never reported as causes): the tracker registration and an unknown
 /// tool point.
-fn always_estimated(config: &Config) -> Vec<Effect> {
+fn always_estimated(config: &Config, data: &Dataset) -> Vec<Effect> {
     let mut effects = Vec::new();
     if config.frame == FrameMode::Tracker {
         effects.push(Effect::Registration);
     }
     if config.tool == ToolMode::Unknown {
         effects.push(Effect::ToolPoint);
+        // An unknown 6-D probe: its rotation is as unknown as its point.
+        if data.has_orientation() && config.orientation_lever_mm > 0.0 {
+            effects.push(Effect::ToolRotation);
+        }
     }
     effects
 }
@@ -303,7 +330,7 @@ fn always_estimated(config: &Config) -> Vec<Effect> {
 fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Result<Nested, DiagnoseError> {
     let folds = folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by);
     let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
-    let always = always_estimated(config);
+    let always = always_estimated(config, data);
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
     let mut selections = Vec::new();
@@ -316,12 +343,12 @@ fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Resul
         selections.push(effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect());
         let ctx = Ctx::new(robot, &subset, &inner);
         let test_set = data.subset(test);
-        let test_pre = prepare_against(robot, &test_set, &subset);
+        let test_pre = prepare_against(robot, &test_set, &subset, config.orientation_lever_mm);
         let rows: Vec<usize> = (0..test.len()).collect();
-        for (e, norms) in [(&always, &mut nominal_norms), (&effects, &mut selected_norms)] {
+        for (e, errors) in [(&always, &mut nominal_norms), (&effects, &mut selected_norms)] {
             let (model, f) = ctx.full_fit(e)?;
             let (r, _) = residuals(robot, &model, &f.theta, &test_set, &rows, &test_pre, false)?;
-            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
+            errors.extend(norms(&r, test_pre.stride()));
         }
     }
     Ok(Nested {
@@ -352,13 +379,7 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
     } else {
         format!("{}-fold cross-validation (seeded shuffle)", config.folds)
     };
-    let mut effects: Vec<Effect> = Vec::new();
-    if config.frame == FrameMode::Tracker {
-        effects.push(Effect::Registration);
-    }
-    if config.tool == ToolMode::Unknown {
-        effects.push(Effect::ToolPoint);
-    }
+    let mut effects = always_estimated(config, data);
     let always = effects.len();
     let (nominal, nominal_errors) = ctx.heldout_errors(&effects, &ctx.folds)?;
     let mut current = nominal;
@@ -523,13 +544,11 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
                 })
                 .collect();
             let relations = ctx.relations(e, &catalogue)?;
-            let mut equivalent: Vec<String> =
-                relations.iter().filter(|(_, r)| *r == Relation::Equivalent).map(|(b, _)| b.label()).collect();
-            let contained_in: Vec<String> =
-                relations.iter().filter(|(_, r)| *r == Relation::ContainedIn).map(|(b, _)| b.label()).collect();
-            equivalent.extend(skipped.iter().filter(|(_, why)| why.contains(&e.label())).map(|(c, _)| c.clone()));
-            equivalent.sort();
-            equivalent.dedup();
+            let of = |kind: Relation| -> Vec<String> {
+                relations.iter().filter(|(_, r)| *r == kind).map(|(b, _)| b.label()).collect()
+            };
+            let (equivalent, contained_in, contains) =
+                (of(Relation::Equivalent), of(Relation::ContainedIn), of(Relation::Contains));
             Ok(EffectReport {
                 effect: e.kind_name().to_string(),
                 label: e.label(),
@@ -540,6 +559,7 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
                 parameters,
                 equivalent,
                 contained_in,
+                contains,
             })
         })
         .collect::<Result<Vec<_>, DiagnoseError>>()?;
@@ -553,11 +573,15 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
             let world_from_base = calibrated.base().pose();
             let t = world_from_base.translation.vector;
             let r = thermokin_chain::xyz_angles_for_output(world_from_base.rotation.to_rotation_matrix().matrix());
-            PoseReport { position_mm: [t.x, t.y, t.z], xyz_euler_deg: [r.x, r.y, r.z].map(f64::to_degrees) }
+            PoseReport { position_mm: [t.x, t.y, t.z], xyz_euler_deg: units::degrees3([r.x, r.y, r.z]) }
         }),
         tool_point_mm: effects.contains(&Effect::ToolPoint).then(|| {
             let t = calibrated.tool().translation + calibrated.tool().error.translation;
             [t.x, t.y, t.z]
+        }),
+        tool_rotation_deg: effects.contains(&Effect::ToolRotation).then(|| {
+            let r = calibrated.tool().error.rotation;
+            units::degrees3([r.x, r.y, r.z])
         }),
     };
     let report = Report {
@@ -570,6 +594,7 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
         calibrated,
         not_in_calibrated: left_out.iter().map(Effect::label).collect(),
         validation,
+        orientation_lever_mm: ctx.pre.lever_mm,
         effects: reports,
         additive,
         leave_one_out,

@@ -1,7 +1,7 @@
 //! The parameterised model: effects as parameter blocks on top of a chain, the prediction of a measured
 //! TCP position and its analytic Jacobian (from [`Chain::parameter_jacobian`]).
 
-use nalgebra::{Isometry3, Matrix3xX, Vector3};
+use nalgebra::{Isometry3, Matrix3, Matrix6xX, Vector3};
 use serde::Serialize;
 use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, Robot};
 use thermokin_deform::{AfterStabilization, TimeProfile};
@@ -77,9 +77,13 @@ pub enum Effect {
     Registration,
     /// An unknown tool point: always estimated, never reported as an effect (3).
     ToolPoint,
+    /// An unknown probe's rotation, when orientations are measured: always estimated with
+    /// [`Effect::ToolPoint`], never reported as an effect (3).
+    ToolRotation,
     /// A base misalignment (6).
     BaseFrame,
-    /// A tool-point error (3: positions carry no tool orientation).
+    /// A tool-frame error: the tool point (3) and the tool's rotation (3). The rotation moves no
+    /// measured point; it is identified from measured orientations (6-D probes) and fixed otherwise.
     ToolFrame,
     /// A joint's zero offset (1).
     JointOffset(JointIndex),
@@ -143,7 +147,9 @@ impl Effect {
             | Effect::JointScale(j)
             | Effect::Periodic(j)
             | Effect::ThermalDrift(j, _) => Some(j),
-            Effect::Registration | Effect::ToolPoint | Effect::BaseFrame | Effect::ToolFrame => None,
+            Effect::Registration | Effect::ToolPoint | Effect::ToolRotation | Effect::BaseFrame | Effect::ToolFrame => {
+                None
+            }
         }
     }
 
@@ -159,10 +165,10 @@ impl Effect {
     /// Number of parameters.
     pub fn len(&self) -> usize {
         match self {
-            Effect::Registration | Effect::BaseFrame | Effect::LinkDeviation(_) => 6,
+            Effect::Registration | Effect::BaseFrame | Effect::ToolFrame | Effect::LinkDeviation(_) => 6,
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
-            Effect::ToolPoint | Effect::ToolFrame => 3,
+            Effect::ToolPoint | Effect::ToolRotation => 3,
             Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::JointScale(_) => 1,
             Effect::Periodic(_) => 4,
         }
@@ -178,6 +184,7 @@ impl Effect {
         match self {
             Effect::Registration => "registration",
             Effect::ToolPoint => "tool_point",
+            Effect::ToolRotation => "tool_rotation",
             Effect::BaseFrame => "base_frame",
             Effect::ToolFrame => "tool_frame",
             Effect::JointOffset(_) => "joint_offset",
@@ -208,7 +215,8 @@ impl Effect {
         let six = ["dx_mm", "dy_mm", "dz_mm", "rx_deg", "ry_deg", "rz_deg"];
         let prefix = self.label();
         match self {
-            Effect::ToolPoint | Effect::ToolFrame => six[..3].iter().map(|n| format!("{prefix}.{n}")).collect(),
+            Effect::ToolPoint => six[..3].iter().map(|n| format!("{prefix}.{n}")).collect(),
+            Effect::ToolRotation => six[3..].iter().map(|n| format!("{prefix}.{n}")).collect(),
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
@@ -242,7 +250,7 @@ impl Effect {
 
     /// Reported to the user as a cause (not a nuisance block).
     pub fn is_reported(&self) -> bool {
-        !matches!(self, Effect::Registration | Effect::ToolPoint)
+        !matches!(self, Effect::Registration | Effect::ToolPoint | Effect::ToolRotation)
     }
 
     /// Whether parameter `k` is an angle: radians inside, degrees in reports and flags (a compliance is
@@ -250,9 +258,11 @@ impl Effect {
     /// sides.
     pub fn is_angle(&self, k: usize) -> bool {
         match (self, k) {
-            (Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::Periodic(_), _) => true,
+            (Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::Periodic(_) | Effect::ToolRotation, _) => {
+                true
+            }
             (Effect::JointScale(_), _) => false,
-            (Effect::ToolPoint | Effect::ToolFrame, _) => false,
+            (Effect::ToolPoint, _) => false,
             (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,
             (_, 3..=5) => true,
             _ => false,
@@ -262,12 +272,12 @@ impl Effect {
     /// Parameter `k` from internal units (mm, radians, minutes, radians per N·m) to report units (mm,
     /// degrees, minutes, degrees per N·m).
     pub fn to_report_units(&self, k: usize, v: f64) -> f64 {
-        if self.is_angle(k) { v.to_degrees() } else { v }
+        if self.is_angle(k) { thermokin_io::units::degrees(v) } else { v }
     }
 
     /// Parameter `k` from report units to internal units (the inverse of [`Effect::to_report_units`]).
     pub fn from_report_units(&self, k: usize, v: f64) -> f64 {
-        if self.is_angle(k) { v.to_radians() } else { v }
+        if self.is_angle(k) { thermokin_io::units::radians(v) } else { v }
     }
 }
 
@@ -385,9 +395,9 @@ impl Model {
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
-                Effect::ToolPoint | Effect::ToolFrame => {
-                    tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
-                }
+                Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
                 Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..) => {
@@ -412,7 +422,9 @@ impl Model {
         Ok(chain.with_base(row)?)
     }
 
-    /// Predicted TCP position of one measurement and, if asked, its 3 × len Jacobian.
+    /// Predicted TCP position and rotation of one measurement and, if asked, the 6 × len Jacobian of the
+    /// pose as twists in the measurement frame (rows 0–2 the position, 3–5 the rotation: a small turn
+    /// `δφ` of the predicted rotation, `R ↦ exp(δφ)·R`).
     pub fn predict(
         &self,
         robot: &Robot,
@@ -420,9 +432,9 @@ impl Model {
         m: &Measurement,
         temp_rise: f64,
         torques: &[f64],
-        jacobian: Option<&mut Matrix3xX<f64>>,
+        jacobian: Option<&mut Matrix6xX<f64>>,
         cache: &mut Option<Chain>,
-    ) -> Result<Vector3<f64>, DiagnoseError> {
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), DiagnoseError> {
         let chain = robot.chain();
         let mut base_err = chain.base().error;
         let mut tool_err = chain.tool().error;
@@ -436,9 +448,9 @@ impl Model {
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
             match *e {
                 Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
-                Effect::ToolPoint | Effect::ToolFrame => {
-                    tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
-                }
+                Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => {
                     let j = j.index();
@@ -477,7 +489,7 @@ impl Model {
                 }
             }
         };
-        let p = registered.tool_position_rotation(&q)?.0;
+        let pose = registered.tool_position_rotation(&q)?;
         if let Some(jac) = jacobian {
             let pj = registered.parameter_jacobian(&q)?;
             let layout = registered.parameter_layout();
@@ -485,7 +497,7 @@ impl Model {
             let mut drift = drift_scale.iter();
             for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
                 let mut copy = |dst: usize, src: usize, scale: f64| {
-                    for r in 0..3 {
+                    for r in 0..6 {
                         jac[(r, dst)] = pj[(r, src)] * scale;
                     }
                 };
@@ -493,7 +505,9 @@ impl Model {
                     Effect::Registration | Effect::BaseFrame => {
                         (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0))
                     }
-                    Effect::ToolPoint | Effect::ToolFrame => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                    Effect::ToolPoint => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                    Effect::ToolRotation => (0..3).for_each(|c| copy(o + c, layout.tool() + 3 + c, 1.0)),
+                    Effect::ToolFrame => (0..6).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
                     Effect::JointOffset(j) => copy(o, layout.zero(j.index()), 1.0),
                     Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
                     Effect::JointCompliance(j) => {
@@ -513,7 +527,7 @@ impl Model {
                         let &(_, s, ds) = drift.next().filter(|d| d.0 == k).unwrap_or(&(k, 0.0, 0.0));
                         (0..6).for_each(|c| copy(o + c, layout.joint(j) + c, s));
                         if shape == DriftShape::Exponential {
-                            for r in 0..3 {
+                            for r in 0..6 {
                                 let mut v = 0.0;
                                 for c in 0..6 {
                                     v += pj[(r, layout.joint(j) + c)] * theta[o + c] * ds;
@@ -525,7 +539,7 @@ impl Model {
                 }
             }
         }
-        Ok(p)
+        Ok(pose)
     }
 }
 
@@ -553,18 +567,32 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
         .collect()
 }
 
-/// Per-measurement quantities that do not depend on the parameters: gravity torques (one list per
-/// measurement) and the mean temperature rise.
-pub(crate) type Pre = (Vec<Vec<f64>>, Vec<f64>);
+/// What the residuals of one data set need beyond the parameters: gravity torques (one list per
+/// measurement), the mean temperature rise, and whether orientations are fitted.
+pub(crate) struct Pre {
+    pub(crate) torques: Vec<Vec<f64>>,
+    pub(crate) rise: Vec<f64>,
+    /// `Some(lever)` when measured orientations are fitted: a rotation error `δφ` (radians) counts as
+    /// the displacement `lever · δφ` (mm) it causes at `lever` millimetres from the tool point.
+    pub(crate) lever_mm: Option<f64>,
+}
 
-/// Per-measurement quantities that do not depend on the parameters: gravity torques and temperature rise.
-pub(crate) fn prepare(robot: &Robot, data: &Dataset) -> Pre {
-    prepare_against(robot, data, data)
+impl Pre {
+    /// Residual rows per measurement: 3 (position) or 6 (position and weighted rotation).
+    pub(crate) fn stride(&self) -> usize {
+        if self.lever_mm.is_some() { 6 } else { 3 }
+    }
+}
+
+/// [`Pre`] of `data`; orientations fitted when every measurement has one and `lever_mm > 0`.
+pub(crate) fn prepare(robot: &Robot, data: &Dataset, lever_mm: f64) -> Pre {
+    prepare_against(robot, data, data, lever_mm)
 }
 
 /// As [`prepare`], the temperature rise taken from the earliest measurement of `reference` (the data a
-/// model was fitted on, when `data` is a test set scored with it).
-pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset) -> Pre {
+/// model was fitted on, when `data` is a test set scored with it); orientations are fitted only when
+/// both carry them.
+pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset, lever_mm: f64) -> Pre {
     let torques = data.measurements.iter().map(|m| gravity_torques(robot.chain(), robot.masses(), &m.q)).collect();
     let first: Option<Vec<f64>> =
         reference.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
@@ -578,5 +606,6 @@ pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset
             _ => 0.0,
         })
         .collect();
-    (torques, rise)
+    let lever_mm = (lever_mm > 0.0 && data.has_orientation() && reference.has_orientation()).then_some(lever_mm);
+    Pre { torques, rise, lever_mm }
 }

@@ -75,12 +75,14 @@ pub struct EffectReport {
     pub heldout_rms_without_mm: f64,
     /// Fitted parameters.
     pub parameters: BTreeMap<String, ParameterValue>,
-    /// Blocks that span the same parameter directions on these data (rank test on the Jacobians), and
-    /// candidates skipped as adding nothing identifiable next to this one.
+    /// Blocks that span the same parameter directions on these data (rank test on the Jacobians).
     pub equivalent: Vec<String>,
     /// Larger blocks that contain this one's directions on these data: they would explain the same and
     /// more; this one was preferred as the smaller.
     pub contained_in: Vec<String>,
+    /// Smaller blocks whose directions this one contains on these data (a joint-6 offset inside a tool
+    /// rotation): what they would explain, this one does too.
+    pub contains: Vec<String>,
 }
 
 /// Identifiability of the final model.
@@ -158,6 +160,9 @@ pub struct Report {
     pub not_in_calibrated: Vec<String>,
     /// How held-out errors were obtained.
     pub validation: String,
+    /// `Some(lever)` when measured orientations were fitted (6-D probe): every error of this report
+    /// then combines position and rotation, `√(|Δp|² + (lever · |δφ|)²)` mm.
+    pub orientation_lever_mm: Option<f64>,
     /// Effects of the final model, main cause first.
     pub effects: Vec<EffectReport>,
     /// Held-out errors as effects are added, in the order chosen.
@@ -197,6 +202,10 @@ pub struct FittedFrames {
     pub registration: Option<PoseReport>,
     /// The tool point in the flange's same-orientation frame, mm, when it was unknown.
     pub tool_point_mm: Option<[f64; 3]>,
+    /// The unknown probe's rotation, when orientations were measured: the tool row's error angles
+    /// (X-Y-Z, degrees, eq. 19 — about the axes of the flange's same-orientation frame, before the
+    /// row's nominal rotation).
+    pub tool_rotation_deg: Option<[f64; 3]>,
 }
 
 pub(crate) fn breakdown(
@@ -208,7 +217,7 @@ pub(crate) fn breakdown(
 ) -> Result<Breakdown, DiagnoseError> {
     let all: Vec<usize> = (0..data.len()).collect();
     let (r, _) = residuals(robot, model, theta, data, &all, pre, false)?;
-    let e: Vec<f64> = r.chunks(3).map(|c| c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).collect();
+    let e: Vec<f64> = crate::fit::norms(&r, pre.stride()).iter().map(|x| x * x).collect();
     let rms_of = |sel: &[usize]| -> f64 {
         if sel.is_empty() { f64::NAN } else { (sel.iter().map(|&i| e[i]).sum::<f64>() / sel.len() as f64).sqrt() }
     };

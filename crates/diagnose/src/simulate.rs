@@ -1,7 +1,7 @@
 //! Measurement sets generated from hidden effects, to check that the diagnosis finds what it is not told.
 
 use self::rand_distr_free::normal;
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -32,11 +32,21 @@ pub struct SimulationConfig {
     pub seed: u64,
     /// Frame of the measurements: this registration applied to every position.
     pub registration: Isometry3<f64>,
+    /// `Some(σ)`: every measurement carries the tool's orientation too (a 6-D probe), turned by a random
+    /// rotation vector of σ radians per axis. `None`: positions only.
+    pub orientation_noise_rad: Option<f64>,
 }
 
 impl Default for SimulationConfig {
     fn default() -> Self {
-        Self { poses: 240, minutes: 240.0, noise_mm: 0.005, seed: 1, registration: Isometry3::identity() }
+        Self {
+            poses: 240,
+            minutes: 240.0,
+            noise_mm: 0.005,
+            seed: 1,
+            registration: Isometry3::identity(),
+            orientation_noise_rad: None,
+        }
     }
 }
 
@@ -58,7 +68,13 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
             })
             .collect();
         let time_min = if config.poses > 1 { config.minutes * k as f64 / (config.poses - 1) as f64 } else { 0.0 };
-        data.measurements.push(Measurement { time_min, q, position_mm: Vector3::zeros(), temps: Vec::new() });
+        data.measurements.push(Measurement {
+            time_min,
+            q,
+            position_mm: Vector3::zeros(),
+            orientation: None,
+            temps: Vec::new(),
+        });
     }
     let effects: Vec<Effect> = hidden.iter().map(|h| h.effect).collect();
     let model = Model::new(robot, effects)?;
@@ -73,11 +89,18 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
         }
         theta[o..o + h.values.len()].copy_from_slice(&h.values);
     }
-    let pre = prepare(robot, &data);
+    let pre = prepare(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let p = model.predict(robot, &theta, m, pre.1[i], &pre.0[i], None, &mut None)?;
+        let (p, rot) = model.predict(robot, &theta, m, pre.rise[i], &pre.torques[i], None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
+        if let Some(sigma) = config.orientation_noise_rad {
+            let turn = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * sigma;
+            let measured = UnitQuaternion::from_scaled_axis(turn)
+                * config.registration.rotation
+                * UnitQuaternion::from_matrix(&rot);
+            m.orientation = Some(measured);
+        }
     }
     Ok(data)
 }

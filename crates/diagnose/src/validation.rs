@@ -6,7 +6,7 @@ use rand::seq::SliceRandom;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Robot;
 
-use crate::fit::{Fit, FixedParameter, fit, identifiable, initial_registration, residuals};
+use crate::fit::{Fit, FixedParameter, fit, identifiable, initial_registration, norms, residuals};
 use crate::model::{Effect, Model, Pre};
 use crate::report::Stats;
 use crate::{Dataset, DiagnoseError};
@@ -106,7 +106,7 @@ impl<'a> Ctx<'a> {
         Self {
             robot,
             data,
-            pre: crate::model::prepare(robot, data),
+            pre: crate::model::prepare(robot, data, config.orientation_lever_mm),
             folds: folds_for(data, config.folds, config.seed, config.folds_by),
             forward: forward_chained(data, config.folds),
         }
@@ -131,7 +131,7 @@ impl<'a> Ctx<'a> {
     /// Held-out statistics and every held-out error (3-D norm, mm, in fold order: the same order for any
     /// model on the same folds, so that two models' errors pair up measurement by measurement).
     pub(crate) fn heldout_errors(&self, effects: &[Effect], folds: &Folds) -> Result<(Stats, Vec<f64>), DiagnoseError> {
-        let mut norms = Vec::new();
+        let mut errors = Vec::new();
         for (train, test) in folds {
             if train.is_empty() || test.is_empty() {
                 continue;
@@ -139,9 +139,9 @@ impl<'a> Ctx<'a> {
             let model = self.model(effects, train)?;
             let f = fit(self.robot, &model, self.data, train, &self.pre)?;
             let (r, _) = residuals(self.robot, &model, &f.theta, self.data, test, &self.pre, false)?;
-            norms.extend(r.chunks(3).map(|c| (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt()));
+            errors.extend(norms(&r, self.pre.stride()));
         }
-        Ok((Stats::of(&norms), norms))
+        Ok((Stats::of(&errors), errors))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
@@ -172,7 +172,7 @@ impl<'a> Ctx<'a> {
 
     pub(crate) fn bic(&self, effects: &[Effect]) -> Result<f64, DiagnoseError> {
         let (_, f) = self.full_fit(effects)?;
-        let m = (self.data.len() * 3) as f64;
+        let m = (self.data.len() * self.pre.stride()) as f64;
         let k = f.free.iter().filter(|&&x| x).count() as f64;
         Ok(m * (f.ssr / m).max(1e-300).ln() + k * m.ln())
     }
@@ -196,7 +196,7 @@ pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64) -> bool {
 impl Ctx<'_> {
     /// How effect `e`'s parameter directions relate to each of `others` on these data: `Equivalent` when
     /// the two blocks' Jacobian columns span the same space, `ContainedIn` when `e`'s lie in the other's
-    /// span (the other block can do all `e` does, and more), decided by rank with [`crate::fit`]'s
+    /// span (the other block can do all `e` does, and more), `Contains` the other way round, decided by rank with [`crate::fit`]'s
     /// tolerance: a direction within 1e-6 (relative) of a span belongs to it. Linearised at the nominal
     /// model (every parameter zero) over all measurements.
     pub(crate) fn relations(&self, e: Effect, others: &[Effect]) -> Result<Vec<(Effect, Relation)>, DiagnoseError> {
@@ -212,11 +212,17 @@ impl Ctx<'_> {
                 range.map(|c| (0..jac.nrows()).map(|r| jac[(r, c)]).collect()).collect()
             };
             let (ce, cb) = (cols(0..e.len()), cols(e.len()..e.len() + b.len()));
+            // A block that moves nothing on these data (gravity about a vertical axis) relates to nothing.
+            let moves = |c: &[Vec<f64>]| c.iter().any(|v| v.iter().any(|x| x.abs() > 1e-12));
+            if !moves(&ce) || !moves(&cb) {
+                continue;
+            }
             let e_in_b = within_span(&ce, &cb);
             let b_in_e = within_span(&cb, &ce);
             match (e_in_b, b_in_e) {
                 (true, true) => out.push((b, Relation::Equivalent)),
                 (true, false) => out.push((b, Relation::ContainedIn)),
+                (false, true) => out.push((b, Relation::Contains)),
                 _ => {}
             }
         }
@@ -231,6 +237,8 @@ pub(crate) enum Relation {
     Equivalent,
     /// Inside the other's column space.
     ContainedIn,
+    /// The other's column space is inside this one's.
+    Contains,
 }
 
 /// Whether every non-zero column of `a` lies in the span of `b` (Gram–Schmidt, twice, on unit columns).

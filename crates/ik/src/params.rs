@@ -114,7 +114,7 @@ impl Default for Params {
             position_tolerance_mm: 1e-9,
             // 1e-9° (1.7e-11 rad): the published results' precision is 1e-6°, and 1e-9° over a 1 m
             // lever is 1.7e-8 mm, below the position tolerance's order.
-            orientation_tolerance_rad: 1e-9_f64.to_radians(),
+            orientation_tolerance_rad: 1.745_329_251_994_329_5e-11,
             restarts: 100,
             restart_seeds: RestartSeeds::BranchesThenRandom,
             time_budget: None,

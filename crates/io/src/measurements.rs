@@ -1,6 +1,6 @@
 //! Measurement sets for identification and diagnosis: `time_min` (optional), `q1..qn` (degrees, or radians
-//! with [`JointUnits::Radians`]), `x,y,z` (mm), optional `rx,ry,rz` (degrees, read and checked, not used:
-//! positions drive the diagnosis), optional `temp_<name>` (°C). Comma-separated, semicolon-separated
+//! with [`JointUnits::Radians`]), `x,y,z` (mm), optional `rx,ry,rz` (the measured tool orientation, X-Y-Z Euler
+//! angles in degrees as everywhere in the project: a 6-D probe; all three or none), optional `temp_<name>` (°C). Comma-separated, semicolon-separated
 //! with decimal commas, or whitespace-separated, as tracker software exports them. The authors' results
 //! files are accepted too (their joints and reached coordinates).
 
@@ -10,7 +10,7 @@ use nalgebra::Vector3;
 use thermokin_chain::{Dataset, JointKind, Measurement};
 
 use crate::csvtext::{column, expect_fields, number, records_any_dialect};
-use crate::units::{joint_value_in, joint_value_out};
+use crate::units::{joint_value_in, joint_value_out, xyz_euler_deg, xyz_rotation_deg};
 use crate::{IoError, parse_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
@@ -64,7 +64,13 @@ pub fn parse_measurements_with(
         let rows = parse_paper_results(path, text)?;
         let measurements = rows
             .into_iter()
-            .map(|r| Measurement { time_min: r.time_min, q: r.joints, position_mm: r.reached_mm, temps: Vec::new() })
+            .map(|r| Measurement {
+                time_min: r.time_min,
+                q: r.joints,
+                position_mm: r.reached_mm,
+                orientation: None,
+                temps: Vec::new(),
+            })
             .collect();
         return Ok(Dataset { measurements, temperature_names: Vec::new() });
     }
@@ -94,6 +100,20 @@ pub fn parse_measurements_with(
         .filter_map(|(i, c)| c.strip_prefix("temp_").map(|n| (i, n.to_string())))
         .collect();
     let r_cols: Vec<Option<usize>> = ["rx", "ry", "rz"].iter().map(|n| column(header, n)).collect();
+    let r_cols: Option<Vec<usize>> = match r_cols.iter().filter(|c| c.is_some()).count() {
+        0 => None,
+        3 => Some(r_cols.into_iter().flatten().collect()),
+        _ => {
+            let missing: Vec<&str> =
+                ["rx", "ry", "rz"].iter().zip(&r_cols).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
+            return Err(IoError::input(
+                path,
+                Some(header.line),
+                missing.join(","),
+                "an orientation needs all three of rx, ry, rz (X-Y-Z Euler angles, degrees)",
+            ));
+        }
+    };
     let mut measurements = Vec::with_capacity(rows.len());
     for r in rows {
         expect_fields(path, r, header.cells.len())?;
@@ -113,11 +133,17 @@ pub fn parse_measurements_with(
             number(path, r.line, "y", &r.cells[p_cols[1]])?,
             number(path, r.line, "z", &r.cells[p_cols[2]])?,
         );
-        for (name, c) in ["rx", "ry", "rz"].iter().zip(&r_cols) {
-            if let Some(c) = c {
-                number(path, r.line, name, &r.cells[*c])?;
+        let orientation = match &r_cols {
+            Some(c) => {
+                let angles = [
+                    number(path, r.line, "rx", &r.cells[c[0]])?,
+                    number(path, r.line, "ry", &r.cells[c[1]])?,
+                    number(path, r.line, "rz", &r.cells[c[2]])?,
+                ];
+                Some(xyz_rotation_deg(angles))
             }
-        }
+            None => None,
+        };
         let time_min = match t_col {
             Some(c) => {
                 let t = number(path, r.line, "time_min", &r.cells[c])?;
@@ -132,7 +158,7 @@ pub fn parse_measurements_with(
             .iter()
             .map(|(c, n)| number(path, r.line, &format!("temp_{n}"), &r.cells[*c]))
             .collect::<Result<Vec<_>, _>>()?;
-        measurements.push(Measurement { time_min, q, position_mm: p, temps });
+        measurements.push(Measurement { time_min, q, position_mm: p, orientation, temps });
     }
     if measurements.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
@@ -145,7 +171,9 @@ pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: 
     let n = data.measurements.first().map_or(0, |m| m.q.len());
     let qs: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
     let temps: Vec<String> = data.temperature_names.iter().map(|t| format!(",temp_{t}")).collect();
-    writeln!(out, "time_min,{},x,y,z{}", qs.join(","), temps.concat())?;
+    let oriented = data.has_orientation();
+    let r_head = if oriented { ",rx,ry,rz" } else { "" };
+    writeln!(out, "time_min,{},x,y,z{r_head}{}", qs.join(","), temps.concat())?;
     for m in &data.measurements {
         let q: Vec<String> = m
             .q
@@ -154,9 +182,16 @@ pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: 
             .map(|(k, &v)| format!("{:?}", joint_value_out(kinds.get(k).copied().unwrap_or(JointKind::Revolute), v)))
             .collect();
         let t: Vec<String> = m.temps.iter().map(|v| format!(",{v:?}")).collect();
+        let r = match (oriented, &m.orientation) {
+            (true, Some(o)) => {
+                let [a, b, c] = xyz_euler_deg(o);
+                format!(",{a:?},{b:?},{c:?}")
+            }
+            _ => String::new(),
+        };
         writeln!(
             out,
-            "{:?},{},{:?},{:?},{:?}{}",
+            "{:?},{},{:?},{:?},{:?}{r}{}",
             m.time_min,
             q.join(","),
             m.position_mm.x,

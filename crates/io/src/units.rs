@@ -43,10 +43,7 @@ impl Orientation {
             return Err("orientation values must be finite".into());
         }
         Ok(match self {
-            Orientation::XyzEuler => {
-                let r = xyz_rotation(&Vector3::new(values[0], values[1], values[2]).map(f64::to_radians));
-                UnitQuaternion::from_matrix(&r)
-            }
+            Orientation::XyzEuler => xyz_rotation_deg([values[0], values[1], values[2]]),
             Orientation::Rpy => {
                 let [roll, pitch, yaw] = [values[0], values[1], values[2]].map(f64::to_radians);
                 UnitQuaternion::from_euler_angles(roll, pitch, yaw)
@@ -104,6 +101,12 @@ pub fn xyz_euler_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let r = rotation.to_rotation_matrix().into_inner();
     let d = thermokin_chain::xyz_angles_for_output(&r).map(f64::to_degrees);
     [tidy_deg(d.x), tidy_deg(d.y), tidy_deg(d.z)]
+}
+
+/// The rotation of X-Y-Z Euler angles in degrees (`R = Rx·Ry·Rz`): the inverse of [`xyz_euler_deg`].
+pub fn xyz_rotation_deg(angles: [f64; 3]) -> UnitQuaternion<f64> {
+    let r = xyz_rotation(&Vector3::from(angles).map(f64::to_radians));
+    UnitQuaternion::from_matrix(&r)
 }
 
 /// ROS roll, pitch, yaw in degrees (`R = Rz(yaw)·Ry(pitch)·Rx(roll)`), pitch in [−90°, 90°]; at the

@@ -551,6 +551,52 @@ fn diagnose_with_an_explicit_holdout() {
 }
 
 #[test]
+fn diagnose_fits_orientations_of_a_6d_probe() {
+    // A probe turned on the tool (rotation only): a position-only diagnosis cannot see it; with the
+    // orientation columns `simulate --orientation-noise` writes, it is named and fitted.
+    let m = tmp("six_d.csv");
+    let o = thermokin(&[
+        "simulate",
+        "--robot",
+        ROBOT,
+        "--effect",
+        "tool_frame=0,0,0,0.3,-0.2,0.4",
+        "--poses",
+        "60",
+        "--minutes",
+        "0",
+        "--orientation-noise",
+        "0.002",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&m).unwrap();
+    assert!(text.lines().next().unwrap().contains(",rx,ry,rz"), "{text}");
+    let o = thermokin(&[
+        "diagnose",
+        "--robot",
+        ROBOT,
+        "--measurements",
+        m.to_str().unwrap(),
+        "--noise",
+        "0.005",
+        "--orientation-noise",
+        "0.002",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(out.contains("6-D measurements: orientations fitted"), "{out}");
+    assert!(out.contains("tool_frame.rx_deg"), "{out}");
+    assert!(out.contains("verdict: explained") && out.contains("0.002° per axis"), "{out}");
+    let o =
+        thermokin(&["diagnose", "--robot", ROBOT, "--measurements", m.to_str().unwrap(), "--orientation-lever", "0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    assert!(!out.contains("6-D measurements") && !out.contains("tool_frame.rx_deg "), "{out}");
+}
+
+#[test]
 fn ik_tool_down_is_right_or_not_converged() {
     // The reported case: this pose printed `Converged` with FK of the answer 180° from the request.
     let o = thermokin(&["ik", "--robot", ROBOT, "--pose", "500,0,300,180,0,0", "--json"]);

@@ -62,7 +62,7 @@ fn finds_a_base_misalignment() {
 
 #[test]
 fn finds_a_tool_error() {
-    check(HiddenEffect { effect: Effect::ToolFrame, values: vec![0.3, 0.2, -0.4] }, "tool_frame", None);
+    check(HiddenEffect { effect: Effect::ToolFrame, values: vec![0.3, 0.2, -0.4, 0.0, 0.0, 0.0] }, "tool_frame", None);
 }
 
 #[test]

@@ -5,4 +5,5 @@ mod catalogue;
 mod export;
 mod hidden;
 mod real_data;
+mod six_d;
 mod tracker;

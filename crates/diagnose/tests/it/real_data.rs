@@ -43,6 +43,7 @@ pub fn rokae() -> (Robot, Dataset) {
             time_min: 0.0,
             q: q.iter().map(|d| d.to_radians()).collect(),
             position_mm: Vector3::new(p[0], p[1], p[2]),
+            orientation: None,
             temps: Vec::new(),
         })
         .collect();

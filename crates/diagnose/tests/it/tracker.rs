@@ -31,7 +31,53 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
                 .collect();
             let p = chain.tool_pose(&actual(&q)).unwrap().translation.vector;
             let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
-            Measurement { time_min: 0.0, q, position_mm: p + noise, temps: Vec::new() }
+            Measurement { time_min: 0.0, q, position_mm: p + noise, orientation: None, temps: Vec::new() }
+        })
+        .collect();
+    Dataset { measurements, temperature_names: Vec::new() }
+}
+
+/// Orientation noise of [`measure_6d`], degrees per axis.
+pub const ORIENTATION_NOISE_DEG: f64 = 0.002;
+
+/// As [`measure`], with a 6-D probe: the robot stands at `actual(commanded)`, the probe sits at
+/// `tool_from_probe` behind the chain's tool frame (its error: a point and a rotation), and the tracker
+/// reports the probe's position ([`NOISE_MM`] per axis) and orientation (a random turn of
+/// [`ORIENTATION_NOISE_DEG`] per axis).
+pub fn measure_6d(
+    chain: &Chain,
+    n: usize,
+    seed: u64,
+    actual: impl Fn(&[f64]) -> Vec<f64>,
+    tool_from_probe: nalgebra::Isometry3<f64>,
+) -> Dataset {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let gauss = |rng: &mut ChaCha8Rng| {
+        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
+        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+    };
+    let measurements = (0..n)
+        .map(|_| {
+            let q: Vec<f64> = chain
+                .joints()
+                .iter()
+                .map(|j| {
+                    let l = j.limits.unwrap();
+                    let m = 0.1 * (l.upper - l.lower);
+                    rng.random_range(l.lower + m..l.upper - m)
+                })
+                .collect();
+            let base_from_probe = chain.tool_pose(&actual(&q)).unwrap() * tool_from_probe;
+            let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
+            let turn =
+                Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * ORIENTATION_NOISE_DEG.to_radians();
+            Measurement {
+                time_min: 0.0,
+                q,
+                position_mm: base_from_probe.translation.vector + noise,
+                orientation: Some(nalgebra::UnitQuaternion::from_scaled_axis(turn) * base_from_probe.rotation),
+                temps: Vec::new(),
+            }
         })
         .collect();
     Dataset { measurements, temperature_names: Vec::new() }
