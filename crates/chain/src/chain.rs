@@ -133,6 +133,17 @@ impl FixedRow {
     }
 }
 
+/// The TCP pose and the parameter Jacobian of one configuration ([`Chain::pose_and_parameter_jacobian`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseAndJacobian {
+    /// `base_from_tcp` translation, mm.
+    pub position: Vector3<f64>,
+    /// `base_from_tcp` rotation.
+    pub rotation: Matrix3<f64>,
+    /// As [`Chain::parameter_jacobian`].
+    pub jacobian: Matrix6xX<f64>,
+}
+
 /// Precomputed per-joint data for the FK hot path.
 #[derive(Clone, Debug, PartialEq)]
 struct Link {
@@ -285,6 +296,25 @@ impl Chain {
             .map(|((j, e), z)| Joint { error: *e, zero: *z, ..j.clone() })
             .collect();
         Chain::new(base_row, js, tool_row)
+    }
+
+    /// Replaces joint `index`'s error parameters in place, recomputing only that row's precomputed
+    /// frame: the fast path for a model whose error rows change from one measurement to the next (a
+    /// drift growing with time), where rebuilding the whole chain costs more than the FK. The chain stays
+    /// validated: a non-finite error or a joint the chain lacks is refused and leaves it unchanged.
+    pub fn set_joint_error(&mut self, index: usize, error: ErrorParams) -> Result<(), ChainError> {
+        if index >= self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: index + 1 });
+        }
+        if !error.is_finite() {
+            return Err(ChainError::NonFinite { joint: index + 1, field: "error" });
+        }
+        let joint = &mut self.joints[index];
+        joint.error = error;
+        let link = &mut self.links[index];
+        link.fixed = Frame::new(error.rotation_matrix(), joint.offset + error.translation);
+        link.partial = partial_rotations(&error.rotation);
+        Ok(())
     }
 
     /// A copy with every error parameter set to zero: the nominal robot.
@@ -493,6 +523,12 @@ impl Chain {
     /// turns everything behind it about the axis `u = R_P e_x`, `R_P Rx(a) e_y`, `R_P Rx(a) Ry(b) e_z`
     /// through the row's origin `o`: column `[u × (p_tcp − o); u]`. A zero offset acts like the joint.
     pub fn parameter_jacobian(&self, q: &[f64]) -> Result<Matrix6xX<f64>, ChainError> {
+        Ok(self.pose_and_parameter_jacobian(q)?.jacobian)
+    }
+
+    /// The TCP position and rotation matrix with [`Chain::parameter_jacobian`], from one pass along the
+    /// chain (an identification evaluates both at every measurement).
+    pub fn pose_and_parameter_jacobian(&self, q: &[f64]) -> Result<PoseAndJacobian, ChainError> {
         self.check_q(q)?;
         let layout = self.parameter_layout();
         // Collect (column, direction, origin, is_rotation) first; the lever arms need the TCP.
@@ -523,7 +559,8 @@ impl Chain {
         }
         let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
         push_row(layout.tool(), &frame, tool_origin, &self.row_partials[1]);
-        let p = frame.mul(&self.tool_frame).trans;
+        let tcp = frame.mul(&self.tool_frame);
+        let p = tcp.trans;
         let mut jac = Matrix6xX::zeros(layout.len());
         for (col, u, o, rotation) in entries.into_iter().chain(zero_entries) {
             if rotation {
@@ -534,6 +571,6 @@ impl Chain {
                 jac.fixed_view_mut::<3, 1>(0, col).copy_from(&u);
             }
         }
-        Ok(jac)
+        Ok(PoseAndJacobian { position: tcp.trans, rotation: tcp.rot, jacobian: jac })
     }
 }

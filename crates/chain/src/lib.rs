@@ -13,7 +13,7 @@ mod measurements;
 mod robot;
 mod so3;
 
-pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout};
+pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, PoseAndJacobian};
 pub use dh::{DhConvention, DhRow, DhTable};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use factors::JointFactor;

@@ -58,7 +58,23 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         ..Config::default()
     };
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
-    let report = thermokin_diagnose::diagnose(&robot, &data, holdout.as_ref(), &config).map_err(Failure::input)?;
+    // Progress on stderr (hidden when stderr is not a terminal): one step per stage — the selection,
+    // each outer fold of the nested validation, the hold-out set.
+    let bar = indicatif::ProgressBar::new(0).with_style(
+        indicatif::ProgressStyle::with_template("{spinner} diagnosing: {msg} [{bar:20}] {pos}/{len} ({elapsed})")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+    bar.enable_steady_tick(std::time::Duration::from_millis(250));
+    bar.set_message("selection on all measurements");
+    let report = thermokin_diagnose::diagnose_with_progress(&robot, &data, holdout.as_ref(), &config, &mut |p| {
+        bar.set_length(p.total as u64);
+        bar.set_position(p.done as u64);
+        bar.set_message(format!("done: {}", p.stage));
+    })
+    .map_err(Failure::input);
+    bar.finish_and_clear();
+    let report = report?;
     print_report(&report);
     if let Some(p) = &a.export {
         let calibrated = robot.with_chain(report.calibrated.clone()).map_err(Failure::internal)?.renamed(format!(

@@ -182,6 +182,39 @@ pub fn diagnose(
     holdout: Option<&Dataset>,
     config: &Config,
 ) -> Result<Report, DiagnoseError> {
+    diagnose_with_progress(robot, data, holdout, config, &mut |_| {})
+}
+
+/// One finished stage of a diagnosis, for a progress display: `done` of `total` stages (the selection
+/// on all data, each outer fold of the nested validation, the hold-out set), each costing about the same.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Progress {
+    /// Stages finished.
+    pub done: usize,
+    /// Stages in all.
+    pub total: usize,
+    /// The stage just finished.
+    pub stage: String,
+}
+
+/// [`diagnose`], telling `progress` after each stage.
+pub fn diagnose_with_progress(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+    progress: &mut dyn FnMut(Progress),
+) -> Result<Report, DiagnoseError> {
+    let outer = match config.validation {
+        Validation::Nested { outer } => nested_folds(data, config, outer).len(),
+        Validation::SelectionOnly => 0,
+    };
+    let total = 1 + outer + usize::from(holdout.is_some());
+    let mut done = 0;
+    let mut tell = |stage: String| {
+        done += 1;
+        progress(Progress { done, total, stage });
+    };
     let n = robot.chain().dof();
     let sets = [("training", Some(data)), ("hold-out", holdout)];
     for (set, d) in sets.iter().filter_map(|(s, d)| d.map(|d| (*s, d))) {
@@ -190,9 +223,10 @@ pub fn diagnose(
         }
     }
     let (mut report, effects) = select(robot, data, config)?;
+    tell("selection on all measurements".into());
     let always = always_estimated(config, data);
     if let Validation::Nested { outer } = config.validation {
-        report.nested = Some(nested(robot, data, config, outer)?);
+        report.nested = Some(nested(robot, data, config, outer, &mut tell)?);
     }
     if let Some(h) = holdout {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
@@ -227,6 +261,7 @@ pub fn diagnose(
         };
         let refitted = always.iter().map(Effect::label).collect();
         report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
+        tell("hold-out set".into());
     }
     report.warnings = warnings(robot, data, config, &report);
     report.verdict = verdict(config, &report);
@@ -324,22 +359,34 @@ fn always_estimated(config: &Config, data: &Dataset) -> Vec<Effect> {
     effects
 }
 
+/// The outer folds of the nested validation (their own seed: not the selection's folds).
+fn nested_folds(data: &Dataset, config: &Config, outer: usize) -> crate::validation::Folds {
+    folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by)
+}
+
 /// Nested cross-validation of the whole procedure: for each outer fold, the selection runs on the
 /// training part only, the model it picks is fitted there and scored on the fold's test part; the
 /// nominal model (the always-estimated blocks) is scored the same way.
-fn nested(robot: &Robot, data: &Dataset, config: &Config, outer: usize) -> Result<Nested, DiagnoseError> {
-    let folds = folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by);
+fn nested(
+    robot: &Robot,
+    data: &Dataset,
+    config: &Config,
+    outer: usize,
+    tell: &mut dyn FnMut(String),
+) -> Result<Nested, DiagnoseError> {
+    let folds = nested_folds(data, config, outer);
     let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
     let always = always_estimated(config, data);
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
     let mut selections = Vec::new();
-    for (train, test) in &folds {
+    for (k, (train, test)) in folds.iter().enumerate() {
         if train.is_empty() || test.is_empty() {
             continue;
         }
         let subset = data.subset(train);
         let (_, effects) = select(robot, &subset, &inner)?;
+        tell(format!("nested validation, outer fold {} of {}", k + 1, folds.len()));
         selections.push(effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect());
         let ctx = Ctx::new(robot, &subset, &inner);
         let test_set = data.subset(test);

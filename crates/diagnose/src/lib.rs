@@ -16,7 +16,7 @@ mod simulate;
 mod validation;
 
 pub use fit::{CorrelatedPair, FixedParameter, NEARLY_DEPENDENT, Observability};
-pub use ladder::{Config, FoldGrouping, FrameMode, ToolMode, Validation, diagnose};
+pub use ladder::{Config, FoldGrouping, FrameMode, Progress, ToolMode, Validation, diagnose, diagnose_with_progress};
 pub use model::{DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques};
 pub use report::{
     Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow,

@@ -281,6 +281,13 @@ impl Effect {
     }
 }
 
+/// The chain of one parameter vector, kept across the measurements of one evaluation, with its joint
+/// rows' errors before any drift (a drift row is rewritten from them per measurement).
+pub(crate) struct ChainCache {
+    chain: Chain,
+    joint_err: Vec<ErrorParams>,
+}
+
 /// Reference time of the linear drift: the parameters are the deviation at 180 minutes (section 4).
 pub const LINEAR_DRIFT_REFERENCE_MIN: f64 = 180.0;
 /// Largest time constant considered, minutes: beyond it the exponential is indistinguishable from the
@@ -425,7 +432,12 @@ impl Model {
     /// Predicted TCP position and rotation of one measurement and, if asked, the 6 × len Jacobian of the
     /// pose as twists in the measurement frame (rows 0–2 the position, 3–5 the rotation: a small turn
     /// `δφ` of the predicted rotation, `R ↦ exp(δφ)·R`).
-    pub fn predict(
+    ///
+    /// `cache` holds the chain of one parameter vector across the measurements of one evaluation: the
+    /// static effects are built once; a thermal drift, which differs per measurement, rewrites only its
+    /// own rows ([`Chain::set_joint_error`]).
+    #[allow(clippy::too_many_arguments)] // one measurement's inputs, crate-internal hot path
+    pub(crate) fn predict(
         &self,
         robot: &Robot,
         theta: &[f64],
@@ -433,29 +445,43 @@ impl Model {
         temp_rise: f64,
         torques: &[f64],
         jacobian: Option<&mut Matrix6xX<f64>>,
-        cache: &mut Option<Chain>,
+        cache: &mut Option<ChainCache>,
     ) -> Result<(Vector3<f64>, Matrix3<f64>), DiagnoseError> {
         let chain = robot.chain();
-        let mut base_err = chain.base().error;
-        let mut tool_err = chain.tool().error;
-        let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
-        let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
-        let mut q = m.q.clone();
-        let mut drift_scale: Vec<(usize, f64, f64)> = Vec::new(); // (effect index, s, ds/dτ)
         let six = |o: usize| {
             ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
         };
+        let cached = match cache {
+            Some(c) => c,
+            None => {
+                let mut base_err = chain.base().error;
+                let mut tool_err = chain.tool().error;
+                let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
+                let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
+                for (e, &o) in self.effects.iter().zip(&self.offsets) {
+                    match *e {
+                        Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
+                        Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                        Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                        Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
+                        Effect::JointOffset(j) => zeros[j.index()] += theta[o],
+                        Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
+                        Effect::JointCompliance(_)
+                        | Effect::JointScale(_)
+                        | Effect::Periodic(_)
+                        | Effect::ThermalDrift(..) => {}
+                    }
+                }
+                let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
+                cache.insert(ChainCache { chain: built, joint_err })
+            }
+        };
+        // Per measurement: the joint values the joint-level effects move, and the drift rows.
+        let mut q = m.q.clone();
+        let mut drift_scale: Vec<(usize, f64, f64)> = Vec::new(); // (effect index, s, ds/dτ)
+        let mut drift_rows: Vec<(usize, ErrorParams)> = Vec::new();
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
             match *e {
-                Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
-                Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
-                Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
-                Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
-                Effect::JointOffset(j) => zeros[j.index()] += theta[o],
-                Effect::LinkDeviation(j) => {
-                    let j = j.index();
-                    joint_err[j] = joint_err[j].add(&six(o));
-                }
                 Effect::JointCompliance(j) => {
                     let j = j.index();
                     q[j] += theta[o] * torques[j];
@@ -468,30 +494,24 @@ impl Model {
                     let j = j.index();
                     let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
                     let (s, ds) = Self::drift_factor(shape, m, temp_rise, tau);
-                    joint_err[j] = joint_err[j].add(&six(o).scaled(s));
+                    match drift_rows.iter_mut().find(|(row, _)| *row == j) {
+                        Some((_, d)) => *d = d.add(&six(o).scaled(s)),
+                        None => drift_rows.push((j, six(o).scaled(s))),
+                    }
                     drift_scale.push((k, s, ds));
                 }
+                _ => {}
             }
         }
-        // Without a drift the deformed chain is the same for every measurement: build it once per
-        // parameter vector (the caller keeps the cache for one evaluation).
-        let per_measurement = !drift_scale.is_empty();
-        let built;
-        let registered: &Chain = match cache {
-            Some(c) if !per_measurement => c,
-            _ => {
-                let c = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
-                if per_measurement {
-                    built = c;
-                    &built
-                } else {
-                    cache.insert(c)
-                }
-            }
-        };
-        let pose = registered.tool_position_rotation(&q)?;
-        if let Some(jac) = jacobian {
-            let pj = registered.parameter_jacobian(&q)?;
+        for &(j, d) in &drift_rows {
+            let row = cached.joint_err[j].add(&d);
+            cached.chain.set_joint_error(j, row)?;
+        }
+        let registered = &cached.chain;
+        let Some(jac) = jacobian else { return Ok(registered.tool_position_rotation(&q)?) };
+        let both = registered.pose_and_parameter_jacobian(&q)?;
+        let (pose, pj) = ((both.position, both.rotation), both.jacobian);
+        {
             let layout = registered.parameter_layout();
             jac.fill(0.0);
             let mut drift = drift_scale.iter();

@@ -95,3 +95,39 @@ fn joint_frames_end_at_the_tool_pose() {
     let (dp, dr) = pose_gap(frames.last().unwrap(), &chain.tool_pose(&q).unwrap());
     assert!(dp < 1e-12 && dr < 1e-12);
 }
+
+#[test]
+fn the_fast_paths_equal_the_slow_ones() {
+    // `set_joint_error` (one row rewritten in place) against a chain rebuilt from scratch, and
+    // `pose_and_parameter_jacobian` against `tool_pose` and `parameter_jacobian` separately: bit for bit,
+    // since the same operations run in the same order.
+    let mut r = rng(37);
+    for chain in [irb140_like(&mut r, true), general_chain(&mut r)] {
+        let errors: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
+        let zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
+        let mut fast = chain.clone();
+        for j in 0..chain.dof() {
+            let e = ErrorParams::from_array([0.1 * j as f64, -0.2, 0.3, 1e-3, -2e-3, 3e-3 * j as f64]);
+            fast.set_joint_error(j, e).unwrap();
+            let mut slow_errors = errors.clone();
+            slow_errors[..=j].iter_mut().enumerate().for_each(|(k, s)| {
+                *s = ErrorParams::from_array([0.1 * k as f64, -0.2, 0.3, 1e-3, -2e-3, 3e-3 * k as f64])
+            });
+            let slow =
+                chain.with_errors_and_zeros(chain.base().error, &slow_errors, chain.tool().error, &zeros).unwrap();
+            for _ in 0..10 {
+                let q = random_q(&mut r, chain.dof());
+                assert_eq!(fast.tool_pose(&q).unwrap(), slow.tool_pose(&q).unwrap());
+                let both = slow.pose_and_parameter_jacobian(&q).unwrap();
+                let (p, rot) = slow.tool_position_rotation(&q).unwrap();
+                assert_eq!((both.position, both.rotation), (p, rot));
+                assert_eq!(both.jacobian, fast.parameter_jacobian(&q).unwrap());
+            }
+        }
+        // Refused, and the chain unchanged: a joint it lacks, a non-finite error.
+        let before = fast.clone();
+        assert!(fast.set_joint_error(chain.dof(), ErrorParams::ZERO).is_err());
+        assert!(fast.set_joint_error(0, ErrorParams::from_array([f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0])).is_err());
+        assert_eq!(fast, before);
+    }
+}

@@ -120,3 +120,18 @@ fn folds_by_region_and_configuration_test_transfer() {
         assert!(nested.selected.heldout_rms_mm <= 1.5 * NOISE_MM * 3f64.sqrt());
     }
 }
+
+#[test]
+fn progress_is_told_once_per_stage_and_ends_at_the_total() {
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let data = measure(robot.chain(), 60, 71, <[f64]>::to_vec);
+    let holdout = measure(robot.chain(), 20, 72, <[f64]>::to_vec);
+    let mut seen = Vec::new();
+    thermokin_diagnose::diagnose_with_progress(&robot, &data, Some(&holdout), &Config::default(), &mut |p| {
+        seen.push((p.done, p.total, p.stage))
+    })
+    .unwrap();
+    // The selection, 5 outer folds, the hold-out set: 7 stages, told in order.
+    assert_eq!(seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(), (1..=7).map(|k| (k, 7)).collect::<Vec<_>>());
+    assert!(seen[1].2.contains("outer fold 1 of 5") && seen[6].2 == "hold-out set", "{seen:?}");
+}
