@@ -101,7 +101,7 @@ pub(crate) fn residuals(
             robot,
             theta,
             m,
-            pre.rise[i],
+            &pre.rise[i],
             &pre.torques[i],
             with_jacobian.then_some(&mut block),
             &mut cache,
@@ -397,12 +397,16 @@ pub(crate) fn initial_registration(
 ) -> Result<Isometry3<f64>, DiagnoseError> {
     let model = Model::new(robot, vec![])?;
     let n = data.measurements.len();
-    let pre = Pre { torques: vec![vec![0.0; robot.chain().dof()]; n], rise: vec![0.0; n], lever_mm: None };
+    let pre = Pre {
+        torques: vec![vec![0.0; robot.chain().dof()]; n],
+        rise: vec![vec![0.0; robot.chain().dof()]; n],
+        lever_mm: None,
+    };
     let mut a = Vec::new();
     let mut b = Vec::new();
     for &i in rows {
         let m = &data.measurements[i];
-        if let Ok((p, _)) = model.predict(robot, &[], m, pre.rise[i], &pre.torques[i], None, &mut None) {
+        if let Ok((p, _)) = model.predict(robot, &[], m, &pre.rise[i], &pre.torques[i], None, &mut None) {
             a.push(p);
             b.push(m.position_mm);
         }

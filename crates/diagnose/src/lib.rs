@@ -17,7 +17,9 @@ mod validation;
 
 pub use fit::{CorrelatedPair, FixedParameter, NEARLY_DEPENDENT, Observability};
 pub use ladder::{Config, FoldGrouping, FrameMode, Progress, ToolMode, Validation, diagnose, diagnose_with_progress};
-pub use model::{DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques};
+pub use model::{
+    DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques, sensor_joint,
+};
 pub use report::{
     Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow,
 };

@@ -19,8 +19,8 @@ pub enum DriftShape {
     /// normalisation at 180 minutes lets a very slow exponential tend to the linear drift instead of
     /// trading a huge amplitude against a huge τ.
     Exponential,
-    /// The law of [`TimeProfile::Temperature`] with no sensor named: `δ · (T(t) − T(0))` per kelvin of
-    /// the mean logged temperature rise.
+    /// The law of [`TimeProfile::Temperature`]: `δ · (T(t) − T(0))` per kelvin of the joint's own logged
+    /// temperature rise when a column names the joint ([`sensor_joint`]), of the mean rise otherwise.
     Temperature,
 }
 
@@ -442,7 +442,7 @@ impl Model {
         robot: &Robot,
         theta: &[f64],
         m: &Measurement,
-        temp_rise: f64,
+        temp_rise: &[f64],
         torques: &[f64],
         jacobian: Option<&mut Matrix6xX<f64>>,
         cache: &mut Option<ChainCache>,
@@ -493,7 +493,7 @@ impl Model {
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
                     let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
-                    let (s, ds) = Self::drift_factor(shape, m, temp_rise, tau);
+                    let (s, ds) = Self::drift_factor(shape, m, temp_rise[j], tau);
                     match drift_rows.iter_mut().find(|(row, _)| *row == j) {
                         Some((_, d)) => *d = d.add(&six(o).scaled(s)),
                         None => drift_rows.push((j, six(o).scaled(s))),
@@ -587,11 +587,28 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
         .collect()
 }
 
+/// The joint (0-based) a temperature column belongs to, from its name without the `temp_` prefix:
+/// `j2`, `joint2`, `a2`, `axis2`, `motor2`, `m2`, `q2` or `2` (case and separators ignored: `J_2`, `Axis-2`)
+/// name joint 2 of a robot with at least 2 joints. Other names (`ambient`, `base`) belong to no joint; a
+/// joint's temperature drift follows its own column when it has one, the mean of all columns otherwise.
+pub fn sensor_joint(name: &str, dof: usize) -> Option<usize> {
+    let flat: String = name.chars().filter(char::is_ascii_alphanumeric).collect::<String>().to_ascii_lowercase();
+    let digits_at = flat.find(|c: char| c.is_ascii_digit())?;
+    let (prefix, number) = flat.split_at(digits_at);
+    if !["", "j", "joint", "a", "axis", "m", "motor", "q"].contains(&prefix) {
+        return None;
+    }
+    let n: usize = number.parse().ok()?;
+    (1..=dof).contains(&n).then(|| n - 1)
+}
+
 /// What the residuals of one data set need beyond the parameters: gravity torques (one list per
-/// measurement), the mean temperature rise, and whether orientations are fitted.
+/// measurement), the temperature rise each joint's drift follows, and whether orientations are fitted.
 pub(crate) struct Pre {
     pub(crate) torques: Vec<Vec<f64>>,
-    pub(crate) rise: Vec<f64>,
+    /// Per measurement, per joint: the rise of the joint's own sensor ([`sensor_joint`]) or, for a joint
+    /// without one, the mean rise of all sensors, K.
+    pub(crate) rise: Vec<Vec<f64>>,
     /// `Some(lever)` when measured orientations are fitted: a rotation error `δφ` (radians) counts as
     /// the displacement `lever · δφ` (mm) it causes at `lever` millimetres from the tool point.
     pub(crate) lever_mm: Option<f64>,
@@ -616,14 +633,18 @@ pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset
     let torques = data.measurements.iter().map(|m| gravity_torques(robot.chain(), robot.masses(), &m.q)).collect();
     let first: Option<Vec<f64>> =
         reference.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min)).map(|m| m.temps.clone());
+    let dof = robot.chain().dof();
+    let own: Vec<Option<usize>> =
+        (0..dof).map(|j| data.temperature_names.iter().position(|n| sensor_joint(n, dof) == Some(j))).collect();
     let rise = data
         .measurements
         .iter()
         .map(|m| match &first {
             Some(t0) if !m.temps.is_empty() => {
-                m.temps.iter().zip(t0).map(|(a, b)| a - b).sum::<f64>() / m.temps.len() as f64
+                let mean = m.temps.iter().zip(t0).map(|(a, b)| a - b).sum::<f64>() / m.temps.len() as f64;
+                own.iter().map(|c| c.and_then(|c| Some(m.temps.get(c)? - t0.get(c)?)).unwrap_or(mean)).collect()
             }
-            _ => 0.0,
+            _ => vec![0.0; dof],
         })
         .collect();
     let lever_mm = (lever_mm > 0.0 && data.has_orientation() && reference.has_orientation()).then_some(lever_mm);

@@ -6,4 +6,5 @@ mod export;
 mod hidden;
 mod real_data;
 mod six_d;
+mod temperature;
 mod tracker;
