@@ -52,6 +52,12 @@ pub enum ChainError {
         /// `base` or `tool`.
         row: &'static str,
     },
+    /// A payload without a positive finite mass and a finite centre, or a robot without joints to carry it.
+    #[error("payload of {mass_kg} kg: a payload needs a positive finite mass, a finite centre and a joint to carry it")]
+    BadPayload {
+        /// The mass given, kg.
+        mass_kg: f64,
+    },
     /// A joint axis that is zero, not finite or not of unit length.
     #[error("joint {joint}: the axis must be a finite unit vector")]
     BadAxis {

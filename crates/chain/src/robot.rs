@@ -91,6 +91,25 @@ impl Robot {
         self
     }
 
+    /// The robot carrying `payload` on its flange (a probe, a gripper, a load), its centre in the last
+    /// link's frame (the flange's same-orientation frame, mm): merged with that link's own mass as one
+    /// body (masses added, centres weighted by mass). A non-positive or non-finite payload is refused.
+    pub fn with_payload(mut self, payload: LinkMass) -> Result<Self, ChainError> {
+        let ok = payload.mass_kg.is_finite() && payload.mass_kg > 0.0 && payload.com_mm.iter().all(|v| v.is_finite());
+        let last = self.chain.dof().checked_sub(1);
+        let (true, Some(last)) = (ok, last) else {
+            return Err(ChainError::BadPayload { mass_kg: payload.mass_kg });
+        };
+        self.masses[last] = Some(match self.masses[last] {
+            None => payload,
+            Some(link) => {
+                let mass_kg = link.mass_kg + payload.mass_kg;
+                LinkMass { mass_kg, com_mm: (link.com_mm * link.mass_kg + payload.com_mm * payload.mass_kg) / mass_kg }
+            }
+        });
+        Ok(self)
+    }
+
     /// Display name.
     pub fn name(&self) -> &str {
         &self.name

@@ -265,9 +265,14 @@ pub struct DiagnoseArgs {
     /// Measurement set (CSV).
     #[arg(long, value_name = "FILE")]
     pub measurements: PathBuf,
-    /// An explicit test set; replaces cross-validation.
+    /// An explicit test set: scored with the model fitted on all measurements (the registration and tool
+    /// refitted on it when they are estimated); it never influences the selection.
     #[arg(long, value_name = "FILE")]
     pub holdout: Option<PathBuf>,
+    /// A payload on the flange for gravity compliance (the probe, a gripper): `KG@X,Y,Z`, its centre in
+    /// the flange's frame in mm, e.g. `2.5@0,0,80`; merged with the last link's mass.
+    #[arg(long, value_name = "KG@X,Y,Z")]
+    pub payload: Option<String>,
     /// Frame of the measurements: base (a base misalignment is a candidate) or tracker (an unknown
     /// registration, always estimated).
     #[arg(long, value_enum, default_value_t = FrameArg::Base)]

@@ -58,6 +58,13 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         ..Config::default()
     };
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
+    // The robot as the fit sees it: with the payload (gravity only; the export keeps the file's masses).
+    let fitted_robot = match &a.payload {
+        Some(spec) => {
+            robot.clone().with_payload(parse_payload(spec).map_err(Failure::input)?).map_err(Failure::input)?
+        }
+        None => robot.clone(),
+    };
     // Progress on stderr (hidden when stderr is not a terminal): one step per stage — the selection,
     // each outer fold of the nested validation, the hold-out set.
     let bar = indicatif::ProgressBar::new(0).with_style(
@@ -67,12 +74,13 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
     bar.enable_steady_tick(std::time::Duration::from_millis(250));
     bar.set_message("selection on all measurements");
-    let report = thermokin_diagnose::diagnose_with_progress(&robot, &data, holdout.as_ref(), &config, &mut |p| {
-        bar.set_length(p.total as u64);
-        bar.set_position(p.done as u64);
-        bar.set_message(format!("done: {}", p.stage));
-    })
-    .map_err(Failure::input);
+    let report =
+        thermokin_diagnose::diagnose_with_progress(&fitted_robot, &data, holdout.as_ref(), &config, &mut |p| {
+            bar.set_length(p.total as u64);
+            bar.set_position(p.done as u64);
+            bar.set_message(format!("done: {}", p.stage));
+        })
+        .map_err(Failure::input);
     bar.finish_and_clear();
     let report = report?;
     print_report(&report);
@@ -309,6 +317,15 @@ fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
         root.present()?;
     }
     write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
+}
+
+/// Parses `--payload KG@X,Y,Z` (kg; mm in the flange's frame).
+fn parse_payload(spec: &str) -> anyhow::Result<thermokin_chain::LinkMass> {
+    let (kg, at) = spec.split_once('@').ok_or_else(|| anyhow!("--payload {spec}: expected KG@X,Y,Z (kg @ mm)"))?;
+    let mass_kg: f64 = kg.trim().parse().map_err(|_| anyhow!("--payload {spec}: mass `{kg}` is not a number"))?;
+    let c = crate::args::parse_list("payload", at)?;
+    anyhow::ensure!(c.len() == 3, "--payload {spec}: the centre takes 3 values (mm), got {}", c.len());
+    Ok(thermokin_chain::LinkMass { mass_kg, com_mm: nalgebra::Vector3::new(c[0], c[1], c[2]) })
 }
 
 /// Parses `KIND[:JOINT][=VALUES]` into a hidden effect (report units → internal), with a seeded random

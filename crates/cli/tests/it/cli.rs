@@ -589,6 +589,16 @@ fn diagnose_fits_orientations_of_a_6d_probe() {
     assert!(out.contains("6-D measurements: orientations fitted"), "{out}");
     assert!(out.contains("tool_frame.rx_deg"), "{out}");
     assert!(out.contains("verdict: explained") && out.contains("0.002° per axis"), "{out}");
+    // A payload that is not KG@X,Y,Z, or not a body, is refused naming the flag.
+    for (bad, needle) in [
+        ("2.5", "expected KG@X,Y,Z"),
+        ("x@0,0,0", "mass `x`"),
+        ("0@0,0,0", "positive finite mass"),
+        ("1@0,0", "3 values"),
+    ] {
+        let o = thermokin(&["diagnose", "--robot", ROBOT, "--measurements", m.to_str().unwrap(), "--payload", bad]);
+        assert!(!o.status.success() && stderr(&o).contains(needle), "{bad}: {}", stderr(&o));
+    }
     let o =
         thermokin(&["diagnose", "--robot", ROBOT, "--measurements", m.to_str().unwrap(), "--orientation-lever", "0"]);
     assert!(o.status.success(), "{}", stderr(&o));
