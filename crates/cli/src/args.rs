@@ -119,8 +119,10 @@ pub struct RobotArgs {
     /// Replace the robot file's base: the robot base in the world frame, as --tool-pose.
     #[arg(long, value_name = "X,Y,Z,A,B,C", allow_hyphen_values = true)]
     pub base_pose: Option<String>,
-    /// Orientation convention of --pose, --tool-pose and --base-pose: xyz (X-Y-Z Euler degrees,
-    /// R = Rx·Ry·Rz, the paper's), rpy (ROS roll,pitch,yaw degrees, R = Rz·Ry·Rx) or quat (w,x,y,z).
+    /// Orientation convention of --pose, --tool-pose and --base-pose, and of a measurement file's
+    /// orientation columns: xyz (X-Y-Z Euler degrees, R = Rx·Ry·Rz, the paper's; columns rx,ry,rz), rpy
+    /// (ROS roll,pitch,yaw degrees, R = Rz·Ry·Rx; columns rx,ry,rz = roll, pitch, yaw) or quat (w,x,y,z;
+    /// columns qw,qx,qy,qz).
     #[arg(long, value_name = "CONVENTION", default_value = "xyz", value_parser = parse_orientation)]
     pub orientation: thermokin_io::Orientation,
     /// Deviation table (the authors' CSV `Dx,Dy,Dz,Dox,Doy,Doz`, or TOML), mm and degrees.
@@ -265,6 +267,13 @@ pub struct DiagnoseArgs {
     /// Measurement set (CSV).
     #[arg(long, value_name = "FILE")]
     pub measurements: PathBuf,
+    /// The measured poses (`x,y,z`, optional `rx,ry,rz`) in a second file, when --measurements holds only
+    /// the joints (`q1..qn`, optional `time_min`, `temp_*`): joined row by row, or by --key.
+    #[arg(long, value_name = "FILE")]
+    pub poses: Option<PathBuf>,
+    /// The column that joins --measurements and --poses (a point name, a timestamp), present in both.
+    #[arg(long, value_name = "COLUMN", requires = "poses")]
+    pub key: Option<String>,
     /// An explicit test set: scored with the model fitted on all measurements (the registration and tool
     /// refitted on it when they are estimated); it never influences the selection.
     #[arg(long, value_name = "FILE")]

@@ -10,7 +10,10 @@ use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{
     Config, DriftShape, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
 };
-use thermokin_io::{JointUnits, read_measurements_with, write_atomic, write_atomic_with, write_measurements};
+use thermokin_io::{
+    JointUnits, MeasurementFormat, read_measurements_joined, read_measurements_with, write_atomic, write_atomic_with,
+    write_measurements,
+};
 
 use crate::args::{DiagnoseArgs, FoldsByArg, FrameArg, JointUnitsArg, SimulateArgs, ToolArg};
 use crate::input::{load, working_chain};
@@ -28,8 +31,15 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let chain = working_chain(&a.robot, &loaded)?;
     let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
-    let units = if a.joint_units == JointUnitsArg::Rad { JointUnits::Radians } else { JointUnits::Degrees };
-    let data = read_measurements_with(&a.measurements, &kinds, units).map_err(Failure::input)?;
+    let units = MeasurementFormat {
+        joint_units: if a.joint_units == JointUnitsArg::Rad { JointUnits::Radians } else { JointUnits::Degrees },
+        orientation: a.robot.orientation,
+    };
+    let data = match &a.poses {
+        Some(poses) => read_measurements_joined(&a.measurements, poses, a.key.as_deref(), &kinds, units),
+        None => read_measurements_with(&a.measurements, &kinds, units),
+    }
+    .map_err(Failure::input)?;
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(Failure::input)?),
         None => None,

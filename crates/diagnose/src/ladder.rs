@@ -289,6 +289,32 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
             units::degrees(largest)
         ));
     }
+    // Coverage: an effect of a joint identified over a small part of the joint's travel is an
+    // extrapolation elsewhere. A quarter of the range between the limits (all of ±180° without limits),
+    // or half a revolution for a cyclic error, whose once- and twice-per-revolution terms trade against
+    // an offset and a scale over a short arc.
+    for e in &report.effects {
+        let Some(&number) = e.joints.first() else { continue };
+        let j = number - 1;
+        let joint = &robot.chain().joints()[j];
+        let (lo, hi) = data
+            .measurements
+            .iter()
+            .map(|m| m.q[j])
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+        let covered = hi - lo;
+        let travel = joint.limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower);
+        let need = if e.effect == "periodic" { std::f64::consts::PI.min(travel) } else { 0.25 * travel };
+        if joint.kind == thermokin_chain::JointKind::Revolute && covered < need {
+            out.push(format!(
+                "{} was identified with joint {number} between {:.1}° and {:.1}° only ({:.0}% of its travel): it may not hold outside that range — measure poses across the joint's travel",
+                e.label,
+                units::degrees(lo),
+                units::degrees(hi),
+                100.0 * covered / travel
+            ));
+        }
+    }
     // A nominal model off by more than 50 mm RMS in the base frame: the robot cannot be that wrong; the
     // measurements are in another frame.
     if config.frame == FrameMode::Base && report.nominal.heldout_rms_mm > 50.0 {

@@ -18,8 +18,8 @@ pub use deviation::{
     parse_deviation_table, parse_temperature_log, read_deviation_table, read_deviation_table_for, read_temperature_log,
 };
 pub use measurements::{
-    JointUnits, parse_measurements, parse_measurements_with, read_measurements, read_measurements_with,
-    write_measurements,
+    JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with, read_measurements,
+    read_measurements_joined, read_measurements_with, write_measurements,
 };
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{

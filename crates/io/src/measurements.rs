@@ -6,11 +6,11 @@
 
 use std::path::Path;
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 use thermokin_chain::{Dataset, JointKind, Measurement};
 
-use crate::csvtext::{column, expect_fields, number, records_any_dialect};
-use crate::units::{joint_value_in, joint_value_out, xyz_euler_deg, xyz_rotation_deg};
+use crate::csvtext::{Record, column, expect_fields, number, records_any_dialect};
+use crate::units::{Orientation, joint_value_in, joint_value_out, xyz_euler_deg};
 use crate::{IoError, parse_paper_results, read_text};
 
 /// Reads a measurement set for a robot with `dof` joints (revolute joints in degrees).
@@ -29,24 +29,36 @@ pub enum JointUnits {
     Radians,
 }
 
-/// Reads a measurement set whose revolute joints are in `units`.
-pub fn read_measurements_with(path: &Path, kinds: &[JointKind], units: JointUnits) -> Result<Dataset, IoError> {
+/// How a measurement file writes what is not fixed by its columns' names: the unit of revolute joints
+/// and the convention of the measured orientation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct MeasurementFormat {
+    /// Revolute joint columns in degrees (default) or radians.
+    pub joint_units: JointUnits,
+    /// The orientation columns: `rx,ry,rz` as X-Y-Z Euler angles (`R = Rx·Ry·Rz`, the default and this
+    /// project's convention) or as roll, pitch, yaw (`R = Rz(rz)·Ry(ry)·Rx(rx)`, ROS and many trackers),
+    /// degrees; or `qw,qx,qy,qz`, a unit quaternion.
+    pub orientation: Orientation,
+}
+
+/// Reads a measurement set written in `format`.
+pub fn read_measurements_with(path: &Path, kinds: &[JointKind], format: MeasurementFormat) -> Result<Dataset, IoError> {
     let text = read_text(path)?;
-    parse_measurements_with(path, &text, kinds, units)
+    parse_measurements_with(path, &text, kinds, format)
 }
 
 /// Parses a measurement set's text for a robot whose joints are of `kinds` (one per joint): joint columns
 /// are degrees for revolute joints and mm for prismatic ones.
 pub fn parse_measurements(path: &Path, text: &str, kinds: &[JointKind]) -> Result<Dataset, IoError> {
-    parse_measurements_with(path, text, kinds, JointUnits::Degrees)
+    parse_measurements_with(path, text, kinds, MeasurementFormat::default())
 }
 
-/// As [`parse_measurements`], revolute joint columns in `units`.
+/// As [`parse_measurements`], written in `format`.
 pub fn parse_measurements_with(
     path: &Path,
     text: &str,
     kinds: &[JointKind],
-    units: JointUnits,
+    format: MeasurementFormat,
 ) -> Result<Dataset, IoError> {
     let dof = kinds.len();
     if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
@@ -78,73 +90,174 @@ pub fn parse_measurements_with(
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
     };
-    let need = |name: &str| {
-        column(header, name)
-            .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
-    };
-    let q_cols: Vec<usize> = (1..=dof).map(|i| need(&format!("q{i}"))).collect::<Result<_, _>>()?;
-    if column(header, &format!("q{}", dof + 1)).is_some() {
-        return Err(IoError::input(
-            path,
-            Some(header.line),
-            format!("q{}", dof + 1),
-            format!("more joint columns than the robot's {dof} joints"),
-        ));
-    }
-    let p_cols: Vec<usize> = ["x", "y", "z"].iter().map(|n| need(n)).collect::<Result<_, _>>()?;
-    let t_col = column(header, "time_min");
-    let temp_cols: Vec<(usize, String)> = header
-        .cells
-        .iter()
-        .enumerate()
-        .filter_map(|(i, c)| c.strip_prefix("temp_").map(|n| (i, n.to_string())))
-        .collect();
-    let r_cols: Vec<Option<usize>> = ["rx", "ry", "rz"].iter().map(|n| column(header, n)).collect();
-    let r_cols: Option<Vec<usize>> = match r_cols.iter().filter(|c| c.is_some()).count() {
-        0 => None,
-        3 => Some(r_cols.into_iter().flatten().collect()),
-        _ => {
-            let missing: Vec<&str> =
-                ["rx", "ry", "rz"].iter().zip(&r_cols).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
-            return Err(IoError::input(
-                path,
-                Some(header.line),
-                missing.join(","),
-                "an orientation needs all three of rx, ry, rz (X-Y-Z Euler angles, degrees)",
-            ));
-        }
-    };
+    let joints = JointColumns::find(path, header, kinds, format.joint_units)?;
+    let poses = PoseColumns::find(path, header, format.orientation)?;
     let mut measurements = Vec::with_capacity(rows.len());
     for r in rows {
         expect_fields(path, r, header.cells.len())?;
-        let q = q_cols
+        let (time_min, q, temps) = joints.read(r)?;
+        let (position_mm, orientation) = poses.read(r)?;
+        measurements.push(Measurement { time_min, q, position_mm, orientation, temps });
+    }
+    if measurements.is_empty() {
+        return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
+    }
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names() })
+}
+
+/// Reads a measurement set kept in two files, as tracker and robot software often write them: the
+/// joints (`q1..qn`, optional `time_min` and `temp_<name>`) in one, the measured poses (`x,y,z`, optional
+/// `rx,ry,rz`) in the other, joined by the column `key` present in both (a point name, a timestamp) or,
+/// without a key, row by row. Every row must find its partner; errors name the file, line and field.
+pub fn read_measurements_joined(
+    joints_path: &Path,
+    poses_path: &Path,
+    key: Option<&str>,
+    kinds: &[JointKind],
+    format: MeasurementFormat,
+) -> Result<Dataset, IoError> {
+    let (jt, pt) = (read_text(joints_path)?, read_text(poses_path)?);
+    let (jr, pr) = (records_any_dialect(joints_path, &jt)?, records_any_dialect(poses_path, &pt)?);
+    let Some((jh, jrows)) = jr.split_first() else {
+        return Err(IoError::input(joints_path, Some(1), "header", "empty file: expected q1..qn"));
+    };
+    let Some((ph, prows)) = pr.split_first() else {
+        return Err(IoError::input(poses_path, Some(1), "header", "empty file: expected x,y,z"));
+    };
+    let joints = JointColumns::find(joints_path, jh, kinds, format.joint_units)?;
+    let poses = PoseColumns::find(poses_path, ph, format.orientation)?;
+    for r in jrows {
+        expect_fields(joints_path, r, jh.cells.len())?;
+    }
+    for r in prows {
+        expect_fields(poses_path, r, ph.cells.len())?;
+    }
+    let pairs: Vec<(&Record, &Record)> = match key {
+        None => {
+            if jrows.len() != prows.len() {
+                return Err(IoError::input(
+                    poses_path,
+                    None,
+                    "rows",
+                    format!(
+                        "{} joint rows in {} but {} poses here: joined row by row they must match (or join by a key column)",
+                        jrows.len(),
+                        joints_path.display(),
+                        prows.len()
+                    ),
+                ));
+            }
+            jrows.iter().zip(prows).collect()
+        }
+        Some(key) => {
+            let col = |path: &Path, h: &Record| {
+                column(h, key).ok_or_else(|| {
+                    IoError::input(
+                        path,
+                        Some(h.line),
+                        key,
+                        format!("missing key column `{key}` (the join needs it in both files)"),
+                    )
+                })
+            };
+            let (jk, pk) = (col(joints_path, jh)?, col(poses_path, ph)?);
+            let mut by_key: std::collections::HashMap<&str, &Record> = std::collections::HashMap::new();
+            for r in prows {
+                if let Some(first) = by_key.insert(r.cells[pk].as_str(), r) {
+                    return Err(IoError::input(
+                        poses_path,
+                        Some(r.line),
+                        key,
+                        format!("`{}` again (first on line {})", r.cells[pk], first.line),
+                    ));
+                }
+            }
+            let mut pairs = Vec::with_capacity(jrows.len());
+            for r in jrows {
+                let pose = by_key.remove(r.cells[jk].as_str()).ok_or_else(|| {
+                    IoError::input(
+                        joints_path,
+                        Some(r.line),
+                        key,
+                        format!("`{}` has no pose in {}", r.cells[jk], poses_path.display()),
+                    )
+                })?;
+                pairs.push((r, pose));
+            }
+            if let Some(r) = by_key.values().min_by_key(|r| r.line) {
+                return Err(IoError::input(
+                    poses_path,
+                    Some(r.line),
+                    key,
+                    format!("`{}` has no joints in {}", r.cells[pk], joints_path.display()),
+                ));
+            }
+            pairs
+        }
+    };
+    let mut measurements = Vec::with_capacity(pairs.len());
+    for (j, p) in pairs {
+        let (time_min, q, temps) = joints.read(j)?;
+        let (position_mm, orientation) = poses.read(p)?;
+        measurements.push(Measurement { time_min, q, position_mm, orientation, temps });
+    }
+    if measurements.is_empty() {
+        return Err(IoError::input(joints_path, Some(jh.line + 1), "rows", "no measurements after the header"));
+    }
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names() })
+}
+
+/// Where a file's joint-side columns are: `q1..qn`, `time_min`, `temp_<name>`.
+struct JointColumns<'a> {
+    path: &'a Path,
+    kinds: &'a [JointKind],
+    units: JointUnits,
+    q: Vec<usize>,
+    time: Option<usize>,
+    temps: Vec<(usize, String)>,
+}
+
+impl<'a> JointColumns<'a> {
+    fn find(path: &'a Path, header: &Record, kinds: &'a [JointKind], units: JointUnits) -> Result<Self, IoError> {
+        let dof = kinds.len();
+        let need = |name: &str| {
+            column(header, name)
+                .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
+        };
+        let q: Vec<usize> = (1..=dof).map(|i| need(&format!("q{i}"))).collect::<Result<_, _>>()?;
+        if column(header, &format!("q{}", dof + 1)).is_some() {
+            return Err(IoError::input(
+                path,
+                Some(header.line),
+                format!("q{}", dof + 1),
+                format!("more joint columns than the robot's {dof} joints"),
+            ));
+        }
+        let temps = header
+            .cells
+            .iter()
+            .enumerate()
+            .filter_map(|(i, c)| c.strip_prefix("temp_").map(|n| (i, n.to_string())))
+            .collect();
+        Ok(Self { path, kinds, units, q, time: column(header, "time_min"), temps })
+    }
+
+    /// Time (minutes), joint values (internal units), temperatures of one row.
+    fn read(&self, r: &Record) -> Result<(f64, Vec<f64>, Vec<f64>), IoError> {
+        let path = self.path;
+        let q = self
+            .q
             .iter()
             .enumerate()
             .map(|(k, &c)| {
-                let kind = kinds.get(k).copied().unwrap_or(JointKind::Revolute);
-                number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(|v| match (kind, units) {
+                let kind = self.kinds.get(k).copied().unwrap_or(JointKind::Revolute);
+                number(path, r.line, &format!("q{}", k + 1), &r.cells[c]).map(|v| match (kind, self.units) {
                     (JointKind::Revolute, JointUnits::Radians) => v,
                     _ => joint_value_in(kind, v),
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let p = Vector3::new(
-            number(path, r.line, "x", &r.cells[p_cols[0]])?,
-            number(path, r.line, "y", &r.cells[p_cols[1]])?,
-            number(path, r.line, "z", &r.cells[p_cols[2]])?,
-        );
-        let orientation = match &r_cols {
-            Some(c) => {
-                let angles = [
-                    number(path, r.line, "rx", &r.cells[c[0]])?,
-                    number(path, r.line, "ry", &r.cells[c[1]])?,
-                    number(path, r.line, "rz", &r.cells[c[2]])?,
-                ];
-                Some(xyz_rotation_deg(angles))
-            }
-            None => None,
-        };
-        let time_min = match t_col {
+        let time_min = match self.time {
             Some(c) => {
                 let t = number(path, r.line, "time_min", &r.cells[c])?;
                 if t < 0.0 {
@@ -154,16 +267,78 @@ pub fn parse_measurements_with(
             }
             None => 0.0,
         };
-        let temps = temp_cols
+        let temps = self
+            .temps
             .iter()
             .map(|(c, n)| number(path, r.line, &format!("temp_{n}"), &r.cells[*c]))
             .collect::<Result<Vec<_>, _>>()?;
-        measurements.push(Measurement { time_min, q, position_mm: p, orientation, temps });
+        Ok((time_min, q, temps))
     }
-    if measurements.is_empty() {
-        return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
+
+    fn temperature_names(&self) -> Vec<String> {
+        self.temps.iter().map(|(_, n)| n.clone()).collect()
     }
-    Ok(Dataset { measurements, temperature_names: temp_cols.into_iter().map(|(_, n)| n).collect() })
+}
+
+/// Where a file's pose-side columns are: `x,y,z`, optional orientation columns.
+struct PoseColumns<'a> {
+    path: &'a Path,
+    p: Vec<usize>,
+    convention: Orientation,
+    /// The orientation columns with their names, when present.
+    r: Option<Vec<(usize, &'static str)>>,
+}
+
+impl<'a> PoseColumns<'a> {
+    fn find(path: &'a Path, header: &Record, convention: Orientation) -> Result<Self, IoError> {
+        let need = |name: &str| {
+            column(header, name)
+                .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
+        };
+        let p: Vec<usize> = ["x", "y", "z"].iter().map(|n| need(n)).collect::<Result<_, _>>()?;
+        let names: &'static [&'static str] = match convention {
+            Orientation::Quaternion => &["qw", "qx", "qy", "qz"],
+            _ => &["rx", "ry", "rz"],
+        };
+        let found: Vec<Option<usize>> = names.iter().map(|n| column(header, n)).collect();
+        let r = match found.iter().filter(|c| c.is_some()).count() {
+            0 => None,
+            k if k == names.len() => Some(found.into_iter().flatten().zip(names.iter().copied()).collect()),
+            _ => {
+                let missing: Vec<&str> =
+                    names.iter().zip(&found).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
+                return Err(IoError::input(
+                    path,
+                    Some(header.line),
+                    missing.join(","),
+                    format!("an orientation needs all of {} ({convention:?})", names.join(", ")),
+                ));
+            }
+        };
+        Ok(Self { path, p, convention, r })
+    }
+
+    /// Position (mm) and orientation of one row.
+    fn read(&self, r: &Record) -> Result<(Vector3<f64>, Option<UnitQuaternion<f64>>), IoError> {
+        let path = self.path;
+        let p = Vector3::new(
+            number(path, r.line, "x", &r.cells[self.p[0]])?,
+            number(path, r.line, "y", &r.cells[self.p[1]])?,
+            number(path, r.line, "z", &r.cells[self.p[2]])?,
+        );
+        let orientation = match &self.r {
+            Some(cols) => {
+                let values = cols
+                    .iter()
+                    .map(|&(c, name)| number(path, r.line, name, &r.cells[c]))
+                    .collect::<Result<Vec<_>, _>>()?;
+                let field = cols.iter().map(|(_, n)| *n).collect::<Vec<_>>().join(",");
+                Some(self.convention.rotation(&values).map_err(|m| IoError::input(path, Some(r.line), field, m))?)
+            }
+            None => None,
+        };
+        Ok((p, orientation))
+    }
 }
 
 /// Writes a measurement set in the format [`read_measurements`] reads (degrees or mm per joint kind, mm).

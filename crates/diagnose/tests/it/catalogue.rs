@@ -135,3 +135,52 @@ fn progress_is_told_once_per_stage_and_ends_at_the_total() {
     assert_eq!(seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(), (1..=7).map(|k| (k, 7)).collect::<Vec<_>>());
     assert!(seen[1].2.contains("outer fold 1 of 5") && seen[6].2 == "hold-out set", "{seen:?}");
 }
+
+#[test]
+fn an_effect_identified_over_a_short_arc_is_warned_about() {
+    // Joint 2's gear ratio, measured with joint 2 kept between 5° and 20° (of its 200° travel): the
+    // effect is found, and the report says it was identified over a small part of the travel. Over the
+    // whole travel (the `finds_a_gear_ratio_error` data) no such warning.
+    use rand::{Rng, SeedableRng};
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let chain = robot.chain();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(101);
+    let measurements = (0..150)
+        .map(|_| {
+            let mut q: Vec<f64> = chain
+                .joints()
+                .iter()
+                .map(|j| {
+                    let l = j.limits.unwrap();
+                    let m = 0.1 * (l.upper - l.lower);
+                    rng.random_range(l.lower + m..l.upper - m)
+                })
+                .collect();
+            q[1] = rng.random_range(5f64.to_radians()..20f64.to_radians());
+            let mut actual = q.clone();
+            actual[1] *= 1.0 + 2e-3;
+            thermokin_diagnose::Measurement {
+                time_min: 0.0,
+                position_mm: chain.tool_pose(&actual).unwrap().translation.vector,
+                q,
+                orientation: None,
+                temps: Vec::new(),
+            }
+        })
+        .collect();
+    let data = thermokin_diagnose::Dataset { measurements, temperature_names: Vec::new() };
+    let report = diagnose(&robot, &data, None, &Config::default()).unwrap();
+    eprintln!("{:?}\n{:?}", report.effects.iter().map(|e| &e.label).collect::<Vec<_>>(), report.warnings);
+    assert!(
+        report.warnings.iter().any(|w| w.contains("joint 2 between 5.") && w.contains("may not hold outside")),
+        "{:?}",
+        report.warnings
+    );
+    let wide = measure(robot.chain(), 150, 102, |q| {
+        let mut a = q.to_vec();
+        a[1] *= 1.0 + 2e-3;
+        a
+    });
+    let report = diagnose(&robot, &wide, None, &Config::default()).unwrap();
+    assert!(report.warnings.iter().all(|w| !w.contains("may not hold outside")), "{:?}", report.warnings);
+}

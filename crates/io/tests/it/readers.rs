@@ -106,7 +106,7 @@ fn measurements_convert_per_joint_kind() {
 
 #[test]
 fn tracker_exports_in_every_dialect_and_unit_read_alike() {
-    use thermokin_io::{JointKind, JointUnits, parse_measurements, parse_measurements_with};
+    use thermokin_io::{JointKind, JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with};
     let kinds = [JointKind::Revolute, JointKind::Prismatic];
     let path = std::path::Path::new("m.csv");
     let commas = "time_min,q1,q2,x,y,z,temp_j1\n0,90,250,1.5,2,3,20.25\n5,-45,10.5,4,-5.125,6,21\n";
@@ -123,7 +123,13 @@ fn tracker_exports_in_every_dialect_and_unit_read_alike() {
         std::f64::consts::FRAC_PI_2,
         -std::f64::consts::FRAC_PI_4
     );
-    let read = parse_measurements_with(path, &radians, &kinds, JointUnits::Radians).unwrap();
+    let read = parse_measurements_with(
+        path,
+        &radians,
+        &kinds,
+        MeasurementFormat { joint_units: JointUnits::Radians, ..MeasurementFormat::default() },
+    )
+    .unwrap();
     for (a, b) in read.measurements.iter().zip(&reference.measurements) {
         assert!((a.q[0] - b.q[0]).abs() < 1e-15 && a.q[1] == b.q[1] && a.position_mm == b.position_mm);
     }
@@ -131,4 +137,82 @@ fn tracker_exports_in_every_dialect_and_unit_read_alike() {
     let bad = "q1;q2;x;y;z\n1;2;3;4;5\n1;2;drei;4;5\n";
     let e = parse_measurements(path, bad, &kinds).unwrap_err().to_string();
     assert!(e.contains("m.csv:3") && e.contains('x'), "{e}");
+}
+
+/// A file in this test process's own temporary directory.
+fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("thermokin-io-readers-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn joints_and_poses_in_two_files_join_by_row_or_by_key() {
+    use thermokin_io::{JointKind, MeasurementFormat, read_measurements_joined};
+    let kinds = [JointKind::Revolute; 6];
+    let f = MeasurementFormat::default();
+    // Rokae robot B as delivered: joints and tracker poses in two files, same row order.
+    let (joints, poses) =
+        (thermokin_testdata::rokae_robot_b("joints-deg.csv"), thermokin_testdata::rokae_robot_b("tracker-poses.csv"));
+    let by_row = read_measurements_joined(&joints, &poses, None, &kinds, f).unwrap();
+    assert_eq!(by_row.len(), 30);
+    let first_pose = std::fs::read_to_string(&poses).unwrap();
+    let x0: f64 = first_pose.lines().nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    assert_eq!(by_row.measurements[0].position_mm.x, x0);
+    assert!(by_row.has_orientation());
+    // By a key, the poses in another order and with their own extra column.
+    let j = temp_file("j.csv", "point,q1,q2,q3,q4,q5,q6,temp_j2\nP1,0,10,20,0,0,0,21.5\nP2,5,15,25,0,0,0,22.0\n");
+    let p = temp_file("p.csv", "point;x;y;z;note\nP2;2,5;0;0;b\nP1;1,5;0;0;a\n");
+    let keyed = read_measurements_joined(&j, &p, Some("point"), &kinds, f).unwrap();
+    let xs: Vec<f64> = keyed.measurements.iter().map(|m| m.position_mm.x).collect();
+    assert_eq!(xs, [1.5, 2.5]);
+    assert_eq!(keyed.measurements[1].q[1], 15f64.to_radians());
+    assert_eq!(keyed.temperature_names, ["j2"]);
+    // Every failure names the file, the line and the field.
+    let cases = [
+        ("p-nokey.csv", "x,y,z\n1,0,0\n2,0,0\n", "p-nokey.csv:1: point: missing key column"),
+        ("p-dup.csv", "point,x,y,z\nP1,1,0,0\nP1,2,0,0\n", "p-dup.csv:3: point: `P1` again (first on line 2)"),
+        ("p-miss.csv", "point,x,y,z\nP1,1,0,0\nP3,2,0,0\n", "j.csv:3: point: `P2` has no pose"),
+        ("p-extra.csv", "point,x,y,z\nP1,1,0,0\nP2,2,0,0\nP9,3,0,0\n", "p-extra.csv:4: point: `P9` has no joints"),
+        ("p-bad.csv", "point,x,y,z\nP1,1,0,0\nP2,two,0,0\n", "p-bad.csv:3: x"),
+    ];
+    for (name, text, needle) in cases {
+        let p = temp_file(name, text);
+        let err = read_measurements_joined(&j, &p, Some("point"), &kinds, f).unwrap_err().to_string();
+        assert!(err.contains(needle), "{name}: {err}");
+    }
+    let short = temp_file("p-short.csv", "x,y,z\n1,0,0\n");
+    let err = read_measurements_joined(&j, &short, None, &kinds, f).unwrap_err().to_string();
+    assert!(err.contains("2 joint rows") && err.contains("but 1 poses"), "{err}");
+}
+
+#[test]
+fn orientation_columns_in_each_convention_read_alike() {
+    use thermokin_io::{JointKind, MeasurementFormat, Orientation, parse_measurements_with};
+    let kinds = [JointKind::Revolute; 6];
+    let path = std::path::Path::new("m.csv");
+    // One rotation written three ways: X-Y-Z Euler, roll-pitch-yaw, a quaternion (w, x, y, z).
+    let r = nalgebra::UnitQuaternion::from_euler_angles(0.3, -0.4, 1.1);
+    let [a, b, c] = thermokin_io::units::xyz_euler_deg(&r);
+    let [roll, pitch, yaw] = thermokin_io::units::ros_rpy_deg(&r);
+    let head = "q1,q2,q3,q4,q5,q6,x,y,z";
+    let texts = [
+        (format!("{head},rx,ry,rz\n0,0,0,0,0,0,1,2,3,{a},{b},{c}\n"), Orientation::XyzEuler),
+        (format!("{head},rx,ry,rz\n0,0,0,0,0,0,1,2,3,{roll},{pitch},{yaw}\n"), Orientation::Rpy),
+        (format!("{head},qw,qx,qy,qz\n0,0,0,0,0,0,1,2,3,{},{},{},{}\n", r.w, r.i, r.j, r.k), Orientation::Quaternion),
+    ];
+    for (text, orientation) in texts {
+        let f = MeasurementFormat { orientation, ..MeasurementFormat::default() };
+        let d = parse_measurements_with(path, &text, &kinds, f).unwrap();
+        let angle = d.measurements[0].orientation.unwrap().angle_to(&r);
+        assert!(angle < 1e-12, "{orientation:?}: {angle}");
+    }
+    // A quaternion that is not of unit norm is refused with its line and columns.
+    let f = MeasurementFormat { orientation: Orientation::Quaternion, ..MeasurementFormat::default() };
+    let err = parse_measurements_with(path, &format!("{head},qw,qx,qy,qz\n0,0,0,0,0,0,1,2,3,2,0,0,0\n"), &kinds, f)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("m.csv:2: qw,qx,qy,qz") && err.contains("norm"), "{err}");
 }
