@@ -15,6 +15,9 @@ pub struct Measurement {
     /// Measured tool orientation in the same frame, when the probe measures one (a 6-D probe: T-Mac,
     /// three reflectors); `None` for a position-only reflector.
     pub orientation: Option<UnitQuaternion<f64>>,
+    /// The tracker's stated standard deviation of this position per axis, mm, when it reports one
+    /// (`std_x, std_y, std_z`): the fit weighs each axis by it.
+    pub position_std_mm: Option<Vector3<f64>>,
     /// Temperatures, °C, in the order of [`Dataset::temperature_names`].
     pub temps: Vec<f64>,
 }
@@ -48,6 +51,10 @@ impl Dataset {
     /// `true` when every measurement carries an orientation (the diagnosis then fits 6-D poses).
     pub fn has_orientation(&self) -> bool {
         !self.measurements.is_empty() && self.measurements.iter().all(|m| m.orientation.is_some())
+    }
+    /// `true` when every measurement carries the tracker's stated standard deviations.
+    pub fn has_position_std(&self) -> bool {
+        !self.measurements.is_empty() && self.measurements.iter().all(|m| m.position_std_mm.is_some())
     }
     /// The time span covered, minutes.
     pub fn time_span(&self) -> f64 {

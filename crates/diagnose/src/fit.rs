@@ -126,6 +126,35 @@ pub(crate) fn residuals(
     Ok((r, jac))
 }
 
+/// [`residuals`] as the fit minimises them: position rows weighted by [`Pre::weights`] when the tracker
+/// stated its standard deviations (weighted least squares), unchanged otherwise.
+fn fit_residuals(
+    robot: &Robot,
+    model: &Model,
+    theta: &[f64],
+    data: &Dataset,
+    rows: &[usize],
+    pre: &Pre,
+    with_jacobian: bool,
+) -> Result<(Vec<f64>, Mat<f64>), DiagnoseError> {
+    let (mut r, mut jac) = residuals(robot, model, theta, data, rows, pre, with_jacobian)?;
+    if let Some(weights) = &pre.weights {
+        let stride = pre.stride();
+        for (k, &i) in rows.iter().enumerate() {
+            for a in 0..3 {
+                let (row, w) = (stride * k + a, weights[i][a]);
+                r[row] *= w;
+                if with_jacobian {
+                    for c in 0..jac.ncols() {
+                        jac[(row, c)] *= w;
+                    }
+                }
+            }
+        }
+    }
+    Ok((r, jac))
+}
+
 /// Per-measurement error norms of residual rows of `stride` rows each.
 pub(crate) fn norms(r: &[f64], stride: usize) -> Vec<f64> {
     r.chunks(stride).map(|c| c.iter().map(|x| x * x).sum::<f64>().sqrt()).collect()
@@ -255,7 +284,7 @@ pub(crate) fn fit_from(
 ) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
     let mut theta = start.theta.clone();
-    let (mut r, mut jac) = residuals(robot, model, &theta, data, rows, pre, true)?;
+    let (mut r, mut jac) = fit_residuals(robot, model, &theta, data, rows, pre, true)?;
     let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
     let mut cost = ssr(&r);
     let mut free = vec![false; model.len()];
@@ -311,7 +340,7 @@ pub(crate) fn fit_from(
                     trial[c] += step[(k, 0)] / scale[k];
                 }
                 // Residuals first; the Jacobian only for an accepted step.
-                let (rt, _) = residuals(robot, model, &trial, data, rows, pre, false)?;
+                let (rt, _) = fit_residuals(robot, model, &trial, data, rows, pre, false)?;
                 let ct = ssr(&rt);
                 if ct < cost {
                     let rel = (cost - ct) / cost.max(1e-300);
@@ -323,7 +352,7 @@ pub(crate) fn fit_from(
                     // by ~1e-5 of their uncertainty.
                     improved = rel > 1e-9;
                     if improved {
-                        jac = residuals(robot, model, &theta, data, rows, pre, true)?.1;
+                        jac = fit_residuals(robot, model, &theta, data, rows, pre, true)?.1;
                     }
                     break;
                 }
@@ -401,6 +430,7 @@ pub(crate) fn initial_registration(
         torques: vec![vec![0.0; robot.chain().dof()]; n],
         rise: vec![vec![0.0; robot.chain().dof()]; n],
         lever_mm: None,
+        weights: None,
     };
     let mut a = Vec::new();
     let mut b = Vec::new();

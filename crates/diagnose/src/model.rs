@@ -612,6 +612,11 @@ pub(crate) struct Pre {
     /// `Some(lever)` when measured orientations are fitted: a rotation error `δφ` (radians) counts as
     /// the displacement `lever · δφ` (mm) it causes at `lever` millimetres from the tool point.
     pub(crate) lever_mm: Option<f64>,
+    /// Per measurement, the weights of its position rows in the fit, `σ̄ / σ` per axis from the
+    /// tracker's stated standard deviations (`σ̄` their mean over the set, so that the weights average
+    /// about 1 and residuals stay in millimetres); `None` when the set states none. Held-out errors are
+    /// never weighted.
+    pub(crate) weights: Option<Vec<Vector3<f64>>>,
 }
 
 impl Pre {
@@ -648,5 +653,10 @@ pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset
         })
         .collect();
     let lever_mm = (lever_mm > 0.0 && data.has_orientation() && reference.has_orientation()).then_some(lever_mm);
-    Pre { torques, rise, lever_mm }
+    let weights = data.has_position_std().then(|| {
+        let stds: Vec<Vector3<f64>> = data.measurements.iter().filter_map(|m| m.position_std_mm).collect();
+        let mean = stds.iter().map(|v| v.sum()).sum::<f64>() / (3 * stds.len()) as f64;
+        stds.iter().map(|v| v.map(|s| mean / s)).collect()
+    });
+    Pre { torques, rise, lever_mm, weights }
 }

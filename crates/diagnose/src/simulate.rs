@@ -73,6 +73,7 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
             q,
             position_mm: Vector3::zeros(),
             orientation: None,
+            position_std_mm: None,
             temps: Vec::new(),
         });
     }

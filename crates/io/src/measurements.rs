@@ -81,6 +81,7 @@ pub fn parse_measurements_with(
                 q: r.joints,
                 position_mm: r.reached_mm,
                 orientation: None,
+                position_std_mm: None,
                 temps: Vec::new(),
             })
             .collect();
@@ -96,8 +97,8 @@ pub fn parse_measurements_with(
     for r in rows {
         expect_fields(path, r, header.cells.len())?;
         let (time_min, q, temps) = joints.read(r)?;
-        let (position_mm, orientation) = poses.read(r)?;
-        measurements.push(Measurement { time_min, q, position_mm, orientation, temps });
+        let (position_mm, orientation, position_std_mm) = poses.read(r)?;
+        measurements.push(Measurement { time_min, q, position_mm, orientation, position_std_mm, temps });
     }
     if measurements.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
@@ -198,8 +199,8 @@ pub fn read_measurements_joined(
     let mut measurements = Vec::with_capacity(pairs.len());
     for (j, p) in pairs {
         let (time_min, q, temps) = joints.read(j)?;
-        let (position_mm, orientation) = poses.read(p)?;
-        measurements.push(Measurement { time_min, q, position_mm, orientation, temps });
+        let (position_mm, orientation, position_std_mm) = poses.read(p)?;
+        measurements.push(Measurement { time_min, q, position_mm, orientation, position_std_mm, temps });
     }
     if measurements.is_empty() {
         return Err(IoError::input(joints_path, Some(jh.line + 1), "rows", "no measurements after the header"));
@@ -280,6 +281,9 @@ impl<'a> JointColumns<'a> {
     }
 }
 
+/// One row's pose side: position, orientation, stated standard deviations.
+type PoseRow = (Vector3<f64>, Option<UnitQuaternion<f64>>, Option<Vector3<f64>>);
+
 /// Where a file's pose-side columns are: `x,y,z`, optional orientation columns.
 struct PoseColumns<'a> {
     path: &'a Path,
@@ -287,6 +291,8 @@ struct PoseColumns<'a> {
     convention: Orientation,
     /// The orientation columns with their names, when present.
     r: Option<Vec<(usize, &'static str)>>,
+    /// `std_x, std_y, std_z`, when present.
+    std: Option<[usize; 3]>,
 }
 
 impl<'a> PoseColumns<'a> {
@@ -315,11 +321,27 @@ impl<'a> PoseColumns<'a> {
                 ));
             }
         };
-        Ok(Self { path, p, convention, r })
+        let std_names = ["std_x", "std_y", "std_z"];
+        let std_found: Vec<Option<usize>> = std_names.iter().map(|n| column(header, n)).collect();
+        let std = match std_found.iter().filter(|c| c.is_some()).count() {
+            0 => None,
+            3 => Some([0, 1, 2].map(|k| std_found[k].unwrap_or_default())),
+            _ => {
+                let missing: Vec<&str> =
+                    std_names.iter().zip(&std_found).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
+                return Err(IoError::input(
+                    path,
+                    Some(header.line),
+                    missing.join(","),
+                    "the tracker's standard deviations need all of std_x, std_y, std_z (mm)",
+                ));
+            }
+        };
+        Ok(Self { path, p, convention, r, std })
     }
 
-    /// Position (mm) and orientation of one row.
-    fn read(&self, r: &Record) -> Result<(Vector3<f64>, Option<UnitQuaternion<f64>>), IoError> {
+    /// Position (mm), orientation and stated standard deviations (mm) of one row.
+    fn read(&self, r: &Record) -> Result<PoseRow, IoError> {
         let path = self.path;
         let p = Vector3::new(
             number(path, r.line, "x", &r.cells[self.p[0]])?,
@@ -337,7 +359,25 @@ impl<'a> PoseColumns<'a> {
             }
             None => None,
         };
-        Ok((p, orientation))
+        let std = match self.std {
+            Some(cols) => {
+                let mut v = [0.0; 3];
+                for (k, name) in ["std_x", "std_y", "std_z"].iter().enumerate() {
+                    v[k] = number(path, r.line, name, &r.cells[cols[k]])?;
+                    if v[k] <= 0.0 {
+                        return Err(IoError::input(
+                            path,
+                            Some(r.line),
+                            *name,
+                            format!("{} is not a positive standard deviation (mm)", v[k]),
+                        ));
+                    }
+                }
+                Some(Vector3::from(v))
+            }
+            None => None,
+        };
+        Ok((p, orientation, std))
     }
 }
 
@@ -348,7 +388,9 @@ pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: 
     let temps: Vec<String> = data.temperature_names.iter().map(|t| format!(",temp_{t}")).collect();
     let oriented = data.has_orientation();
     let r_head = if oriented { ",rx,ry,rz" } else { "" };
-    writeln!(out, "time_min,{},x,y,z{r_head}{}", qs.join(","), temps.concat())?;
+    let with_std = data.has_position_std();
+    let s_head = if with_std { ",std_x,std_y,std_z" } else { "" };
+    writeln!(out, "time_min,{},x,y,z{r_head}{s_head}{}", qs.join(","), temps.concat())?;
     for m in &data.measurements {
         let q: Vec<String> = m
             .q
@@ -364,9 +406,13 @@ pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: 
             }
             _ => String::new(),
         };
+        let sd = match (with_std, &m.position_std_mm) {
+            (true, Some(v)) => format!(",{:?},{:?},{:?}", v.x, v.y, v.z),
+            _ => String::new(),
+        };
         writeln!(
             out,
-            "{:?},{},{:?},{:?},{:?}{r}{}",
+            "{:?},{},{:?},{:?},{:?}{r}{sd}{}",
             m.time_min,
             q.join(","),
             m.position_mm.x,

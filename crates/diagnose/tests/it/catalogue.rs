@@ -164,6 +164,7 @@ fn an_effect_identified_over_a_short_arc_is_warned_about() {
                 position_mm: chain.tool_pose(&actual).unwrap().translation.vector,
                 q,
                 orientation: None,
+                position_std_mm: None,
                 temps: Vec::new(),
             }
         })

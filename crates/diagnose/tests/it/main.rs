@@ -9,3 +9,4 @@ mod real_data;
 mod six_d;
 mod temperature;
 mod tracker;
+mod weights;

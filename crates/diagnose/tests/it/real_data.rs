@@ -44,6 +44,7 @@ pub fn rokae() -> (Robot, Dataset) {
             q: q.iter().map(|d| d.to_radians()).collect(),
             position_mm: Vector3::new(p[0], p[1], p[2]),
             orientation: None,
+            position_std_mm: None,
             temps: Vec::new(),
         })
         .collect();

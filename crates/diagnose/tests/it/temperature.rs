@@ -52,6 +52,7 @@ fn measure(names: [&str; 3]) -> (thermokin_diagnose::Robot, Dataset) {
                 position_mm: warm.tool_pose(&q).unwrap().translation.vector + noise,
                 q,
                 orientation: None,
+                position_std_mm: None,
                 temps: rise.iter().map(|r| 22.0 + r).collect(),
             }
         })

@@ -31,7 +31,14 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
                 .collect();
             let p = chain.tool_pose(&actual(&q)).unwrap().translation.vector;
             let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
-            Measurement { time_min: 0.0, q, position_mm: p + noise, orientation: None, temps: Vec::new() }
+            Measurement {
+                time_min: 0.0,
+                q,
+                position_mm: p + noise,
+                orientation: None,
+                position_std_mm: None,
+                temps: Vec::new(),
+            }
         })
         .collect();
     Dataset { measurements, temperature_names: Vec::new() }
@@ -76,6 +83,7 @@ pub fn measure_6d(
                 q,
                 position_mm: base_from_probe.translation.vector + noise,
                 orientation: Some(nalgebra::UnitQuaternion::from_scaled_axis(turn) * base_from_probe.rotation),
+                position_std_mm: None,
                 temps: Vec::new(),
             }
         })
