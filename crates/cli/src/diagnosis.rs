@@ -180,7 +180,7 @@ fn print_report(r: &Report) {
             );
         }
     }
-    println!("\neffects, main cause first:");
+    println!("\neffects, main cause first (the one whose removal raises the held-out error most):");
     if r.effects.is_empty() {
         println!(
             "  none: no candidate lowers the held-out mean squared error by more than one standard error of the paired difference"

@@ -586,6 +586,50 @@ fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec
             }
         }
     }
+    // Parsimony across steps: a block chosen early may hold a smaller one that explains as much once the
+    // later blocks are in (a joint offset inside a link deviation). Each chosen block is replaced by the
+    // smallest catalogue block its directions contain (rank test on the data) when the larger is not
+    // significantly better held out (the same gate, the other way round).
+    for k in always..effects.len() {
+        let big = effects[k];
+        let mut smaller: Vec<Effect> = Vec::new();
+        for &c in catalogue.iter().filter(|c| c.len() < big.len() && !effects.contains(c)) {
+            if ctx.relations(c, &[big])?.iter().any(|(_, r)| *r == Relation::ContainedIn) {
+                smaller.push(c);
+            }
+        }
+        // Of the smaller blocks as good as the larger, the fewest parameters, then the lowest error.
+        let mut best: Option<(Effect, Stats, Vec<f64>)> = None;
+        for c in smaller {
+            let mut swapped = effects.clone();
+            swapped[k] = c;
+            let (stats, errors) = ctx.heldout_errors(&swapped, &ctx.folds)?;
+            if significantly_better(&errors, &current_errors, config.gate_standard_errors) {
+                continue;
+            }
+            let better = match &best {
+                None => true,
+                Some((b, s, _)) => (c.len(), stats.heldout_rms_mm) < (b.len(), s.heldout_rms_mm),
+            };
+            if better {
+                best = Some((c, stats, errors));
+            }
+        }
+        if let Some((c, stats, errors)) = best {
+            effects[k] = c;
+            current_errors = errors;
+            if let Some(row) = additive.get_mut(k - always + 1) {
+                row.model = format!(
+                    "+ {} (replaces {}: as good held out with {} parameters instead of {})",
+                    c.label(),
+                    big.label(),
+                    c.len(),
+                    big.len()
+                );
+                row.stats = stats;
+            }
+        }
+    }
     // Final model on all data.
     let (model, final_fit) = ctx.full_fit(&effects)?;
     let all: Vec<usize> = (0..data.len()).collect();

@@ -414,7 +414,7 @@ fn simulate_then_diagnose() {
         "0.005",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stdout(&o).contains("effects, main cause first:"));
+    assert!(stdout(&o).contains("effects, main cause first (the one whose removal raises the held-out error most):"));
     assert!(stdout(&o).contains("verdict: explained"), "{}", stdout(&o));
     // The exported robot carries the identified offset: joint 2's zero moved by ~0.05°, so FK at the
     // same joints differs from the nominal robot's, and fk accepts the file.
