@@ -135,12 +135,16 @@ fn bench(json: bool) -> Result<()> {
         "thermokin-ik",
         "--package",
         "thermokin-compensate",
+        "--package",
+        "thermokin-diagnose",
         "--bench",
         "kinematics",
         "--bench",
         "ik",
         "--bench",
         "program",
+        "--bench",
+        "diagnose",
     ]))?;
     let stream: serde_json::Value = std::fs::read_to_string("target/criterion/program_stream.json")
         .ok()
@@ -218,6 +222,30 @@ fn bench(json: bool) -> Result<()> {
             stream["300000"]["peak_rss_mib"].as_f64(),
             "peak memory after 300,000 targets, MiB (flat: same as 1M)",
             f64::NAN,
+        ),
+        (
+            "diagnose_240_s",
+            mean_ns("diagnose/diagnose_240_poses").map(|n| n / 1e9),
+            "diagnosis of 240 poses over 240 min, nested 5×5-fold, every candidate",
+            f64::NAN,
+        ),
+        (
+            "diagnose_selection_60_s",
+            mean_ns("diagnose_scaling/selection/60").map(|n| n / 1e9),
+            "selection alone (5-fold ladder), 60 poses",
+            f64::NAN,
+        ),
+        (
+            "diagnose_selection_480_s",
+            mean_ns("diagnose_scaling/selection/480").map(|n| n / 1e9),
+            "selection alone, 480 poses",
+            f64::NAN,
+        ),
+        (
+            "diagnose_growth_480_over_60",
+            ratio(mean_ns("diagnose_scaling/selection/480"), mean_ns("diagnose_scaling/selection/60")),
+            "cost growth for 8× the poses (8 = linear)",
+            8.0,
         ),
         (
             "transient_10050_s",

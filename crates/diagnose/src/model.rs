@@ -243,6 +243,15 @@ impl Effect {
         }
     }
 
+    /// Whether a robot file can hold the effect: the same for every pose and time (frames, offsets, link
+    /// deviations), unlike compliance, joint-level errors and drift.
+    pub fn is_static(&self) -> bool {
+        !matches!(
+            self,
+            Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..)
+        )
+    }
+
     /// Time-dependent effects are judged with forward-chained cross-validation too.
     pub fn is_time_dependent(&self) -> bool {
         matches!(self, Effect::ThermalDrift(..))
@@ -390,12 +399,19 @@ impl Model {
     /// and the effects a robot file cannot hold because they depend on the pose's load or on time
     /// (gravity compliance, thermal drift), which are left out.
     pub fn calibrated_chain(&self, robot: &Robot, theta: &[f64]) -> Result<(Chain, Vec<Effect>), DiagnoseError> {
+        let (chain, _) = self.static_chain(robot, theta)?;
+        let left_out = self.effects.iter().filter(|e| !e.is_static()).copied().collect();
+        Ok((chain, left_out))
+    }
+
+    /// The chain with the static effects at `theta` (registered), and its joint rows' errors: the part
+    /// of a prediction that is the same for every measurement.
+    fn static_chain(&self, robot: &Robot, theta: &[f64]) -> Result<(Chain, Vec<ErrorParams>), DiagnoseError> {
         let chain = robot.chain();
         let mut base_err = chain.base().error;
         let mut tool_err = chain.tool().error;
         let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
         let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
-        let mut left_out = Vec::new();
         let six = |o: usize| {
             ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
         };
@@ -408,12 +424,11 @@ impl Model {
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
                 Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..) => {
-                    left_out.push(*e)
                 }
             }
         }
-        let c = chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?;
-        Ok((self.registered(c)?, left_out))
+        let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
+        Ok((built, joint_err))
     }
 
     /// `chain` with the registration's starting pose in its base row's nominal pose (its parameters are
@@ -454,26 +469,8 @@ impl Model {
         let cached = match cache {
             Some(c) => c,
             None => {
-                let mut base_err = chain.base().error;
-                let mut tool_err = chain.tool().error;
-                let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
-                let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
-                for (e, &o) in self.effects.iter().zip(&self.offsets) {
-                    match *e {
-                        Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
-                        Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
-                        Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
-                        Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
-                        Effect::JointOffset(j) => zeros[j.index()] += theta[o],
-                        Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
-                        Effect::JointCompliance(_)
-                        | Effect::JointScale(_)
-                        | Effect::Periodic(_)
-                        | Effect::ThermalDrift(..) => {}
-                    }
-                }
-                let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
-                cache.insert(ChainCache { chain: built, joint_err })
+                let (chain, joint_err) = self.static_chain(robot, theta)?;
+                cache.insert(ChainCache { chain, joint_err })
             }
         };
         // Per measurement: the joint values the joint-level effects move, and the drift rows.

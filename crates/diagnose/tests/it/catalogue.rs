@@ -147,15 +147,7 @@ fn an_effect_identified_over_a_short_arc_is_warned_about() {
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(101);
     let measurements = (0..150)
         .map(|_| {
-            let mut q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
+            let mut q = crate::tracker::random_q(chain, &mut rng);
             q[1] = rng.random_range(5f64.to_radians()..20f64.to_radians());
             let mut actual = q.clone();
             actual[1] *= 1.0 + 2e-3;

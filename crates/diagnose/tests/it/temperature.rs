@@ -4,13 +4,13 @@
 //! joint's column (`temp_j3`), not the mean of all sensors.
 
 use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::ErrorParams;
 use thermokin_diagnose::{Config, Dataset, Measurement, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
-use crate::tracker::NOISE_MM;
+use crate::tracker::{NOISE_MM, gauss, random_q};
 
 /// Sensor curves over a 240-minute run, K above the start: joint 2 warms fast (τ = 30 min, +8 K), joint 3
 /// only after 60 minutes and then linearly (+4 K at 240), the ambient barely (+0.5 K, linear).
@@ -24,23 +24,11 @@ fn measure(names: [&str; 3]) -> (thermokin_diagnose::Robot, Dataset) {
     // Joint 3's row per kelvin of its own rise.
     let per_kelvin = error_mm_deg([0.12, 0.0, -0.08, 0.008, 0.0, 0.004]);
     let mut rng = ChaCha8Rng::seed_from_u64(81);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
     let n = 200;
     let measurements = (0..n)
         .map(|k| {
             let t = 240.0 * k as f64 / (n - 1) as f64;
-            let q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
+            let q = random_q(&chain, &mut rng);
             let rise = temps(t);
             let mut rows = vec![ErrorParams::ZERO; 6];
             rows[2] = per_kelvin.scaled(rise[1]);

@@ -10,25 +10,32 @@ use thermokin_diagnose::{Dataset, Measurement};
 /// Noise per axis, mm.
 pub const NOISE_MM: f64 = 0.005;
 
+/// A standard normal sample (Box–Muller).
+pub fn gauss(rng: &mut ChaCha8Rng) -> f64 {
+    let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Joint values drawn uniformly 10 % inside each joint's limits (real calibration poses avoid them).
+pub fn random_q(chain: &Chain, rng: &mut ChaCha8Rng) -> Vec<f64> {
+    chain
+        .joints()
+        .iter()
+        .map(|j| {
+            let l = j.limits.unwrap();
+            let m = 0.1 * (l.upper - l.lower);
+            rng.random_range(l.lower + m..l.upper - m)
+        })
+        .collect()
+}
+
 /// `n` poses 10 % inside the limits: the commanded joints are recorded, the robot stands at
 /// `actual(commanded)`, its TCP is measured with [`NOISE_MM`] of Gaussian noise per axis (Box–Muller).
 pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Vec<f64>) -> Dataset {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
     let measurements = (0..n)
         .map(|_| {
-            let q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
+            let q = random_q(chain, &mut rng);
             let p = chain.tool_pose(&actual(&q)).unwrap().translation.vector;
             let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
             Measurement {
@@ -59,21 +66,9 @@ pub fn measure_6d(
     tool_from_probe: nalgebra::Isometry3<f64>,
 ) -> Dataset {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
     let measurements = (0..n)
         .map(|_| {
-            let q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
+            let q = random_q(chain, &mut rng);
             let base_from_probe = chain.tool_pose(&actual(&q)).unwrap() * tool_from_probe;
             let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
             let turn =

@@ -4,30 +4,20 @@
 //! joints, noise drawn per point from its own σ (not the diagnosis's model).
 
 use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{Config, Dataset, Measurement, Validation, diagnose};
 use thermokin_testdata::workspace;
+
+use crate::tracker::{gauss, random_q};
 
 fn data(stated: bool) -> (thermokin_diagnose::Robot, Dataset) {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let chain = robot.chain().clone();
     let mut rng = ChaCha8Rng::seed_from_u64(111);
-    let gauss = |rng: &mut ChaCha8Rng| {
-        let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    };
     let measurements = (0..150)
         .map(|k| {
-            let q: Vec<f64> = chain
-                .joints()
-                .iter()
-                .map(|j| {
-                    let l = j.limits.unwrap();
-                    let m = 0.1 * (l.upper - l.lower);
-                    rng.random_range(l.lower + m..l.upper - m)
-                })
-                .collect();
+            let q = random_q(&chain, &mut rng);
             let mut actual = q.clone();
             actual[1] += 0.05f64.to_radians();
             let sigma = if k % 3 == 0 { 0.05 } else { 0.005 };
