@@ -378,7 +378,7 @@ fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Resu
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
                 (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
-                (Effect::ToolFrame, _) | (_, 0..=2) => rng.random_range(-0.4..0.4),
+                (_, 0..=2) => rng.random_range(-0.4..0.4),
                 _ => rng.random_range(-0.02..0.02),
             })
             .collect(),
