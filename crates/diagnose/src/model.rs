@@ -290,6 +290,11 @@ impl Effect {
     }
 }
 
+/// The six error parameters of a row block starting at `theta[o]`.
+fn six_at(theta: &[f64], o: usize) -> ErrorParams {
+    ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
+}
+
 /// The chain of one parameter vector, kept across the measurements of one evaluation, with its joint
 /// rows' errors before any drift (a drift row is rewritten from them per measurement).
 pub(crate) struct ChainCache {
@@ -412,9 +417,7 @@ impl Model {
         let mut tool_err = chain.tool().error;
         let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
         let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
-        let six = |o: usize| {
-            ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
-        };
+        let six = |o: usize| six_at(theta, o);
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
@@ -463,9 +466,7 @@ impl Model {
         cache: &mut Option<ChainCache>,
     ) -> Result<(Vector3<f64>, Matrix3<f64>), DiagnoseError> {
         let chain = robot.chain();
-        let six = |o: usize| {
-            ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
-        };
+        let six = |o: usize| six_at(theta, o);
         let cached = match cache {
             Some(c) => c,
             None => {
@@ -508,49 +509,45 @@ impl Model {
         let Some(jac) = jacobian else { return Ok(registered.tool_position_rotation(&q)?) };
         let both = registered.pose_and_parameter_jacobian(&q)?;
         let (pose, pj) = ((both.position, both.rotation), both.jacobian);
-        {
-            let layout = registered.parameter_layout();
-            jac.fill(0.0);
-            let mut drift = drift_scale.iter();
-            for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
-                let mut copy = |dst: usize, src: usize, scale: f64| {
-                    for r in 0..6 {
-                        jac[(r, dst)] = pj[(r, src)] * scale;
+        let layout = registered.parameter_layout();
+        jac.fill(0.0);
+        let mut drift = drift_scale.iter();
+        for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
+            let mut copy = |dst: usize, src: usize, scale: f64| {
+                for r in 0..6 {
+                    jac[(r, dst)] = pj[(r, src)] * scale;
+                }
+            };
+            match *e {
+                Effect::Registration | Effect::BaseFrame => (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0)),
+                Effect::ToolPoint => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                Effect::ToolRotation => (0..3).for_each(|c| copy(o + c, layout.tool() + 3 + c, 1.0)),
+                Effect::ToolFrame => (0..6).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                Effect::JointOffset(j) => copy(o, layout.zero(j.index()), 1.0),
+                Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
+                Effect::JointCompliance(j) => {
+                    let j = j.index();
+                    let scale = if chain.joints()[j].kind == JointKind::Revolute { torques[j] } else { 0.0 };
+                    copy(o, layout.zero(j), scale);
+                }
+                Effect::JointScale(j) | Effect::Periodic(j) => {
+                    // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
+                    let j = j.index();
+                    for (k, b) in e.joint_basis(m.q[j]).iter().enumerate() {
+                        copy(o + k, layout.zero(j), *b);
                     }
-                };
-                match *e {
-                    Effect::Registration | Effect::BaseFrame => {
-                        (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0))
-                    }
-                    Effect::ToolPoint => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
-                    Effect::ToolRotation => (0..3).for_each(|c| copy(o + c, layout.tool() + 3 + c, 1.0)),
-                    Effect::ToolFrame => (0..6).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
-                    Effect::JointOffset(j) => copy(o, layout.zero(j.index()), 1.0),
-                    Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
-                    Effect::JointCompliance(j) => {
-                        let j = j.index();
-                        let scale = if chain.joints()[j].kind == JointKind::Revolute { torques[j] } else { 0.0 };
-                        copy(o, layout.zero(j), scale);
-                    }
-                    Effect::JointScale(j) | Effect::Periodic(j) => {
-                        // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
-                        let j = j.index();
-                        for (k, b) in e.joint_basis(m.q[j]).iter().enumerate() {
-                            copy(o + k, layout.zero(j), *b);
-                        }
-                    }
-                    Effect::ThermalDrift(j, shape) => {
-                        let j = j.index();
-                        let &(_, s, ds) = drift.next().filter(|d| d.0 == k).unwrap_or(&(k, 0.0, 0.0));
-                        (0..6).for_each(|c| copy(o + c, layout.joint(j) + c, s));
-                        if shape == DriftShape::Exponential {
-                            for r in 0..6 {
-                                let mut v = 0.0;
-                                for c in 0..6 {
-                                    v += pj[(r, layout.joint(j) + c)] * theta[o + c] * ds;
-                                }
-                                jac[(r, o + 6)] = v;
+                }
+                Effect::ThermalDrift(j, shape) => {
+                    let j = j.index();
+                    let &(_, s, ds) = drift.next().filter(|d| d.0 == k).unwrap_or(&(k, 0.0, 0.0));
+                    (0..6).for_each(|c| copy(o + c, layout.joint(j) + c, s));
+                    if shape == DriftShape::Exponential {
+                        for r in 0..6 {
+                            let mut v = 0.0;
+                            for c in 0..6 {
+                                v += pj[(r, layout.joint(j) + c)] * theta[o + c] * ds;
                             }
+                            jac[(r, o + 6)] = v;
                         }
                     }
                 }

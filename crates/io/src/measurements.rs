@@ -93,17 +93,13 @@ pub fn parse_measurements_with(
     };
     let joints = JointColumns::find(path, header, kinds, format.joint_units)?;
     let poses = PoseColumns::find(path, header, format.orientation)?;
-    let mut measurements = Vec::with_capacity(rows.len());
-    for r in rows {
-        expect_fields(path, r, header.cells.len())?;
-        let (time_min, q, temps) = joints.read(r)?;
-        let (position_mm, orientation, position_std_mm) = poses.read(r)?;
-        measurements.push(Measurement { time_min, q, position_mm, orientation, position_std_mm, temps });
-    }
-    if measurements.is_empty() {
-        return Err(IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"));
-    }
-    Ok(Dataset { measurements, temperature_names: joints.temperature_names() })
+    let pairs = rows.iter().map(|r| expect_fields(path, r, header.cells.len()).map(|()| (r, r)));
+    assemble(
+        &joints,
+        &poses,
+        pairs,
+        IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"),
+    )
 }
 
 /// Reads a measurement set kept in two files, as tracker and robot software often write them: the
@@ -196,14 +192,27 @@ pub fn read_measurements_joined(
             pairs
         }
     };
-    let mut measurements = Vec::with_capacity(pairs.len());
-    for (j, p) in pairs {
+    let empty = IoError::input(joints_path, Some(jh.line + 1), "rows", "no measurements after the header");
+    assemble(&joints, &poses, pairs.into_iter().map(Ok), empty)
+}
+
+/// The measurements of paired rows (joint side, pose side: the same record for a single file), in order;
+/// `empty` when there are none.
+fn assemble<'r>(
+    joints: &JointColumns,
+    poses: &PoseColumns,
+    pairs: impl Iterator<Item = Result<(&'r Record, &'r Record), IoError>>,
+    empty: IoError,
+) -> Result<Dataset, IoError> {
+    let mut measurements = Vec::new();
+    for pair in pairs {
+        let (j, p) = pair?;
         let (time_min, q, temps) = joints.read(j)?;
         let (position_mm, orientation, position_std_mm) = poses.read(p)?;
         measurements.push(Measurement { time_min, q, position_mm, orientation, position_std_mm, temps });
     }
     if measurements.is_empty() {
-        return Err(IoError::input(joints_path, Some(jh.line + 1), "rows", "no measurements after the header"));
+        return Err(empty);
     }
     Ok(Dataset { measurements, temperature_names: joints.temperature_names() })
 }
