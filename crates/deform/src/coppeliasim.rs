@@ -9,9 +9,15 @@
 //! adding one degree to each Euler angle of a Y- or X-axis joint is not the rotation `Rx(1°)Ry(1°)Rz(1°)`
 //! of the canonical reading; this model leaves 0.25 mm RMS per coordinate against the published static coordinates for
 //! this model versus ~20 mm for the canonical one.
+//!
+//! The angles the script adds to are the ones CoppeliaSim *returns*, [`coppeliasim_euler_angles`]: within
+//! 0.18° of β = ±90° CoppeliaSim reports α = 0 and folds the rest into γ, which is not the object's
+//! rotation. An X-axis joint object (IRB 140 joints 4 and 6) sits exactly there at home, so a small edit
+//! read back and edited again each minute (the transient case) drifts away from the same total applied
+//! once; a 1° edit lands outside the band and is unaffected.
 
 use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
-use thermokin_chain::{Chain, ErrorParams, JointKind, xyz_angles, xyz_rotation};
+use thermokin_chain::{Chain, ErrorParams, JointKind, xyz_rotation};
 
 use crate::{DeformError, DeviationTable};
 
@@ -57,11 +63,13 @@ impl CoppeliaSimEdits {
             let object_rot = coppeliasim_object_rotation(chain.joints()[i].axis.as_ref(), self.spin[i]);
             let old = world_from_joint[i];
             let object = old.rotation.to_rotation_matrix().matrix() * object_rot;
-            let euler = xyz_angles(&object) + edit.rotation;
+            let euler = coppeliasim_euler_angles(&object) + edit.rotation;
             let new_rot = xyz_rotation(&euler) * object_rot.transpose();
             let new = Isometry3::from_parts(
                 Translation3::from(old.translation.vector + edit.translation),
-                UnitQuaternion::from_matrix(&new_rot),
+                // Closed form (Shepperd), exact to rounding; the iterative `from_matrix` stops ~1e-8 rad
+                // short for some 90° rotations, which this module's exactness test sees.
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(new_rot)),
             );
             let delta = new * old.inverse();
             for w in world_from_joint.iter_mut().skip(i) {
@@ -87,6 +95,28 @@ impl CoppeliaSimEdits {
         // Base and tool rows of the table on top, canonically.
         let extra = DeviationTable { joints: vec![ErrorParams::ZERO; n], ..table.clone() };
         extra.apply(&deformed, &crate::TableSemantics::Canonical)
+    }
+}
+
+/// `|r₀₂|` (= `|sin β|`) from which CoppeliaSim treats X-Y-Z Euler angles as gimbal-locked: β within
+/// acos(0.999995) ≈ 0.18° of ±90°.
+const COPPELIASIM_GIMBAL_SIN: f64 = 0.999995;
+
+/// The X-Y-Z Euler angles (`R = Rx(α) Ry(β) Rz(γ)`) that CoppeliaSim's `getObjectOrientation` returns for
+/// a rotation: β = asin(r₀₂) in [−90°, 90°]; α = atan2(−r₁₂, r₂₂) and γ = atan2(−r₀₁, r₀₀) unless
+/// |r₀₂| ≥ 0.999995, where CoppeliaSim declares gimbal lock and returns α = 0, γ = atan2(r₁₀, r₁₁).
+///
+/// Inside that band (β within 0.18° of ±90°) the returned angles are *not* the rotation: rebuilding
+/// them drops the part of α that the lock does not make equivalent to γ — a rotation of up to
+/// |α|·cos β. Exactly at ±90° they rebuild it. The authors' script adds its edit to these angles, so the
+/// loss is part of what their scene did (module documentation).
+pub fn coppeliasim_euler_angles(r: &Matrix3<f64>) -> Vector3<f64> {
+    let s = r[(0, 2)].clamp(-1.0, 1.0);
+    let beta = s.asin();
+    if s.abs() < COPPELIASIM_GIMBAL_SIN {
+        Vector3::new((-r[(1, 2)]).atan2(r[(2, 2)]), beta, (-r[(0, 1)]).atan2(r[(0, 0)]))
+    } else {
+        Vector3::new(0.0, beta, r[(1, 0)].atan2(r[(1, 1)]))
     }
 }
 

@@ -8,7 +8,7 @@
 mod coppeliasim;
 mod profile;
 
-pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_object_rotation};
+pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
 pub use profile::{AfterStabilization, RowFactors, TemperatureLog, TimeProfile};
 pub use thermokin_chain::{ErrorParams, ParameterLayout};
 

@@ -16,7 +16,8 @@ pub mod scene;
 pub use reproduce::{Inputs, Reproduction, brief, check, reproduce};
 
 pub use scene::{
-    Hypothesis, Residuals, TransientCandidate, Verdict, identify_tool_point, residuals, scene_chain, static_hypotheses,
+    Hypothesis, Residuals, SCENE_RANK_CUTOFF, SinglePrecisionEvidence, TransientCandidate, Verdict,
+    identify_scene_geometry, identify_tool_point, residuals, scene_chain, single_precision_evidence, static_hypotheses,
     transient_candidates,
 };
 

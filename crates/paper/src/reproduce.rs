@@ -498,6 +498,7 @@ fn scene_section(
     let minute0: Vec<&PaperResultRow> = authors_transient.iter().filter(|r| r.time_min == 0.0).collect();
     let (floor, hypotheses) = crate::static_hypotheses(table9, &table, &minute0, authors_static)?;
     let tool_point = crate::identify_tool_point(table9, &minute0)?;
+    let (scene, rank) = crate::identify_scene_geometry(&crate::scene_chain(table9, tool_point)?, &minute0)?;
     let _ = writeln!(w, "## The authors' scene replayed (`configs/irb140-scene.toml`, `--semantics coppeliasim`)\n");
     let _ = writeln!(
         w,
@@ -505,10 +506,11 @@ fn scene_section(
     );
     let _ = writeln!(
         w,
-        "Tool point identified on the 50 minute-0 rows of their transient file (nominal robot, closed-form least squares): ({:.6}, {:.6}, {:.6}) mm in joint 6's frame. The nominal scene then leaves {:.4} mm RMS (worst {:.4} mm, {}) and {:.4}° on those rows: the floor. Every candidate below is judged on the 50 static rows, which the identification never saw: kept when its position RMS and worst orientation are both within twice the floor.\n",
+        "Tool point identified on the 50 minute-0 rows of their transient file (nominal robot, closed-form least squares): ({:.6}, {:.6}, {:.6}) mm in joint 6's frame; then, on the same rows, the scene's geometry beyond Table 9's round numbers — the translation of every joint row (rotations stay Table 9's: positions cannot see the tool's orientation), Gauss–Newton with a rank-truncated step (rank {} of 18: what 50 rows of one tool orientation can see; micrometres). The nominal scene then leaves {:.4} mm RMS (worst {:.4} mm, {}) and {:.4}° on those rows: the floor, the files' 0.001 mm rounding. Every candidate below is judged on the 50 static rows, which the identification never saw: kept when its position RMS and worst orientation are both within twice the floor.\n",
         tool_point.x,
         tool_point.y,
         tool_point.z,
+        rank,
         floor.rms_mm,
         floor.worst_mm,
         floor.worst_row,
@@ -530,7 +532,7 @@ fn scene_section(
         let goal_met = k.residuals.worst_mm <= 0.005;
         let _ = writeln!(
             w,
-            "\n**Static goal (≤ 0.005 mm in all 50 rows):** {}. RMS {:.4} mm; worst row {:.4} mm ({}). The nominal scene already leaves {:.4} mm worst on minute 0, where no deformation acts: what is left is the scene's geometry beyond Table 9 (and the files' rounding), which 50 rows of one tool orientation cannot identify further.\n",
+            "\n**Static goal (≤ 0.005 mm in all 50 rows):** {}. RMS {:.4} mm; worst row {:.4} mm ({}), on rows the scene was not identified on; the nominal scene leaves {:.4} mm worst on its own minute-0 rows.\n",
             if goal_met { "met" } else { "not met by the worst row" },
             k.residuals.rms_mm,
             k.residuals.worst_mm,
@@ -541,11 +543,11 @@ fn scene_section(
         j["scene_static_worst_mm"] = json!(k.residuals.worst_mm);
     }
     j["scene_minute0_floor_rms_mm"] = json!(floor.rms_mm);
-    let scene = crate::scene_chain(table9, tool_point)?;
     let candidates = crate::transient_candidates(&scene, &table, authors_transient)?;
+    let precision = crate::single_precision_evidence(authors_transient);
     let _ = writeln!(
         w,
-        "**Transient file: not reproduced yet.** Their script adds table/180 to every joint object each minute wherever the robot stands (path-dependent); the replays tried so far, on the scene's robot:\n\n| candidate | minute 1 RMS, mm | minute 180 RMS, mm | all 10,050 rows RMS, mm |\n|---|---|---|---|"
+        "**Transient file: not reproduced yet.** Their script adds table/180 to every joint object each minute (path-dependent: each edit is added to the angles the scene reports at that moment). CoppeliaSim reports X-Y-Z Euler angles with α = 0 whenever β is within 0.18° of ±90° (its gimbal-lock branch), and joint 4's object (an X axis) sits exactly there at home: a 1/180° edit read back and edited again each minute loses part of α every time, while one 1° edit (the static case) lands outside the band. Replays, on the scene's robot:\n\n| candidate | minute 1 RMS, mm | minute 180 RMS, mm | all 10,050 rows RMS, mm |\n|---|---|---|---|"
     );
     for c in &candidates {
         let _ =
@@ -553,8 +555,11 @@ fn scene_section(
     }
     let _ = writeln!(
         w,
-        "\nNeither reaches the file, already at minute 1 (one increment). What their scene did between two minutes is still open; Tables 17–18 are therefore compared with our own compensation only.\n"
+        "\nReading the angles back as CoppeliaSim does takes the path-dependent replay at home from the table's 5 mm to about 1 mm, but none reaches the file, already at minute 1 (one increment). Why the rest is out of reach here: their scene computed in single precision — all {} published angles between 1 and 2 rad lie within {:.2} of a 32-bit float's spacing of a 32-bit float (double-precision values printed to 1e-6° would spread to 0.5) — and in single precision the tilt that decides what the gimbal branch drops is not resolved: one minute's increment (0.0056°) changes sin β by 5e-9, while 32-bit floats step by 6e-8 near 1, so which part is lost each minute hangs on rounding in their scene file, which the published files do not carry. Replaying that would need their scene's stored single-precision poses, not a better model. Tables 17–18 are therefore compared with our own compensation only.\n",
+        precision.angles, precision.worst_fraction_of_spacing
     );
+    j["transient_single_precision_angles"] = json!(precision.angles);
+    j["transient_single_precision_worst_fraction"] = json!(precision.worst_fraction_of_spacing);
     Ok(())
 }
 

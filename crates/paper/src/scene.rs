@@ -22,9 +22,9 @@
 //! the transient file's minute-0 rows (the nominal robot, no deformation) in closed form; the static
 //! file, never used for it, is the check.
 
-use nalgebra::{Point3, UnitQuaternion, Vector3};
+use nalgebra::{DMatrix, DVector, Point3, UnitQuaternion, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, JointKind, rotation_angle, xyz_rotation};
+use thermokin_chain::{Chain, ErrorParams, JointKind, rotation_angle, xyz_rotation};
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
 use thermokin_io::PaperResultRow;
 use thermokin_io::units;
@@ -110,6 +110,75 @@ pub fn identify_tool_point(nominal: &Chain, minute0: &[&PaperResultRow]) -> Resu
     Ok(sum / minute0.len() as f64)
 }
 
+/// Singular values of the minute-0 identification below this fraction of the largest are taken as
+/// unidentifiable. The 150 × 18 Jacobian of the joint rows' translations at the 50 minute-0 rows has
+/// rank 12 by this rule: its spectrum falls from 0.18 to 3e-4 (mm per mm) between the 12th and the 13th
+/// value, a 600× gap, and 1e-3 of the largest (17.1) sits at 0.017, inside it. Below the gap the step
+/// would trade +0.11 mm of joint 1 against −0.12 mm of joint 6 to fit rounding; beyond it the minimum
+/// norm fixes those combinations at zero.
+pub const SCENE_RANK_CUTOFF: f64 = 1e-3;
+
+/// Gauss–Newton steps of [`identify_scene_geometry`]; the residual settles after the second (the
+/// corrections are micrometres, so the model is linear to rounding).
+const SCENE_STEPS: usize = 4;
+
+/// The scene's geometry beyond Table 9, identified on rows taken on the *nominal* robot (the transient
+/// file's minute 0): the translation of every joint row, by Gauss–Newton on the positions with a
+/// rank-truncated least-squares step ([`SCENE_RANK_CUTOFF`]; minimum norm in what the rows cannot see).
+/// Returns the corrected chain and the rank used.
+///
+/// The scene's CAD places its joints micrometres away from Table 9's round numbers; 50 rows identify 12
+/// combinations of the 18 translations, enough to predict the same targets under any deformation.
+/// Checked, never fitted, on the static file. Rotations are left at Table 9 on purpose: positions alone
+/// cannot see the tool's orientation, and rotation errors fitted on them (rank 22 of 36) reproduce the
+/// static positions no better (0.0009 mm RMS, against 0.00085 with translations alone) but tilt the
+/// tool by thousandths of a degree, which an IK on pose then follows with joints 4 and 6 — 0.0065° away
+/// from the authors' printed angles (Table 16, P4), where Table 9's rotations stay within 0.005°.
+pub fn identify_scene_geometry(scene: &Chain, minute0: &[&PaperResultRow]) -> Result<(Chain, usize), PaperError> {
+    if minute0.is_empty() {
+        return Err(PaperError::Shape { what: "minute-0 rows", expected: 1, got: 0 });
+    }
+    let dof = scene.dof();
+    let layout = scene.parameter_layout();
+    let mut chain = scene.clone();
+    let mut rank = 0;
+    for _ in 0..SCENE_STEPS {
+        let mut a = DMatrix::zeros(3 * minute0.len(), 3 * dof);
+        let mut b = DVector::zeros(3 * minute0.len());
+        for (k, row) in minute0.iter().enumerate() {
+            let pj = chain.pose_and_parameter_jacobian(&joints_rad(&chain, row)?)?;
+            let error = row.reached_mm - pj.position;
+            for axis in 0..3 {
+                b[3 * k + axis] = error[axis];
+                for i in 0..dof {
+                    for c in 0..3 {
+                        a[(3 * k + axis, 3 * i + c)] = pj.jacobian[(axis, layout.joint(i) + c)];
+                    }
+                }
+            }
+        }
+        let svd = a.svd(true, true);
+        let cutoff = SCENE_RANK_CUTOFF * svd.singular_values.max();
+        rank = svd.singular_values.iter().filter(|&&v| v > cutoff).count();
+        let step = svd.solve(&b, cutoff).map_err(|_| PaperError::Shape {
+            what: "identifiable scene parameters",
+            expected: 1,
+            got: 0,
+        })?;
+        let errors: Vec<ErrorParams> = chain
+            .joints()
+            .iter()
+            .enumerate()
+            .map(|(i, j)| ErrorParams {
+                translation: j.error.translation + step.fixed_rows::<3>(3 * i).into_owned(),
+                rotation: j.error.rotation,
+            })
+            .collect();
+        chain = chain.with_errors(chain.base().error, &errors, chain.tool().error)?;
+    }
+    Ok((chain, rank))
+}
+
 /// The scene's robot: `nominal` with the tool point `tool_point_mm` (in the last joint's frame) and the
 /// last joint's row point moved along its axis onto the tool point's foot — where the scene's joint-6
 /// object sits. Nominal FK is unchanged by the move (a point on a revolute axis is fixed by the joint's
@@ -170,7 +239,7 @@ pub fn static_hypotheses(
     let mut identified = table9.tool().clone();
     identified.translation = tool_point;
     let table9_identified = table9.with_tool(identified)?;
-    let scene = scene_chain(table9, tool_point)?;
+    let (scene, _rank) = identify_scene_geometry(&scene_chain(table9, tool_point)?, minute0)?;
     let floor = residuals(&scene, minute0.iter().copied())?;
     let at_home = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; table9.dof()]));
     let last = table9.dof() - 1;
@@ -250,27 +319,27 @@ pub fn transient_candidates(
     let at_home = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof]));
     let increment = table.scaled(1.0 / 180.0);
     let mut out = Vec::new();
-    for path_dependent in [false, true] {
+    for replay in
+        [TransientReplay::OnceAtHome, TransientReplay::EachMinuteAtHome, TransientReplay::EachMinuteAtLastTarget]
+    {
         let mut chain = scene.clone();
         let mut per_minute = Vec::with_capacity(minutes + 1);
         for (m, minute_rows) in by_minute.iter().enumerate() {
             if m > 0 {
-                chain = if path_dependent {
-                    let Some(last) = by_minute[m - 1].last() else { continue };
-                    let at = joints_rad(scene, last)?;
-                    increment.apply(&chain, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(at)))?
-                } else {
-                    table.scaled(m as f64 / 180.0).apply(scene, &at_home)?
+                chain = match replay {
+                    TransientReplay::OnceAtHome => table.scaled(m as f64 / 180.0).apply(scene, &at_home)?,
+                    TransientReplay::EachMinuteAtHome => increment.apply(&chain, &at_home)?,
+                    TransientReplay::EachMinuteAtLastTarget => {
+                        let Some(last) = by_minute[m - 1].last() else { continue };
+                        let at = joints_rad(scene, last)?;
+                        increment.apply(&chain, &TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(at)))?
+                    }
                 };
             }
             per_minute.push(residuals(&chain, minute_rows.iter().copied())?);
         }
         let all = combine(&per_minute);
-        let name = if path_dependent {
-            "increment table/180 each minute, robot at the previous minute's last target"
-        } else {
-            "table × t/180 applied at home"
-        };
+        let name = replay.name();
         let pick = |m: usize| {
             per_minute.get(m).cloned().ok_or(PaperError::Shape {
                 what: "minutes",
@@ -281,6 +350,61 @@ pub fn transient_candidates(
         out.push(TransientCandidate { name: name.into(), minute1: pick(1)?, minute180: pick(180)?, all });
     }
     Ok(out)
+}
+
+/// Whether the authors' scene computed in single precision, read from their published joint angles.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SinglePrecisionEvidence {
+    /// Published angles between 1 and 2 rad (where a 32-bit float's spacing, 2⁻²³ rad = 6.8e-6°, is
+    /// larger than the files' printed step of 1e-6°).
+    pub angles: usize,
+    /// Largest distance of one of them to the nearest 32-bit float, as a fraction of the float spacing.
+    /// Double-precision values printed to 1e-6° spread evenly up to 0.5; float values printed to 1e-6°
+    /// stay below 1e-6° / 6.8e-6° = 0.15.
+    pub worst_fraction_of_spacing: f64,
+}
+
+/// [`SinglePrecisionEvidence`] of published rows.
+pub fn single_precision_evidence<'a>(rows: impl IntoIterator<Item = &'a PaperResultRow>) -> SinglePrecisionEvidence {
+    let mut angles = 0;
+    let mut worst: f64 = 0.0;
+    for q in rows.into_iter().flat_map(|r| r.joints.iter().copied()).filter(|q| (1.0..2.0).contains(&q.abs())) {
+        // The nearest f32 and its neighbours (the cast rounds to nearest; check both sides anyway).
+        let f = q as f32;
+        let spacing = 2f64.powi(-23);
+        let distance =
+            [f.next_down(), f, f.next_up()].iter().map(|&c| (f64::from(c) - q).abs()).fold(f64::INFINITY, f64::min);
+        worst = worst.max(distance / spacing);
+        angles += 1;
+    }
+    SinglePrecisionEvidence { angles, worst_fraction_of_spacing: worst }
+}
+
+/// How a candidate replays the transient file's deformation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TransientReplay {
+    /// The table scaled by t/180, applied once to the nominal scene at home.
+    OnceAtHome,
+    /// The script's per-minute increment, table/180, applied to the current scene at home, each time
+    /// reading the object's angles back the CoppeliaSim way (its Euler edit is path-dependent near the
+    /// X-axis joints' gimbal lock).
+    EachMinuteAtHome,
+    /// The same increment with the robot standing at the previous minute's last target.
+    EachMinuteAtLastTarget,
+}
+
+impl TransientReplay {
+    fn name(self) -> &'static str {
+        match self {
+            Self::OnceAtHome => "table × t/180 applied once at home",
+            Self::EachMinuteAtHome => {
+                "increment table/180 each minute, robot at home (CoppeliaSim's read-back of the angles)"
+            }
+            Self::EachMinuteAtLastTarget => {
+                "increment table/180 each minute, robot at the previous minute's last target"
+            }
+        }
+    }
 }
 
 /// Pools per-minute residuals into one.

@@ -651,9 +651,9 @@ fn fk_on_the_scene_replays_the_authors_static_coordinates() {
             "--json",
         ]);
         let miss = p.iter().zip(&published).map(|(a, b)| (a - b).powi(2)).sum::<f64>().sqrt();
-        // Row by row the worst is 0.0060 mm (the 0.005 is met as an RMS only; see
-        // docs/paper-reproduction.md): 0.0065 mm here would flag a regression, not hide one.
-        assert!(miss < 0.0065, "{}: {miss} mm", cells[0]);
+        // The goal, row by row: ≤ 0.005 mm (measured worst 0.0011 mm, P19; the scene's geometry
+        // was identified on the transient file's minute 0, never on these rows).
+        assert!(miss <= 0.005, "{}: {miss} mm", cells[0]);
         sum_sq += miss * miss;
         rows += 1;
     }

@@ -143,7 +143,11 @@ fn coppeliasim_edits_are_re_expressed_exactly() {
         world_from_j1 * rest
     };
     let ours = deformed.tool_pose(&q).unwrap();
-    assert!((ours.translation.vector - expected.translation.vector).norm() < 1e-9);
+    assert!(
+        (ours.translation.vector - expected.translation.vector).norm() < 1e-9,
+        "{:?}",
+        ours.translation.vector - expected.translation.vector
+    );
     assert!(ours.rotation.angle_to(&expected.rotation) < 1e-12);
 }
 
@@ -151,4 +155,45 @@ fn coppeliasim_edits_are_re_expressed_exactly() {
 fn row_count_mismatch_is_an_error() {
     let t = DeviationTable::zeros(5);
     assert!(t.apply(&irb140(), &TableSemantics::Canonical).is_err());
+}
+
+#[test]
+fn coppeliasim_euler_angles_rebuild_the_rotation_outside_the_gimbal_band_only() {
+    use thermokin_chain::xyz_rotation;
+    use thermokin_deform::coppeliasim_euler_angles;
+    let rot = |a: f64, b: f64, c: f64| xyz_rotation(&Vector3::new(a, b, c));
+    // Small angles through the Frobenius distance (‖P − Q‖ = 2√2·sin(θ/2)): acos of the trace loses
+    // half the digits near zero.
+    let angle_between = |p: &nalgebra::Matrix3<f64>, q: &nalgebra::Matrix3<f64>| {
+        2.0 * ((p - q).norm() / (2.0 * std::f64::consts::SQRT_2)).asin()
+    };
+    // Away from β = ±90°: the angles are the rotation's own (500 seeded rotations, |β| < 89.5°).
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+    for _ in 0..500 {
+        let (a, b, c) = (rng.random_range(-3.1..3.1), rng.random_range(-1.562..1.562), rng.random_range(-3.1..3.1));
+        let r = rot(a, b, c);
+        let e = coppeliasim_euler_angles(&r);
+        assert!(angle_between(&r, &xyz_rotation(&e)) < 1e-12, "{a} {b} {c} -> {e:?}");
+        assert!((e - Vector3::new(a, b, c)).norm() < 1e-9);
+    }
+    // Exactly at the lock (an X-axis joint object at home is Ry(90°)·Rz(spin)): α = 0, and the rotation
+    // is rebuilt.
+    let r = rot(0.0, std::f64::consts::FRAC_PI_2, 0.3);
+    let e = coppeliasim_euler_angles(&r);
+    assert_eq!(e.x, 0.0);
+    assert!(angle_between(&r, &xyz_rotation(&e)) < 1e-12);
+    // Inside the band (β 0.05° short of 90°, α = 0.01 rad): α is reported as 0 and a rotation of
+    // |α|·cos β (to first order in α) is lost.
+    let (alpha, beta) = (0.01, std::f64::consts::FRAC_PI_2 - 0.05f64.to_radians());
+    let r = rot(alpha, beta, 0.2);
+    let e = coppeliasim_euler_angles(&r);
+    assert_eq!(e.x, 0.0);
+    assert!((e.y - beta).abs() < 1e-9);
+    let lost = angle_between(&r, &xyz_rotation(&e));
+    let first_order = alpha * beta.cos();
+    assert!((lost - first_order).abs() < 0.01 * first_order, "{lost} vs {first_order}");
+    // Just outside the band (0.2° short of 90°) nothing is lost.
+    let r = rot(alpha, std::f64::consts::FRAC_PI_2 - 0.2f64.to_radians(), 0.2);
+    assert!(angle_between(&r, &xyz_rotation(&coppeliasim_euler_angles(&r))) < 1e-9);
 }
