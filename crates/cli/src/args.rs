@@ -144,6 +144,24 @@ pub struct RobotArgs {
     pub semantics: Semantics,
 }
 
+/// How a transient run moves from one update to the next (`thermokin_compensate::Accumulation`).
+#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AccumulateArg {
+    /// The profile's share of the table, applied to the undeformed robot at every update.
+    FromNominal,
+    /// The change of the share since the previous update, applied to the deformed robot.
+    Increments,
+}
+
+impl From<AccumulateArg> for thermokin_compensate::Accumulation {
+    fn from(a: AccumulateArg) -> Self {
+        match a {
+            AccumulateArg::FromNominal => Self::FromNominal,
+            AccumulateArg::Increments => Self::Increments,
+        }
+    }
+}
+
 /// Deviation-table semantics.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Semantics {
@@ -218,6 +236,13 @@ pub struct CompensateArgs {
     /// Model update interval, minutes (with --profile).
     #[arg(long, value_name = "MIN", default_value_t = 1.0)]
     pub step: f64,
+    /// How each update brings the table into force (with --profile): from-nominal (the profile's share
+    /// applied to the undeformed robot; the state at t depends on t alone) or increments (only the change
+    /// since the previous update, applied to the robot as already deformed — what the authors' script
+    /// did every minute, paper section 4 and Appendix A, Figure A5; with --semantics coppeliasim the
+    /// state then depends on the path, see docs/paper-reproduction.md).
+    #[arg(long, value_enum, value_name = "HOW", default_value_t = AccumulateArg::FromNominal)]
+    pub accumulate: AccumulateArg,
     /// Seed of the first solve, degrees (default: all zero).
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub seed: Option<String>,

@@ -19,7 +19,7 @@ use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, w
 use std::path::{Path, PathBuf};
 
 use crate::args::{
-    Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
+    AccumulateArg, Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
 };
 use crate::input::{Loaded, joints, load, pose, program, progress_bar, working_chain};
 use crate::{Failure, exit, plots, reproduce};
@@ -221,12 +221,23 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     if a.robot.time.is_some() {
         return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
     }
+    let transient = a.robot.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static);
+    if a.accumulate == AccumulateArg::Increments && !transient {
+        return Err(Failure::input(anyhow!(
+            "--accumulate increments needs a transient run: give --profile (e.g. linear-grow:180)"
+        )));
+    }
     let chain = loaded.robot.chain();
     let start = match &a.seed {
         Some(s) => joints(chain, "seed", s)?,
         None => vec![0.0; chain.dof()],
     };
-    let settings = RunSettings { semantics: loaded.semantics.clone(), ik: Params::default(), start };
+    let settings = RunSettings {
+        semantics: loaded.semantics.clone(),
+        accumulation: a.accumulate.into(),
+        ik: Params::default(),
+        start,
+    };
     if a.stream {
         return compensate_streamed(&a, &loaded, &table, settings);
     }

@@ -70,7 +70,12 @@ fn main() {
     let chain = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap().chain().clone();
     let table = DeviationTable::from_joint_rows(vec![thermokin_testdata::error_mm_deg([1.0; 6]); 6]);
     let start = [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec();
-    let run = RunSettings { semantics: TableSemantics::Canonical, ik: thermokin_ik::Params::default(), start };
+    let run = RunSettings {
+        semantics: TableSemantics::Canonical,
+        accumulation: Default::default(),
+        ik: thermokin_ik::Params::default(),
+        start,
+    };
     let settings = StreamSettings::new(run);
     let sizes: &[usize] = if full { &[100_000, 300_000, 1_000_000] } else { &[1_000] };
     let mut results = serde_json::Map::new();

@@ -21,7 +21,7 @@ pub use program::{
     AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, kuka_status, kuka_turn, programs,
 };
 pub use run::{
-    Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
+    Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,
     orientation_error,
 };
 pub use stream::{StreamSettings, compensate_static_stream};

@@ -45,11 +45,32 @@ impl Cycle {
     }
 }
 
+/// How a transient run brings the table into force from one model update to the next.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Accumulation {
+    /// At each update the profile's share of the table is applied to the undeformed robot: the state at
+    /// t depends on t alone (this library's reading of section 4).
+    #[default]
+    FromNominal,
+    /// At each update only the *change* of the profile's share since the previous update is applied, to
+    /// the robot as already deformed — what the authors' script does every minute (section 4: "the
+    /// forward geometric model was updated minute by minute"; Appendix A, Figure A5: each call adds
+    /// table/180 to every joint object). Under the canonical semantics both readings give the same
+    /// state; under the CoppeliaSim semantics each increment is added to the Euler angles the scene
+    /// reports at that moment, and near an X-axis joint object's gimbal lock (IRB 140 joints 4 and 6 at
+    /// home) the reported angles drop part of the rotation, so the state depends on the path taken
+    /// (`thermokin_deform::coppeliasim_euler_angles`). No update is made while the share does not change
+    /// (minute 0, or a plateau).
+    Increments,
+}
+
 /// Settings of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunSettings {
     /// How the deviation table acts on the chain.
     pub semantics: TableSemantics,
+    /// How a transient run moves from one update's state to the next (static runs ignore it).
+    pub accumulation: Accumulation,
     /// IK settings.
     pub ik: Params,
     /// Seed of the first solve (radians / mm); the program is then chained target to target.
@@ -257,6 +278,7 @@ fn nominal_program(
 /// let program = vec![Target::new("P1", Isometry3::from_parts(Translation3::new(641.0, 21.0, 473.0), tool_along_x))];
 /// let settings = RunSettings {
 ///     semantics: TableSemantics::Canonical,
+///     accumulation: Default::default(),
 ///     ik: thermokin_ik::Params::default(),
 ///     start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec(),
 /// };
@@ -304,8 +326,21 @@ pub fn compensate_transient(
     let nominal = nominal_program(chain, program, settings)?;
     let mut seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
     let mut rows = Vec::with_capacity(times.len() * program.len());
+    // Under `Accumulation::Increments`: the state reached so far and the share of the table in it.
+    let mut carried = (chain.clone(), DeviationTable::zeros(chain.dof()));
     for (k, &t) in times.iter().enumerate() {
-        let deformed = profile.table_at(table, t)?.apply(chain, &settings.semantics)?;
+        let in_force = profile.table_at(table, t)?;
+        let deformed = match settings.accumulation {
+            Accumulation::FromNominal => in_force.apply(chain, &settings.semantics)?,
+            Accumulation::Increments => {
+                let increment = in_force.add(&carried.1.scaled(-1.0))?;
+                if !increment.is_zero() {
+                    carried.0 = increment.apply(&carried.0, &settings.semantics)?;
+                }
+                carried.1 = in_force;
+                carried.0.clone()
+            }
+        };
         let solutions = solve_batch(&deformed, &goals, Seeds::PerTarget(&seeds), &settings.ik)?;
         for ((target, s), n) in program.iter().zip(&solutions).zip(&nominal) {
             rows.push(record(&deformed, t, target, s, &n.q)?);

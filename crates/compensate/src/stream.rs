@@ -59,7 +59,12 @@ impl StreamSettings {
 /// let csv = ",X,Y,Z\nP1,641,21,473\nP2,536,235,281\n";
 /// let mut targets = TargetReader::new("program.csv".as_ref(), Cursor::new(csv))?;
 /// let start = [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec();
-/// let run = RunSettings { semantics: TableSemantics::Canonical, ik: thermokin_ik::Params::default(), start };
+/// let run = RunSettings {
+///     semantics: TableSemantics::Canonical,
+///     accumulation: Default::default(),
+///     ik: thermokin_ik::Params::default(),
+///     start,
+/// };
 /// let mut out = Vec::new();
 /// let summary = compensate_static_stream(&robot, &table, &mut targets, &mut out, &StreamSettings::new(run), |_| {})?;
 /// assert_eq!((summary.solves, summary.failures), (2, 0));

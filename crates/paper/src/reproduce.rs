@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 use serde_json::{Value, json};
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    Cycle, RunOutput, RunSettings, SummaryOut, Target, compensate_static, compensate_transient,
+    Accumulation, Cycle, RunOutput, RunSettings, SummaryOut, Target, compensate_static, compensate_transient,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
@@ -170,7 +170,12 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
     // The authors' IK ran in CoppeliaSim from the robot's current pose; a seed with the wrist bent down
     // (A5 = −45°) puts every target on the branch of their Table 16 (A5 < 0).
     let start = to_internal(&scene, &[0.0, 20.0, 20.0, 0.0, -45.0, 0.0]);
-    let settings = RunSettings { semantics: coppelia.clone(), ik: Params::default(), start };
+    let settings = RunSettings {
+        semantics: coppelia.clone(),
+        accumulation: Accumulation::FromNominal,
+        ik: Params::default(),
+        start,
+    };
 
     let static_run = compensate_static(&scene, &table, &prog, &settings)?;
     let canonical_run = compensate_static(
@@ -555,7 +560,7 @@ fn scene_section(
     }
     let _ = writeln!(
         w,
-        "\nReading the angles back as CoppeliaSim does takes the path-dependent replay at home from the table's 5 mm to about 1 mm, but none reaches the file, already at minute 1 (one increment). Why the rest is out of reach here: their scene computed in single precision — all {} published angles between 1 and 2 rad lie within {:.2} of a 32-bit float's spacing of a 32-bit float (double-precision values printed to 1e-6° would spread to 0.5) — and in single precision the tilt that decides what the gimbal branch drops is not resolved: one minute's increment (0.0056°) changes sin β by 5e-9, while 32-bit floats step by 6e-8 near 1, so which part is lost each minute hangs on rounding in their scene file, which the published files do not carry. Replaying that would need their scene's stored single-precision poses, not a better model. Tables 17–18 are therefore compared with our own compensation only.\n",
+        "\nThe second replay is what `thermokin compensate --robot configs/irb140-scene.toml --semantics coppeliasim --profile linear-grow:180 --accumulate increments` runs. Reading the angles back as CoppeliaSim does takes the path-dependent replay at home from the table's 5 mm to about 1 mm, but none reaches the file, already at minute 1 (one increment). Why the rest is out of reach here: their scene computed in single precision — all {} published angles between 1 and 2 rad lie within {:.2} of a 32-bit float's spacing of a 32-bit float (double-precision values printed to 1e-6° would spread to 0.5) — and in single precision the tilt that decides what the gimbal branch drops is not resolved: one minute's increment (0.0056°) changes sin β by 5e-9, while 32-bit floats step by 6e-8 near 1, so which part is lost each minute hangs on rounding in their scene file, which the published files do not carry. Replaying that would need their scene's stored single-precision poses, not a better model. Tables 17–18 are therefore compared with our own compensation only.\n",
         precision.angles, precision.worst_fraction_of_spacing
     );
     j["transient_single_precision_angles"] = json!(precision.angles);

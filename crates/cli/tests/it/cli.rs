@@ -933,3 +933,60 @@ fn ik_branches_lists_every_configuration_with_its_confdata() {
     let o = thermokin(&["ik", "--robot", ROBOT, "--pose", "641,21,473", "--position-only", "--branches"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn compensate_replays_the_authors_increments_on_request() {
+    // The authors' transient run: the scene, their table, the increment table/180 added each minute to
+    // the robot as deformed so far (`--accumulate increments`), against the default reading.
+    let scene = "configs/irb140-scene.toml";
+    let table = "fixtures/paper/authors/deformations-case-study.csv";
+    let targets = "fixtures/paper/table12-targets.csv";
+    let mut worst = Vec::new();
+    for how in ["from-nominal", "increments"] {
+        let out = tmp(&format!("accumulate-{how}.json"));
+        let o = thermokin(&[
+            "compensate",
+            "--robot",
+            scene,
+            "--deformation",
+            table,
+            "--semantics",
+            "coppeliasim",
+            "--targets",
+            targets,
+            "--profile",
+            "linear-grow:180",
+            "--duration",
+            "20",
+            "--accumulate",
+            how,
+            "--format",
+            "json",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{how}: {}", stderr(&o));
+        let j: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+        worst.push(j["summary"]["max_uncompensated_error_mm"].as_f64().unwrap());
+        // Either way every target is reached.
+        assert!(j["summary"]["max_position_error_mm"].as_f64().unwrap() < 1e-6, "{how}");
+    }
+    // The path shows in the uncompensated program within 20 minutes.
+    assert!((worst[0] - worst[1]).abs() > 0.01, "{worst:?}");
+    // Increments without a transient run are refused, with the reason.
+    let o = thermokin(&[
+        "compensate",
+        "--robot",
+        scene,
+        "--deformation",
+        table,
+        "--targets",
+        targets,
+        "--accumulate",
+        "increments",
+        "--out",
+        tmp("refused.csv").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--accumulate increments needs a transient run"), "{}", stderr(&o));
+}

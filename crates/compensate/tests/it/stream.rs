@@ -15,6 +15,7 @@ fn setup() -> (thermokin_chain::Chain, DeviationTable, RunSettings, String) {
     let table = read_deviation_table(&workspace("fixtures/paper/deformations-case-study.toml")).unwrap();
     let run = RunSettings {
         semantics: TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; 6])),
+        accumulation: Default::default(),
         ik: Params::default(),
         start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec(),
     };
