@@ -19,8 +19,16 @@
 //! # The scene's tool point
 //! Every target of both case studies has the same tool orientation, so a tool-point difference between
 //! the scene and Table 9 is a constant vector in the world. [`identify_tool_point`] estimates it from
-//! the transient file's minute-0 rows (the nominal robot, no deformation) in closed form; the static
-//! file, never used for it, is the check.
+//! the transient file's minute-0 rows (the nominal robot, no deformation) in closed form, and
+//! [`identify_scene_geometry`] the joint points' micrometre offsets from Table 9 on the same rows; the
+//! static file, never used for either, is the check (0.00085 mm RMS, every row within 0.0011 mm).
+//!
+//! # The transient file
+//! Their script adds table/180 to each joint object every minute, to the angles the scene *reports*
+//! ([`thermokin_deform::coppeliasim_euler_angles`]): joint 4's object sits on CoppeliaSim's gimbal-lock
+//! branch at home, so the accumulation is path-dependent. [`transient_candidates`] judges the replays;
+//! [`single_precision_evidence`] shows that the scene ran in single precision, where that branch's
+//! outcome hangs on rounding of the scene's stored poses.
 
 use nalgebra::{DMatrix, DVector, Point3, UnitQuaternion, Vector3};
 use serde::Serialize;
@@ -113,13 +121,13 @@ pub fn identify_tool_point(nominal: &Chain, minute0: &[&PaperResultRow]) -> Resu
 /// Singular values of the minute-0 identification below this fraction of the largest are taken as
 /// unidentifiable. The 150 × 18 Jacobian of the joint rows' translations at the 50 minute-0 rows has
 /// rank 12 by this rule: its spectrum falls from 0.18 to 3e-4 (mm per mm) between the 12th and the 13th
-/// value, a 600× gap, and 1e-3 of the largest (17.1) sits at 0.017, inside it. Below the gap the step
-/// would trade +0.11 mm of joint 1 against −0.12 mm of joint 6 to fit rounding; beyond it the minimum
-/// norm fixes those combinations at zero.
+/// value, a 600× gap, and 1e-3 of the largest (17.1) sits at 0.017, inside it. Keeping the direction
+/// below the gap would trade +0.11 mm of joint 1 against −0.12 mm of joint 6 to fit the files' rounding;
+/// cut, the minimum norm fixes it (and the five null directions) at zero.
 pub const SCENE_RANK_CUTOFF: f64 = 1e-3;
 
-/// Gauss–Newton steps of [`identify_scene_geometry`]; the residual settles after the second (the
-/// corrections are micrometres, so the model is linear to rounding).
+/// Gauss–Newton steps of [`identify_scene_geometry`] (the corrections are micrometres, where the model is
+/// linear to rounding: more steps change nothing the files can show).
 const SCENE_STEPS: usize = 4;
 
 /// The scene's geometry beyond Table 9, identified on rows taken on the *nominal* robot (the transient
