@@ -290,6 +290,20 @@ impl<'a> JointColumns<'a> {
     }
 }
 
+/// Columns that come all together or not at all: their indices in `names` order, `None` when none is
+/// present, and an error naming the missing ones (with `message`) when only some are.
+fn column_group(path: &Path, header: &Record, names: &[&str], message: &str) -> Result<Option<Vec<usize>>, IoError> {
+    let found: Vec<Option<usize>> = names.iter().map(|n| column(header, n)).collect();
+    match found.iter().filter(|c| c.is_some()).count() {
+        0 => Ok(None),
+        k if k == names.len() => Ok(Some(found.into_iter().flatten().collect())),
+        _ => {
+            let missing: Vec<&str> = names.iter().zip(&found).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
+            Err(IoError::input(path, Some(header.line), missing.join(","), message.to_string()))
+        }
+    }
+}
+
 /// One row's pose side: position, orientation, stated standard deviations.
 type PoseRow = (Vector3<f64>, Option<UnitQuaternion<f64>>, Option<Vector3<f64>>);
 
@@ -315,37 +329,20 @@ impl<'a> PoseColumns<'a> {
             Orientation::Quaternion => &["qw", "qx", "qy", "qz"],
             _ => &["rx", "ry", "rz"],
         };
-        let found: Vec<Option<usize>> = names.iter().map(|n| column(header, n)).collect();
-        let r = match found.iter().filter(|c| c.is_some()).count() {
-            0 => None,
-            k if k == names.len() => Some(found.into_iter().flatten().zip(names.iter().copied()).collect()),
-            _ => {
-                let missing: Vec<&str> =
-                    names.iter().zip(&found).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
-                return Err(IoError::input(
-                    path,
-                    Some(header.line),
-                    missing.join(","),
-                    format!("an orientation needs all of {} ({convention:?})", names.join(", ")),
-                ));
-            }
-        };
-        let std_names = ["std_x", "std_y", "std_z"];
-        let std_found: Vec<Option<usize>> = std_names.iter().map(|n| column(header, n)).collect();
-        let std = match std_found.iter().filter(|c| c.is_some()).count() {
-            0 => None,
-            3 => Some([0, 1, 2].map(|k| std_found[k].unwrap_or_default())),
-            _ => {
-                let missing: Vec<&str> =
-                    std_names.iter().zip(&std_found).filter(|(_, c)| c.is_none()).map(|(n, _)| *n).collect();
-                return Err(IoError::input(
-                    path,
-                    Some(header.line),
-                    missing.join(","),
-                    "the tracker's standard deviations need all of std_x, std_y, std_z (mm)",
-                ));
-            }
-        };
+        let r = column_group(
+            path,
+            header,
+            names,
+            &format!("an orientation needs all of {} ({convention:?})", names.join(", ")),
+        )?
+        .map(|cols| cols.into_iter().zip(names.iter().copied()).collect());
+        let std = column_group(
+            path,
+            header,
+            &["std_x", "std_y", "std_z"],
+            "the tracker's standard deviations need all of std_x, std_y, std_z (mm)",
+        )?
+        .map(|cols| [cols[0], cols[1], cols[2]]);
         Ok(Self { path, p, convention, r, std })
     }
 
