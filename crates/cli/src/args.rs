@@ -323,10 +323,12 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// How poses are grouped into validation folds: time (default; time-grouped, or shuffled for a static
-    /// set), region (leave one workspace quadrant out) or configuration (leave one arm branch out) — the
-    /// latter two test whether an effect transfers to poses unlike those it was fitted on.
-    #[arg(long, value_enum, default_value_t = FoldsByArg::Time)]
+    /// How poses are grouped into validation folds. neighbourhood (default): time-grouped when the data
+    /// span time; otherwise blocks of neighbouring arm configurations (4 per fold, k-means in joint
+    /// space; single poses below 10 per block), so that an effect is scored on poses unlike those it was
+    /// fitted on and the gate counts blocks, not poses. time: time-grouped, or single poses shuffled.
+    /// region: leave one workspace quadrant out. configuration: leave one arm branch out.
+    #[arg(long, value_enum, default_value_t = FoldsByArg::Neighbourhood)]
     pub folds_by: FoldsByArg,
     /// Unit of the measurement files' revolute joint columns: deg (default) or rad (ROS, robot SDKs).
     #[arg(long, value_enum, default_value_t = JointUnitsArg::Deg)]
@@ -344,18 +346,25 @@ pub struct DiagnoseArgs {
     /// --noise, the verdict's noise floor then includes the orientations.
     #[arg(long, value_name = "DEG")]
     pub orientation_noise: Option<f64>,
-    /// Write the identified robot — the final model fitted on all measurements: registration (as the
-    /// base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
-    /// deviations — as a robot TOML (or URDF if FILE ends in .urdf) that fk, ik and compensate accept.
-    /// Compliance and thermal drift depend on the load and on time and are left out (named when so).
+    /// Write the identified robot — registration (as the base row, so that FK gives the measurement
+    /// frame), tool point, base frame, joint offsets, link deviations — as a robot TOML (or URDF if FILE
+    /// ends in .urdf) that fk, ik and compensate accept. When the chosen model holds effects a robot file
+    /// cannot hold yet (compliance, gear ratio, cyclic error, thermal drift), the others are refitted
+    /// without them and that model — the one written — is scored beside the export. Refused when the
+    /// chosen model does not beat the nominal one on data it never saw, unless --force-export.
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,
+    /// Write --export even when the chosen model does not beat the nominal one held out.
+    #[arg(long)]
+    pub force_export: bool,
 }
 
 /// `--folds-by`.
 #[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FoldsByArg {
-    /// Time-grouped folds (or a seeded shuffle).
+    /// Time-grouped folds, or blocks of neighbouring arm configurations.
+    Neighbourhood,
+    /// Time-grouped folds (or a seeded shuffle of single poses).
     Time,
     /// Leave one workspace region out.
     Region,

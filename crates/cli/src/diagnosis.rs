@@ -55,6 +55,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     }
     let config = Config {
         folds_by: match a.folds_by {
+            FoldsByArg::Neighbourhood => FoldGrouping::Neighbourhood,
             FoldsByArg::Time => FoldGrouping::Time,
             FoldsByArg::Region => FoldGrouping::WorkspaceRegion,
             FoldsByArg::Configuration => FoldGrouping::JointConfiguration,
@@ -94,6 +95,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     bar.finish_and_clear();
     let report = report?;
     print_report(&report);
+    if let (Some(p), Some(why)) = (&a.export, &report.honest_end)
+        && !a.force_export
+    {
+        return Err(Failure::input(anyhow!("not writing {}: {why} (--force-export writes it anyway)", p.display())));
+    }
     if let Some(p) = &a.export {
         let calibrated = robot.with_chain(report.calibrated.clone()).map_err(Failure::internal)?.renamed(format!(
             "{} (calibrated on {})",
@@ -111,11 +117,24 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
 identified robot → {}",
             p.display()
         );
-        if !report.not_in_calibrated.is_empty() {
+        if let Some(x) = &report.export {
             println!(
-                "  left out (they depend on the load or on time, a robot file cannot hold them): {}",
-                report.not_in_calibrated.join(", ")
+                "  a robot file cannot hold {} yet: the model written is the others refitted without {} — {}",
+                x.left_out.join(", "),
+                if x.left_out.len() > 1 { "them" } else { "it" },
+                if x.effects.is_empty() { "the frames only".to_string() } else { x.effects.join(", ") }
             );
+            let s = &x.heldout;
+            println!(
+                "  its held-out error (selection's folds): mean {:.4}, RMS {:.4}, max {:.4} mm",
+                s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm
+            );
+            if let Some(h) = &x.holdout {
+                println!(
+                    "  on the hold-out set: mean {:.4}, RMS {:.4}, max {:.4} mm",
+                    h.heldout_mean_mm, h.heldout_rms_mm, h.heldout_max_mm
+                );
+            }
         }
     }
     if let Some(p) = &a.json {
@@ -131,6 +150,9 @@ identified robot → {}",
 }
 
 fn print_report(r: &Report) {
+    if let Some(why) = &r.honest_end {
+        println!("NOT BETTER THAN NOMINAL: {why}\n");
+    }
     for w in &r.warnings {
         println!("warning: {w}");
     }
@@ -140,19 +162,30 @@ fn print_report(r: &Report) {
         );
     }
     let line = |what: &str, s: &thermokin_diagnose::Stats| {
-        println!("  {what:<44} {:>9.4} {:>9.4} {:>9.4}", s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm)
+        println!(
+            "  {what:<44} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
+            s.heldout_mean_mm, s.heldout_median_mm, s.heldout_p95_mm, s.heldout_rms_mm, s.heldout_max_mm
+        )
     };
+    let header = || println!("  {:<44} {:>9} {:>9} {:>9} {:>9} {:>9}", "model", "mean", "median", "p95", "RMS", "max");
     if let Some(n) = &r.nested {
         println!(
             "held-out error of the whole diagnosis, nested {}-fold (each outer test fold unseen by the selection), mm:",
             n.outer_folds
         );
-        println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
+        header();
         line("nominal", &n.nominal);
         line("the effects each outer selection chose", &n.selected);
-        for (k, chosen) in n.selections.iter().enumerate() {
-            let chosen = if chosen.is_empty() { "none".to_string() } else { chosen.join(", ") };
-            println!("    outer fold {}: {chosen}", k + 1);
+        for f in &n.folds {
+            let chosen = if f.effects.is_empty() { "none".to_string() } else { f.effects.join(", ") };
+            let flag = if f.selected.heldout_rms_mm > f.nominal.heldout_rms_mm { "  WORSE THAN NOMINAL" } else { "" };
+            println!(
+                "    outer fold {} ({} poses): nominal {:.4} → {:.4} mm RMS{flag}; chose {chosen}",
+                f.fold, f.poses, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm
+            );
+        }
+        if let Some(d) = n.dominated_by {
+            println!("    outer fold {d} holds more than half of the squared error: the RMS above is mostly that fold");
         }
     }
     if let Some(h) = &r.holdout {
@@ -160,6 +193,7 @@ fn print_report(r: &Report) {
         if !h.refitted.is_empty() {
             println!("  (its own frame and probe: {} refitted on it, the effects kept)", h.refitted.join(", "));
         }
+        header();
         line("nominal", &h.nominal);
         line("the effects chosen below", &h.selected);
     }
@@ -257,6 +291,12 @@ fn print_report(r: &Report) {
     if !b.by_time.is_empty() {
         let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
         println!("  time quartiles                                    {}   →   {}", list(&b.by_time), list(&a.by_time));
+    }
+    if !r.identifiability.not_identifiable.is_empty() {
+        println!("\nnot identifiable from these data (not selectable; --help of diagnose says the rules):");
+        for x in &r.identifiability.not_identifiable {
+            println!("  {:<30} {} — {}", x.effect, x.reason, x.remedy);
+        }
     }
     if let Some(o) = &r.identifiability.observability {
         println!(

@@ -1,18 +1,16 @@
 //! The ladder: candidate effects added one at a time, each judged on held-out data, the smaller block
 //! preferred when two explain the data alike; then the final model on all data and the report.
 
-use rayon::prelude::*;
 use serde::Serialize;
 use thermokin_chain::Robot;
 use thermokin_io::units;
 
-use crate::fit::{Start, fit, fit_from, initial_registration, norms, observability, residuals};
-use crate::model::{DriftShape, Effect, JointIndex, Model, prepare_against};
-use crate::report::{
-    EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, ParameterValue, PoseReport, Report, Stats,
-    TableRow, breakdown,
-};
-use crate::validation::{Ctx, Relation, Scored, folds_for, significantly_better};
+use crate::eligibility::Eligibility;
+use crate::fit::{Start, fit_from, initial_registration, norms, residuals};
+use crate::model::{Effect, Model, prepare_against};
+use crate::report::{HoldoutStats, Nested, OuterFold, Report, Stats};
+use crate::select::{Plausibility, always_estimated, select};
+use crate::validation::{Ctx, folds_for};
 use crate::{Dataset, DiagnoseError};
 
 /// In which frame the measurements are.
@@ -68,13 +66,24 @@ pub struct Config {
     /// The orientation noise per axis of a 6-D probe (standard deviation, degrees), when known: with
     /// orientations fitted, the verdict's noise floor is `√(3σ² + 3(lever · σ_rot)²)`.
     pub orientation_noise_deg: Option<f64>,
+    /// What the data must show before an effect may be selected ([`Eligibility`]).
+    pub eligibility: Eligibility,
+    /// Bounds on fitted values beyond which a candidate is refused as implausible ([`Plausibility`]).
+    pub plausibility: Plausibility,
 }
 
 /// How measurements are grouped into cross-validation folds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub enum FoldGrouping {
-    /// `folds` folds grouped in time when the data span time, a seeded shuffle otherwise (the default).
+    /// The default: `folds` folds grouped in time when the data span time (neighbours in time share a
+    /// thermal state); otherwise grouped by neighbourhood in joint space — `4 · folds` blocks of
+    /// neighbouring arm configurations (k-means), every `folds`-th block in one fold, so that each
+    /// candidate is scored on poses unlike those it was fitted on while every fold spans the workspace.
+    /// The gate's standard error is taken over the blocks.
     #[default]
+    Neighbourhood,
+    /// `folds` folds grouped in time when the data span time, a seeded shuffle of single poses
+    /// otherwise.
     Time,
     /// One fold per workspace quadrant (reach × height against their medians): held-out poses lie in a
     /// region the fit never saw.
@@ -110,49 +119,13 @@ impl Default for Config {
             seed: 0xd1a6,
             validation: Validation::Nested { outer: 5 },
             noise_mm: None,
-            folds_by: FoldGrouping::Time,
+            folds_by: FoldGrouping::Neighbourhood,
             orientation_lever_mm: 100.0,
             orientation_noise_deg: None,
+            eligibility: Eligibility::default(),
+            plausibility: Plausibility::default(),
         }
     }
-}
-
-/// The catalogue's candidates for this robot and data set, in catalogue order.
-fn candidates(robot: &Robot, data: &Dataset, config: &Config) -> Result<Vec<Effect>, DiagnoseError> {
-    let joints =
-        (0..robot.chain().dof()).map(|j| JointIndex::of(robot, j)).collect::<Result<Vec<_>, DiagnoseError>>()?;
-    let mut c = Vec::new();
-    if config.frame == FrameMode::Base {
-        c.push(Effect::BaseFrame);
-    }
-    if config.tool == ToolMode::Known {
-        c.push(Effect::ToolFrame);
-    }
-    c.extend(joints.iter().map(|&j| Effect::JointOffset(j)));
-    c.extend(joints.iter().map(|&j| Effect::LinkDeviation(j)));
-    for &j in &joints {
-        let carries_mass = robot.masses().iter().skip(j.index()).any(Option::is_some);
-        if carries_mass {
-            c.push(Effect::JointCompliance(j));
-        }
-    }
-    // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity).
-    for &j in &joints {
-        if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Revolute {
-            c.push(Effect::JointScale(j));
-            c.push(Effect::Periodic(j));
-        }
-    }
-    if data.time_span() > 0.0 {
-        for &j in &joints {
-            c.push(Effect::ThermalDrift(j, DriftShape::Linear));
-            c.push(Effect::ThermalDrift(j, DriftShape::Exponential));
-        }
-    }
-    if !data.temperature_names.is_empty() {
-        c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
-    }
-    Ok(c)
 }
 
 /// Runs the diagnosis of `data` against `robot`.
@@ -233,39 +206,74 @@ pub fn diagnose_with_progress(
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
         let ctx = Ctx::new(robot, data, config);
-        let rows: Vec<usize> = (0..h.len()).collect();
-        let pre = prepare_against(robot, h, data, config.orientation_lever_mm);
-        let score = |e: &[Effect]| -> Result<Stats, DiagnoseError> {
-            let (trained, f) = ctx.full_fit(e)?;
-            let (model, theta) = if trained.effects().iter().any(|b| !b.is_reported()) {
-                let mut model = Model::new(robot, e.to_vec())?;
-                if model.has_registration() {
-                    model = model.with_registration(initial_registration(robot, h, &rows)?);
-                }
-                let mut theta = f.theta.clone();
-                let mut movable = vec![false; model.len()];
-                for (b, &o) in model.effects().iter().zip(model.offsets()) {
-                    if !b.is_reported() {
-                        // The frame blocks restart from the hold-out file's own registration.
-                        theta[o..o + b.len()].fill(0.0);
-                        movable[o..o + b.len()].fill(true);
-                    }
-                }
-                let refit = fit_from(robot, &model, h, &rows, &pre, &Start { theta, movable })?;
-                (model, refit.theta)
-            } else {
-                (trained, f.theta)
-            };
-            let (r, _) = residuals(robot, &model, &theta, h, &rows, &pre, false)?;
-            Ok(Stats::of(&norms(&r, pre.stride())))
-        };
+        let score = |e: &[Effect]| transfer_score(&ctx, h, e, config);
         let refitted = always.iter().map(Effect::label).collect();
         report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
+        if let Some(export) = &mut report.export {
+            let kept: Vec<Effect> = effects.iter().filter(|e| e.is_static()).copied().collect();
+            export.holdout = Some(score(&kept)?);
+        }
         tell("hold-out set".into());
     }
     report.warnings = warnings(robot, data, config, &report);
     report.verdict = verdict(config, &report);
+    report.honest_end = honest_end(&report);
     Ok(report)
+}
+
+/// The model of `effects` fitted on all of `ctx`'s data, scored on `holdout`. When the registration or
+/// the tool point is always estimated, the hold-out file may be in another tracker frame or carry another
+/// probe: those blocks (only) are refitted on it, the effects kept as fitted.
+pub(crate) fn transfer_score(
+    ctx: &Ctx<'_>,
+    holdout: &Dataset,
+    effects: &[Effect],
+    config: &Config,
+) -> Result<Stats, DiagnoseError> {
+    let robot = ctx.robot;
+    let rows: Vec<usize> = (0..holdout.len()).collect();
+    let pre = prepare_against(robot, holdout, ctx.data, config.orientation_lever_mm);
+    let (trained, f) = ctx.full_fit(effects)?;
+    let (model, theta) = if trained.effects().iter().any(|b| !b.is_reported()) {
+        let mut model = Model::new(robot, effects.to_vec())?;
+        if model.has_registration() {
+            model = model.with_registration(initial_registration(robot, holdout, &rows)?);
+        }
+        let mut theta = f.theta.clone();
+        let mut movable = vec![false; model.len()];
+        for (b, &o) in model.effects().iter().zip(model.offsets()) {
+            if !b.is_reported() {
+                // The frame blocks restart from the hold-out file's own registration.
+                theta[o..o + b.len()].fill(0.0);
+                movable[o..o + b.len()].fill(true);
+            }
+        }
+        let refit = fit_from(robot, &model, holdout, &rows, &pre, &Start { theta, movable })?;
+        (model, refit.theta)
+    } else {
+        (trained, f.theta)
+    };
+    let (r, _) = residuals(robot, &model, &theta, holdout, &rows, &pre, false)?;
+    Ok(Stats::of(&norms(&r, pre.stride())))
+}
+
+/// The model of `effects` (the always-estimated blocks are added) fitted on all of `data` and scored on
+/// `holdout` as [`diagnose`] scores its choice: for comparing a model of one's own with the diagnosis's.
+pub fn evaluate(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: &Dataset,
+    effects: &[Effect],
+    config: &Config,
+) -> Result<Stats, DiagnoseError> {
+    let ctx = Ctx::new(robot, data, config);
+    let mut all = always_estimated(config, data);
+    for e in effects {
+        if !all.contains(e) {
+            all.push(*e);
+        }
+    }
+    transfer_score(&ctx, holdout, &all, config)
 }
 
 /// Signs that the data were read with the wrong units or frame: the diagnosis would otherwise absorb a
@@ -326,6 +334,39 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
     out
 }
 
+/// The sentence said first when the chosen model does not beat the nominal one where it was not fitted:
+/// the nested validation's mean error (or one of its outer folds), or the hold-out set's.
+fn honest_end(report: &Report) -> Option<String> {
+    if report.effects.is_empty() {
+        return None;
+    }
+    let mut out = Vec::new();
+    if let Some(n) = &report.nested {
+        if n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm {
+            out.push(format!(
+                "on outer folds the selection never saw, the chosen model's mean error {:.4} mm does not beat the nominal model's {:.4} mm",
+                n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm
+            ));
+        } else if !n.worse_than_nominal.is_empty() {
+            let list: Vec<String> = n.worse_than_nominal.iter().map(ToString::to_string).collect();
+            out.push(format!(
+                "in outer fold{} {} the model chosen there predicts worse than the nominal one",
+                if list.len() > 1 { "s" } else { "" },
+                list.join(", ")
+            ));
+        }
+    }
+    if let Some(h) = &report.holdout
+        && h.selected.heldout_mean_mm >= h.nominal.heldout_mean_mm
+    {
+        out.push(format!(
+            "on the hold-out set the chosen model's mean error {:.4} mm does not beat the nominal model's {:.4} mm",
+            h.selected.heldout_mean_mm, h.nominal.heldout_mean_mm
+        ));
+    }
+    (!out.is_empty()).then(|| format!("the chosen model does not transfer: {}", out.join("; ")))
+}
+
 /// Whether what the effects leave is the noise: the nested held-out RMS (or the selection's own CV
 /// without nesting) against `√3 · σ` of the stated per-axis noise (`√(3σ² + 3(lever · σ_rot)²)` with
 /// orientations fitted), with a factor 1.5 of margin (the 3-D RMS of Gaussian noise scatters by ~10 %
@@ -368,31 +409,16 @@ fn verdict(config: &Config, report: &Report) -> String {
     }
 }
 
-/// The blocks every model estimates (never reported as causes): the tracker registration and an unknown
-/// tool point.
-fn always_estimated(config: &Config, data: &Dataset) -> Vec<Effect> {
-    let mut effects = Vec::new();
-    if config.frame == FrameMode::Tracker {
-        effects.push(Effect::Registration);
-    }
-    if config.tool == ToolMode::Unknown {
-        effects.push(Effect::ToolPoint);
-        // An unknown 6-D probe: its rotation is as unknown as its point.
-        if data.has_orientation() && config.orientation_lever_mm > 0.0 {
-            effects.push(Effect::ToolRotation);
-        }
-    }
-    effects
-}
-
 /// The outer folds of the nested validation (their own seed: not the selection's folds).
 fn nested_folds(data: &Dataset, config: &Config, outer: usize) -> crate::validation::Folds {
-    folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by)
+    folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by).folds
 }
 
 /// Nested cross-validation of the whole procedure: for each outer fold, the selection runs on the
 /// training part only, the model it picks is fitted there and scored on the fold's test part; the
-/// nominal model (the always-estimated blocks) is scored the same way.
+/// nominal model (the always-estimated blocks) is scored the same way. Every outer fold is reported on
+/// its own: a fold whose model predicts its test poses worse than the nominal one is named, and so is
+/// a fold that holds most of the squared error.
 fn nested(
     robot: &Robot,
     data: &Dataset,
@@ -405,7 +431,7 @@ fn nested(
     let always = always_estimated(config, data);
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
-    let mut selections = Vec::new();
+    let mut outcomes = Vec::new();
     for (k, (train, test)) in folds.iter().enumerate() {
         if train.is_empty() || test.is_empty() {
             continue;
@@ -413,317 +439,47 @@ fn nested(
         let subset = data.subset(train);
         let (_, effects) = select(robot, &subset, &inner)?;
         tell(format!("nested validation, outer fold {} of {}", k + 1, folds.len()));
-        selections.push(effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect());
         let ctx = Ctx::new(robot, &subset, &inner);
         let test_set = data.subset(test);
         let test_pre = prepare_against(robot, &test_set, &subset, config.orientation_lever_mm);
         let rows: Vec<usize> = (0..test.len()).collect();
+        let mut fold_stats = Vec::new();
         for (e, errors) in [(&always, &mut nominal_norms), (&effects, &mut selected_norms)] {
             let (model, f) = ctx.full_fit(e)?;
             let (r, _) = residuals(robot, &model, &f.theta, &test_set, &rows, &test_pre, false)?;
-            errors.extend(norms(&r, test_pre.stride()));
+            let n = norms(&r, test_pre.stride());
+            fold_stats.push(Stats::of(&n));
+            errors.extend(n);
         }
+        outcomes.push(OuterFold {
+            fold: k + 1,
+            poses: test.len(),
+            nominal: fold_stats[0],
+            selected: fold_stats[1],
+            effects: effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
+        });
     }
+    let total: f64 = selected_norms.iter().map(|x| x * x).sum();
+    // One fold dominates when it holds more than half of the squared error with at most twice its
+    // share of the poses.
+    let dominated_by = outcomes
+        .iter()
+        .find(|f| {
+            let share = f.selected.heldout_rms_mm.powi(2) * f.poses as f64 / total.max(1e-300);
+            share > 0.5 && f.poses * outcomes.len() <= 2 * selected_norms.len().max(1)
+        })
+        .map(|f| f.fold);
     Ok(Nested {
         outer_folds: outer,
         nominal: Stats::of(&nominal_norms),
         selected: Stats::of(&selected_norms),
-        selections,
+        selections: outcomes.iter().map(|f| f.effects.clone()).collect(),
+        worse_than_nominal: outcomes
+            .iter()
+            .filter(|f| f.selected.heldout_rms_mm > f.nominal.heldout_rms_mm)
+            .map(|f| f.fold)
+            .collect(),
+        dominated_by,
+        folds: outcomes,
     })
-}
-
-/// The ladder on `data`: candidates chosen by cross-validation, the final model fitted on all of it. The
-/// report's held-out figures here are the selection's own (optimistic) scores.
-fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(Report, Vec<Effect>), DiagnoseError> {
-    let needed = 2 * config.folds.max(2);
-    if data.len() < needed {
-        return Err(DiagnoseError::TooFewMeasurements { count: data.len(), folds: config.folds, needed });
-    }
-    let ctx = Ctx::new(robot, data, config);
-    let validation = if config.folds_by == FoldGrouping::WorkspaceRegion {
-        "leave one workspace region out (4 quadrants of reach × height)".to_string()
-    } else if config.folds_by == FoldGrouping::JointConfiguration {
-        "leave one arm configuration out (elbow × wrist)".to_string()
-    } else if data.time_span() > 0.0 {
-        format!(
-            "{}-fold cross-validation, folds grouped in time; time-dependent effects also forward-chained",
-            config.folds
-        )
-    } else {
-        format!("{}-fold cross-validation (seeded shuffle)", config.folds)
-    };
-    let mut effects = always_estimated(config, data);
-    let always = effects.len();
-    let (nominal, nominal_errors) = ctx.heldout_errors(&effects, &ctx.folds)?;
-    let mut current = nominal;
-    let mut current_errors = nominal_errors;
-    let mut additive = vec![TableRow { model: "nominal".into(), stats: nominal }];
-    let mut bic = vec![ctx.bic(&effects)?];
-    let mut before_after: Vec<(f64, f64)> = Vec::new();
-    let mut skipped: Vec<(String, String)> = Vec::new();
-    let catalogue = candidates(robot, data, config)?;
-    let mut pool = catalogue.clone();
-    while effects.len() - always < config.max_effects && !pool.is_empty() {
-        // Identifiability gate, then held-out error of each remaining candidate (in parallel). An
-        // exponential drift refines the linear one of its joint: it is scored only where the linear drift
-        // already earns half the best gain (it costs a model per measurement and a nonlinear τ).
-        let score = |c: &Effect| -> Scored {
-            let (new, _) = ctx.new_free(&effects, *c)?;
-            if new == 0 {
-                return Ok(None);
-            }
-            let mut with = effects.clone();
-            with.push(*c);
-            let (stats, errors) = ctx.heldout_errors(&with, &ctx.folds)?;
-            Ok(Some((*c, new, stats, errors)))
-        };
-        let is_exp = |c: &Effect| matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential));
-        let first: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
-        let mut scored: Vec<(Effect, Scored)> = first.par_iter().map(|c| (*c, score(c))).collect();
-        let best_gain = scored
-            .iter()
-            .filter_map(|(_, r)| {
-                r.as_ref().ok().and_then(|o| o.as_ref()).map(|s| current.heldout_rms_mm - s.2.heldout_rms_mm)
-            })
-            .fold(0.0, f64::max);
-        let linear_gain = |j: Option<JointIndex>| {
-            scored
-                .iter()
-                .filter(|(c, _)| matches!(c, Effect::ThermalDrift(_, DriftShape::Linear)) && c.joint() == j)
-                .filter_map(|(_, r)| {
-                    r.as_ref().ok().and_then(|o| o.as_ref()).map(|s| current.heldout_rms_mm - s.2.heldout_rms_mm)
-                })
-                .fold(f64::NEG_INFINITY, f64::max)
-        };
-        let second: Vec<Effect> = pool
-            .iter()
-            .copied()
-            .filter(|c| is_exp(c) && linear_gain(c.joint()) >= 0.5 * best_gain && best_gain > 0.0)
-            .collect();
-        scored.extend(second.par_iter().map(|c| (*c, score(c))).collect::<Vec<_>>());
-        let deferred: Vec<Effect> = pool.iter().copied().filter(|c| is_exp(c) && !second.contains(c)).collect();
-        let mut results = Vec::new();
-        let mut still = deferred;
-        for (c, r) in &scored {
-            match r.clone()? {
-                None => {
-                    let (_, fixed) = ctx.new_free(&effects, *c)?;
-                    let reason =
-                        fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone());
-                    if c.is_reported() {
-                        skipped.push((c.label(), reason));
-                    }
-                }
-                Some(s) => {
-                    results.push(s);
-                    still.push(*c);
-                }
-            }
-        }
-        pool = still;
-        let Some(best) = results.iter().min_by(|a, b| a.2.heldout_rms_mm.total_cmp(&b.2.heldout_rms_mm)) else {
-            break;
-        };
-        if !significantly_better(&current_errors, &best.3, config.gate_standard_errors) {
-            break;
-        }
-        let gain = current.heldout_rms_mm - best.2.heldout_rms_mm;
-        // Parsimony: the smallest block within `parsimony` of the best gain, itself significant; then the
-        // lowest error.
-        let mut eligible: Vec<&(Effect, usize, Stats, Vec<f64>)> = results
-            .iter()
-            .filter(|r| current.heldout_rms_mm - r.2.heldout_rms_mm >= config.parsimony * gain)
-            .filter(|r| significantly_better(&current_errors, &r.3, config.gate_standard_errors))
-            .collect();
-        // Ties between blocks of one size go to the conventional one (base_frame, tool_frame,
-        // joint_offset), which the report names; its equivalents are listed beside it.
-        let conventional = |e: &Effect| matches!(e, Effect::BaseFrame | Effect::ToolFrame | Effect::JointOffset(_));
-        eligible.sort_by(|a, b| {
-            a.1.cmp(&b.1)
-                .then(conventional(&b.0).cmp(&conventional(&a.0)))
-                .then(a.2.heldout_rms_mm.total_cmp(&b.2.heldout_rms_mm))
-        });
-        let mut chosen = None;
-        for cand in eligible {
-            let mut with = effects.clone();
-            with.push(cand.0);
-            if cand.0.is_time_dependent() {
-                let before = ctx.heldout(&effects, &ctx.forward)?;
-                let after = ctx.heldout(&with, &ctx.forward)?;
-                if after.heldout_rms_mm >= before.heldout_rms_mm {
-                    continue;
-                }
-            }
-            let b = ctx.bic(&with)?;
-            if b >= *bic.last().unwrap_or(&f64::INFINITY) {
-                continue;
-            }
-            chosen = Some((cand.0, cand.2, cand.3.clone(), b));
-            break;
-        }
-        let Some((effect, stats, errors, b)) = chosen else { break };
-        before_after.push((current.heldout_rms_mm, stats.heldout_rms_mm));
-        effects.push(effect);
-        pool.retain(|c| *c != effect);
-        current = stats;
-        current_errors = errors;
-        additive.push(TableRow { model: format!("+ {}", effect.label()), stats });
-        bic.push(b);
-    }
-    // An exponential drift that is not significantly better than its linear twin on held-out data (the
-    // same gate) is reported as the linear one: the smaller model.
-    for k in always..effects.len() {
-        if let Effect::ThermalDrift(j, DriftShape::Exponential) = effects[k] {
-            let mut swapped = effects.clone();
-            swapped[k] = Effect::ThermalDrift(j, DriftShape::Linear);
-            let (_, errors) = ctx.heldout_errors(&swapped, &ctx.folds)?;
-            if !significantly_better(&errors, &current_errors, config.gate_standard_errors) {
-                effects = swapped;
-                current_errors = errors;
-                if let Some(row) = additive.get_mut(k - always + 1) {
-                    row.model = format!("+ {} (replaces the exponential)", effects[k].label());
-                }
-            }
-        }
-    }
-    // Parsimony across steps: a block chosen early may hold a smaller one that explains as much once the
-    // later blocks are in (a joint offset inside a link deviation). Each chosen block is replaced by the
-    // smallest catalogue block its directions contain (rank test on the data) when the larger is not
-    // significantly better held out (the same gate, the other way round).
-    for k in always..effects.len() {
-        let big = effects[k];
-        let mut smaller: Vec<Effect> = Vec::new();
-        for &c in catalogue.iter().filter(|c| c.len() < big.len() && !effects.contains(c)) {
-            if ctx.relations(c, &[big])?.iter().any(|(_, r)| *r == Relation::ContainedIn) {
-                smaller.push(c);
-            }
-        }
-        // Of the smaller blocks as good as the larger, the fewest parameters, then the lowest error.
-        let mut best: Option<(Effect, Stats, Vec<f64>)> = None;
-        for c in smaller {
-            let mut swapped = effects.clone();
-            swapped[k] = c;
-            let (stats, errors) = ctx.heldout_errors(&swapped, &ctx.folds)?;
-            if significantly_better(&errors, &current_errors, config.gate_standard_errors) {
-                continue;
-            }
-            let better = match &best {
-                None => true,
-                Some((b, s, _)) => (c.len(), stats.heldout_rms_mm) < (b.len(), s.heldout_rms_mm),
-            };
-            if better {
-                best = Some((c, stats, errors));
-            }
-        }
-        if let Some((c, stats, errors)) = best {
-            effects[k] = c;
-            current_errors = errors;
-            if let Some(row) = additive.get_mut(k - always + 1) {
-                row.model = format!(
-                    "+ {} (replaces {}: as good held out with {} parameters instead of {})",
-                    c.label(),
-                    big.label(),
-                    c.len(),
-                    big.len()
-                );
-                row.stats = stats;
-            }
-        }
-    }
-    // Final model on all data.
-    let (model, final_fit) = ctx.full_fit(&effects)?;
-    let all: Vec<usize> = (0..data.len()).collect();
-    let (_, jac) = residuals(robot, &model, &final_fit.theta, data, &all, &ctx.pre, true)?;
-    let observability = observability(&jac, &final_fit.free);
-    let reported: Vec<usize> = (always..effects.len()).collect();
-    let mut leave_one_out = Vec::new();
-    let mut without = Vec::new();
-    for &k in &reported {
-        let rest: Vec<Effect> = effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
-        let s = ctx.heldout(&rest, &ctx.folds)?;
-        leave_one_out.push(TableRow { model: format!("all − {}", effects[k].label()), stats: s });
-        without.push(s.heldout_rms_mm);
-    }
-    let names = model.parameter_names();
-    let mut reports: Vec<EffectReport> = reported
-        .iter()
-        .enumerate()
-        .map(|(r, &k)| -> Result<EffectReport, DiagnoseError> {
-            let e = effects[k];
-            let o = model.offsets()[k];
-            let parameters = (0..e.len())
-                .map(|p| {
-                    let v = final_fit.theta[o + p];
-                    let s = final_fit.std[o + p];
-                    let fixed = final_fit.fixed.iter().find(|f| f.parameter == names[o + p]).map(|f| f.reason.clone());
-                    let std = (fixed.is_none() && s.is_finite()).then(|| e.to_report_units(p, s).abs());
-                    (names[o + p].clone(), ParameterValue { value: e.to_report_units(p, v), std, fixed })
-                })
-                .collect();
-            let relations = ctx.relations(e, &catalogue)?;
-            let of = |kind: Relation| -> Vec<String> {
-                relations.iter().filter(|(_, r)| *r == kind).map(|(b, _)| b.label()).collect()
-            };
-            let (equivalent, contained_in, contains) =
-                (of(Relation::Equivalent), of(Relation::ContainedIn), of(Relation::Contains));
-            Ok(EffectReport {
-                effect: e.kind_name().to_string(),
-                label: e.label(),
-                joints: e.joint().map(|j| vec![j.number()]).unwrap_or_default(),
-                heldout_rms_before_mm: before_after[r].0,
-                heldout_rms_after_mm: before_after[r].1,
-                heldout_rms_without_mm: without[r],
-                parameters,
-                equivalent,
-                contained_in,
-                contains,
-            })
-        })
-        .collect::<Result<Vec<_>, DiagnoseError>>()?;
-    // Main cause first: the effect whose removal hurts most.
-    reports.sort_by(|a, b| (b.heldout_rms_without_mm).total_cmp(&a.heldout_rms_without_mm));
-    let nominal_model = ctx.model(&effects[..always], &all)?;
-    let nominal_fit = fit(robot, &nominal_model, data, &all, &ctx.pre)?;
-    let (calibrated, left_out) = model.calibrated_chain(robot, &final_fit.theta)?;
-    let frames = FittedFrames {
-        registration: model.has_registration().then(|| {
-            let world_from_base = calibrated.base().pose();
-            let t = world_from_base.translation.vector;
-            let r = thermokin_chain::xyz_angles_for_output(world_from_base.rotation.to_rotation_matrix().matrix());
-            PoseReport { position_mm: [t.x, t.y, t.z], xyz_euler_deg: units::degrees3([r.x, r.y, r.z]) }
-        }),
-        tool_point_mm: effects.contains(&Effect::ToolPoint).then(|| {
-            let t = calibrated.tool().translation + calibrated.tool().error.translation;
-            [t.x, t.y, t.z]
-        }),
-        tool_rotation_deg: effects.contains(&Effect::ToolRotation).then(|| {
-            let r = calibrated.tool().error.rotation;
-            units::degrees3([r.x, r.y, r.z])
-        }),
-    };
-    let report = Report {
-        frames,
-        warnings: Vec::new(),
-        verdict: String::new(),
-        nominal,
-        nested: None,
-        holdout: None,
-        calibrated,
-        not_in_calibrated: left_out.iter().map(Effect::label).collect(),
-        validation,
-        orientation_lever_mm: ctx.pre.lever_mm,
-        effects: reports,
-        additive,
-        leave_one_out,
-        identifiability: Identifiability {
-            observability,
-            fixed: final_fit.fixed.clone(),
-            skipped_candidates: skipped,
-            correlated: final_fit.correlated.clone(),
-        },
-        residuals_before: breakdown(robot, data, &nominal_model, &nominal_fit.theta, &ctx.pre)?,
-        residuals_after: breakdown(robot, data, &model, &final_fit.theta, &ctx.pre)?,
-        bic,
-    };
-    Ok((report, effects))
 }

@@ -8,21 +8,28 @@
 //! by k-fold cross-validation (grouped in time, and forward-chained for time-dependent candidates) or an
 //! explicit hold-out set, preferring the smaller block when two explain the data alike.
 
+mod eligibility;
 mod fit;
 mod ladder;
 mod model;
 mod report;
+mod select;
 mod simulate;
 mod validation;
 
+pub use eligibility::{Eligibility, Refusal};
 pub use fit::{CorrelatedPair, FixedParameter, NEARLY_DEPENDENT, Observability};
-pub use ladder::{Config, FoldGrouping, FrameMode, Progress, ToolMode, Validation, diagnose, diagnose_with_progress};
+pub use ladder::{
+    Config, FoldGrouping, FrameMode, Progress, ToolMode, Validation, diagnose, diagnose_with_progress, evaluate,
+};
 pub use model::{
     DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques, sensor_joint,
 };
 pub use report::{
-    Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, ParameterValue, Report, Stats, TableRow,
+    Breakdown, EffectReport, ExportModel, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue, Report,
+    Stats, TableRow,
 };
+pub use select::Plausibility;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 
 use thermokin_chain::ChainError;

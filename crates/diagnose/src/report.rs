@@ -19,6 +19,10 @@ pub struct Stats {
     pub heldout_rms_mm: f64,
     /// Max |e|.
     pub heldout_max_mm: f64,
+    /// Median |e|: robust to a few wild poses.
+    pub heldout_median_mm: f64,
+    /// 95th percentile of |e| (nearest rank).
+    pub heldout_p95_mm: f64,
     /// Held-out residuals counted.
     pub heldout_count: usize,
 }
@@ -26,10 +30,21 @@ pub struct Stats {
 impl Stats {
     pub(crate) fn of(norms: &[f64]) -> Stats {
         let n = norms.len().max(1) as f64;
+        let mut sorted = norms.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        let rank = |p: f64| -> f64 {
+            if sorted.is_empty() {
+                return 0.0;
+            }
+            let k = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+            sorted[k - 1]
+        };
         Stats {
             heldout_mean_mm: norms.iter().sum::<f64>() / n,
             heldout_rms_mm: (norms.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
             heldout_max_mm: norms.iter().copied().fold(0.0, f64::max),
+            heldout_median_mm: rank(0.5),
+            heldout_p95_mm: rank(0.95),
             heldout_count: norms.len(),
         }
     }
@@ -94,6 +109,10 @@ pub struct Identifiability {
     pub fixed: Vec<FixedParameter>,
     /// Candidates skipped because they add nothing identifiable to the model: (candidate, reason).
     pub skipped_candidates: Vec<(String, String)>,
+    /// Candidates the data cannot pin down (too little of the joint's travel, of the load, of the
+    /// temperature; a near re-description of the tracker frame or probe): not selectable, each with what
+    /// to measure ([`crate::Eligibility`]).
+    pub not_identifiable: Vec<crate::Refusal>,
     /// Nearly unidentifiable combinations of the final model: pairs of parameters whose estimates are
     /// correlated above 0.99 (their combination is determined, not each).
     pub correlated: Vec<crate::fit::CorrelatedPair>,
@@ -126,6 +145,41 @@ pub struct Nested {
     pub selected: Stats,
     /// What each outer selection chose (how stable the choice is).
     pub selections: Vec<Vec<String>>,
+    /// Each outer fold on its own.
+    pub folds: Vec<OuterFold>,
+    /// Outer folds (1-based) whose chosen model predicts its test poses worse than the nominal one.
+    pub worse_than_nominal: Vec<usize>,
+    /// The outer fold (1-based) holding more than half of the squared held-out error, if one does.
+    pub dominated_by: Option<usize>,
+}
+
+/// One outer fold of the nested validation.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct OuterFold {
+    /// 1-based.
+    pub fold: usize,
+    /// Test poses.
+    pub poses: usize,
+    /// The nominal model on them.
+    pub nominal: Stats,
+    /// The model this fold's selection chose, on them.
+    pub selected: Stats,
+    /// What it chose.
+    pub effects: Vec<String>,
+}
+
+/// The model `--export` writes when the chosen one holds effects a robot file cannot hold: the others,
+/// refitted on all measurements without them, scored the same way — the figures beside the export.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ExportModel {
+    /// The effects it holds.
+    pub effects: Vec<String>,
+    /// The chosen effects it leaves out.
+    pub left_out: Vec<String>,
+    /// Its held-out error on the selection's folds.
+    pub heldout: Stats,
+    /// Its error on the hold-out set, when one was given.
+    pub holdout: Option<Stats>,
 }
 
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.
@@ -151,13 +205,20 @@ pub struct Report {
     /// Nominal and selected model on an explicit hold-out set, when one was given (it never influences
     /// the selection).
     pub holdout: Option<HoldoutStats>,
-    /// The robot as identified: its chain with the final model's static effects fitted on all
-    /// measurements (registration as the base row, tool, base, offsets, link deviations) — what
-    /// `diagnose --export` writes. Not in the JSON: it is the robot file.
+    /// The robot as identified: the chain of the model that `diagnose --export` writes, fitted on all
+    /// measurements (registration as the base row, tool, base, offsets, link deviations) — the chosen
+    /// model when a robot file holds all of it, otherwise [`Report::export`]'s model (the others refitted
+    /// without what it cannot hold), never a subset of a joint fit. Not in the JSON: it is the robot file.
     #[serde(skip)]
     pub calibrated: thermokin_chain::Chain,
     /// Effects of the final model the calibrated robot cannot hold (compliance, thermal drift).
     pub not_in_calibrated: Vec<String>,
+    /// When `not_in_calibrated` is not empty: the model [`Report::calibrated`] is — the others refitted
+    /// without them — and its own held-out figures.
+    pub export: Option<ExportModel>,
+    /// Said first when the chosen model does not beat the nominal one on data it never saw (nested
+    /// validation, the hold-out set): `--export` then refuses unless forced.
+    pub honest_end: Option<String>,
     /// How held-out errors were obtained.
     pub validation: String,
     /// `Some(lever)` when measured orientations were fitted (6-D probe): every error of this report

@@ -1,8 +1,8 @@
 //! How held-out errors are obtained: folds grouped in time (or a seeded shuffle), forward-chained folds
 //! for time-dependent effects, an explicit hold-out set; and the fits the ladder asks for.
 
-use rand::SeedableRng;
 use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Robot;
 
@@ -11,14 +11,97 @@ use crate::model::{Effect, Model, Pre};
 use crate::report::Stats;
 use crate::{Dataset, DiagnoseError};
 
-/// A scored candidate: the effect, its newly identifiable parameters, its held-out statistics.
-pub(crate) type Scored = Result<Option<(Effect, usize, Stats, Vec<f64>)>, DiagnoseError>;
 pub(crate) type Folds = Vec<(Vec<usize>, Vec<usize>)>;
+
+/// Folds and the block each measurement belongs to: measurements of one block are never split between
+/// a training and a test part, and the gate's standard error is taken over blocks
+/// ([`significantly_better`]), because the residuals of neighbouring poses (in time, or in joint space)
+/// are correlated and do not count as independent evidence.
+pub(crate) struct Partition {
+    pub(crate) folds: Folds,
+    /// Block of each measurement (data order).
+    pub(crate) block: Vec<usize>,
+}
+
+impl Partition {
+    /// The block of each held-out error, in the order [`Ctx::heldout_errors`] returns them.
+    pub(crate) fn test_blocks(&self) -> Vec<usize> {
+        self.folds
+            .iter()
+            .filter(|(tr, te)| !tr.is_empty() && !te.is_empty())
+            .flat_map(|(_, te)| te.iter().map(|&i| self.block[i]))
+            .collect()
+    }
+}
+
+/// Blocks of neighbouring arm configurations: k-means (k-means++ start, seeded, Lloyd iterations until
+/// nothing moves or 50 rounds) on the joint values in radians (millimetres / 1000 for a prismatic joint, so
+/// that a metre weighs like a radian). Returns the cluster of each measurement.
+pub(crate) fn configuration_clusters(data: &Dataset, count: usize, seed: u64) -> Vec<usize> {
+    let n = data.len();
+    let count = count.clamp(1, n.max(1));
+    let x: Vec<&[f64]> = data.measurements.iter().map(|m| m.q.as_slice()).collect();
+    let d2 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(u, v)| (u - v) * (u - v)).sum::<f64>();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xc1a5_7e25);
+    let mut centres: Vec<Vec<f64>> = Vec::with_capacity(count);
+    if n == 0 {
+        return Vec::new();
+    }
+    centres.push(x[rng.random_range(0..n)].to_vec());
+    let mut nearest: Vec<f64> = x.iter().map(|p| d2(p, &centres[0])).collect();
+    while centres.len() < count {
+        let total: f64 = nearest.iter().sum();
+        let pick = if total > 0.0 {
+            let mut t = rng.random_range(0.0..total);
+            let mut chosen = n - 1;
+            for (i, w) in nearest.iter().enumerate() {
+                if t < *w {
+                    chosen = i;
+                    break;
+                }
+                t -= w;
+            }
+            chosen
+        } else {
+            rng.random_range(0..n)
+        };
+        centres.push(x[pick].to_vec());
+        for (i, p) in x.iter().enumerate() {
+            nearest[i] = nearest[i].min(d2(p, &centres[centres.len() - 1]));
+        }
+    }
+    let mut label = vec![usize::MAX; n];
+    for _ in 0..50 {
+        let mut moved = false;
+        for (i, p) in x.iter().enumerate() {
+            let best =
+                (0..centres.len()).min_by(|&a, &b| d2(p, &centres[a]).total_cmp(&d2(p, &centres[b]))).unwrap_or(0);
+            if label[i] != best {
+                label[i] = best;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+        for (c, centre) in centres.iter_mut().enumerate() {
+            let members: Vec<&&[f64]> = x.iter().zip(&label).filter(|(_, l)| **l == c).map(|(p, _)| p).collect();
+            if members.is_empty() {
+                continue;
+            }
+            for (a, v) in centre.iter_mut().enumerate() {
+                *v = members.iter().map(|p| p[a]).sum::<f64>() / members.len() as f64;
+            }
+        }
+    }
+    label
+}
 
 /// Folds grouped in time when the data span time — the time-ordered measurements cut into chunks, fold
 /// `f` holding chunks `f, f + k, f + 2k, …` so that neighbours in time (which share a thermal state)
-/// never sit on both sides, while every fold spans the whole run — and a seeded shuffle otherwise.
-pub(crate) fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
+/// never sit on both sides, while every fold spans the whole run — and a seeded shuffle otherwise (each
+/// measurement its own block).
+pub(crate) fn kfold(data: &Dataset, k: usize, seed: u64) -> Partition {
     let n = data.len();
     let mut idx: Vec<usize> = (0..n).collect();
     if data.time_span() > 0.0 {
@@ -27,21 +110,55 @@ pub(crate) fn kfold(data: &Dataset, k: usize, seed: u64) -> Folds {
         idx.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
     }
     let k = k.clamp(2, n.max(2));
-    let chunks = if data.time_span() > 0.0 { (4 * k).min(n) } else { k };
+    let timed = data.time_span() > 0.0;
+    let chunks = if timed { (4 * k).min(n) } else { k };
     let chunk_of = |pos: usize| pos * chunks / n;
-    (0..k)
+    let folds = (0..k)
         .map(|f| {
             let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&pos| chunk_of(pos) % k == f);
             (train.iter().map(|&p| idx[p]).collect(), test.iter().map(|&p| idx[p]).collect())
         })
-        .collect()
+        .collect();
+    let mut block: Vec<usize> = (0..n).collect();
+    if timed {
+        for (pos, &i) in idx.iter().enumerate() {
+            block[i] = chunk_of(pos);
+        }
+    }
+    Partition { folds, block }
+}
+
+/// Folds of neighbouring arm configurations, for data without time: `4k` blocks of neighbouring
+/// configurations ([`configuration_clusters`]), fold `f` holding every `k`-th block in a seeded order —
+/// a test pose's neighbourhood is never in its training part, while every fold spans the workspace.
+pub(crate) fn neighbourhood_folds(data: &Dataset, k: usize, seed: u64) -> Partition {
+    let n = data.len();
+    let k = k.clamp(2, n.max(2));
+    let blocks = (4 * k).min(n);
+    let block = configuration_clusters(data, blocks, seed);
+    let mut order: Vec<usize> = (0..blocks).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let fold_of_block: Vec<usize> = {
+        let mut f = vec![0; blocks];
+        for (pos, &b) in order.iter().enumerate() {
+            f[b] = pos % k;
+        }
+        f
+    };
+    let folds = (0..k).map(|f| (0..n).partition::<Vec<usize>, _>(|&i| fold_of_block[block[i]] != f)).collect();
+    Partition { folds, block }
 }
 
 /// The folds `config` asks for: [`kfold`] by default, or one fold per workspace region or joint
 /// configuration (leave one group out), so that an effect which only memorises a region or a branch
 /// scores worse than one that transfers.
-pub(crate) fn folds_for(data: &Dataset, k: usize, seed: u64, by: crate::FoldGrouping) -> Folds {
+pub(crate) fn folds_for(data: &Dataset, k: usize, seed: u64, by: crate::FoldGrouping) -> Partition {
     let groups: Vec<usize> = match by {
+        crate::FoldGrouping::Neighbourhood if data.time_span() > 0.0 => return kfold(data, k, seed),
+        // Blocks of fewer than 10 poses are no neighbourhood (and too few per block for the block
+        // standard error): a small set is shuffled pose by pose.
+        crate::FoldGrouping::Neighbourhood if data.len() < 10 * 4 * k.max(2) => return kfold(data, k, seed),
+        crate::FoldGrouping::Neighbourhood => return neighbourhood_folds(data, k, seed),
         crate::FoldGrouping::Time => return kfold(data, k, seed),
         crate::FoldGrouping::WorkspaceRegion => {
             // Reach (distance from the base's Z axis) and height against their medians: four quadrants.
@@ -60,14 +177,16 @@ pub(crate) fn folds_for(data: &Dataset, k: usize, seed: u64, by: crate::FoldGrou
         }
     };
     let labels: std::collections::BTreeSet<usize> = groups.iter().copied().collect();
-    labels
+    let folds = labels
         .into_iter()
         .map(|g| {
             let (test, train): (Vec<usize>, Vec<usize>) = (0..data.len()).partition(|&i| groups[i] == g);
             (train, test)
         })
         .filter(|(train, test)| !train.is_empty() && !test.is_empty())
-        .collect()
+        .collect();
+    // One group per fold: the gate counts measurements (four groups are too few blocks for an error).
+    Partition { folds, block: (0..data.len()).collect() }
 }
 
 fn median(v: &[f64]) -> f64 {
@@ -97,17 +216,22 @@ pub(crate) struct Ctx<'a> {
     pub(crate) data: &'a Dataset,
     pub(crate) pre: Pre,
     pub(crate) folds: Folds,
+    /// The block of each held-out error of `folds`, in order (the gate's unit of evidence).
+    pub(crate) blocks: Vec<usize>,
     pub(crate) forward: Folds,
 }
 
 impl<'a> Ctx<'a> {
     /// The folds and per-measurement quantities of `data`.
     pub(crate) fn new(robot: &'a Robot, data: &'a Dataset, config: &crate::Config) -> Self {
+        let partition = folds_for(data, config.folds, config.seed, config.folds_by);
+        let blocks = partition.test_blocks();
         Self {
             robot,
             data,
             pre: crate::model::prepare(robot, data, config.orientation_lever_mm),
-            folds: folds_for(data, config.folds, config.seed, config.folds_by),
+            folds: partition.folds,
+            blocks,
             forward: forward_chained(data, config.folds),
         }
     }
@@ -181,16 +305,31 @@ impl<'a> Ctx<'a> {
 /// Whether model `b` has a lower held-out mean squared error than model `a`, by more than `z` standard
 /// errors of the paired difference (errors `a[i]`, `b[i]` of the same measurement): the acceptance rule
 /// of the ladder. With `z = 1` this is the one-standard-error rule: an improvement smaller than its own
-/// uncertainty over the measurements is not taken.
-pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64) -> bool {
+/// uncertainty is not taken. The standard error is taken over blocks (`blocks[i]`, the block of error
+/// `i`: a cluster-robust standard error of the mean, `√(B/(B−1) · Σ_b (D_b − n_b·d̄)²) / n`, `D_b` the
+/// block's summed difference): neighbouring poses share their systematic residuals, so a gain that
+/// holds in a few neighbourhoods only is not counted once per pose. With one measurement per block this
+/// is the ordinary paired standard error.
+pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64, blocks: &[usize]) -> bool {
     let n = a.len().min(b.len());
     if n < 2 {
         return false;
     }
     let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x * x - y * y).collect();
     let mean = d.iter().sum::<f64>() / n as f64;
-    let var = d.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64;
-    mean > z * (var / n as f64).sqrt()
+    let mut sums: std::collections::BTreeMap<usize, (f64, f64)> = std::collections::BTreeMap::new();
+    for (i, v) in d.iter().enumerate() {
+        let e = sums.entry(blocks.get(i).copied().unwrap_or(usize::MAX - i)).or_insert((0.0, 0.0));
+        e.0 += v;
+        e.1 += 1.0;
+    }
+    let count = sums.len();
+    if count < 2 {
+        return false;
+    }
+    let ss: f64 = sums.values().map(|(s, m)| (s - m * mean) * (s - m * mean)).sum();
+    let var_of_mean = ss * count as f64 / (count - 1) as f64 / (n as f64 * n as f64);
+    mean > z * var_of_mean.sqrt()
 }
 
 impl Ctx<'_> {

@@ -9,4 +9,5 @@ mod real_data;
 mod six_d;
 mod temperature;
 mod tracker;
+mod transfer;
 mod weights;

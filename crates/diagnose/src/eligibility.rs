@@ -1,0 +1,266 @@
+//! Eligibility, before any selection: a candidate whose parameters these data cannot pin down is not
+//! selectable, and the report says what to measure instead.
+//!
+//! Three rules, each stated with its threshold:
+//! - **Coverage.** An effect that is a function of its joint's own angle (a gear-ratio scale, a cyclic
+//!   encoder error) is identified from how the error changes along the joint's travel. Over a short arc
+//!   its terms trade against a zero offset (`s · q = s · q̄ + s · (q − q̄)`), so the fit follows whatever
+//!   else varies over that arc and extrapolates it elsewhere. Required: a quarter of the travel between
+//!   the limits ([`Eligibility::min_travel_fraction`]; a revolution when the joint has none), and half a
+//!   revolution for the cyclic error, whose once- and twice-per-revolution terms need it to separate
+//!   from an offset and a scale. A gravity compliance is identified from how the gravity torque changes:
+//!   the data must span the same fraction of the torque range the joint can see (`[−τ_max, τ_max]`,
+//!   `τ_max` the largest gravity torque over the joint space, sampled).
+//! - **Temperature.** A drift per kelvin needs the temperature to move: at least
+//!   [`Eligibility::min_temperature_span_k`] (2 K by default: over 2 K a 1 m steel link grows by 23 µm,
+//!   the order of a laser tracker's noise — below it a fitted coefficient is mostly noise and whatever
+//!   else drifted).
+//! - **Nuisance.** A parameter whose estimate would move with one of the always-estimated blocks'
+//!   (tracker registration, unknown tool point) — correlation of the two estimates above
+//!   [`crate::NEARLY_DEPENDENT`], the report's criterion for a nearly unidentifiable pair, at which each
+//!   one's standard deviation is inflated 7× — is a re-description of the frame, not an effect of the
+//!   robot. (Exact equivalences are not refused here: the identifiability gate fixes those parameters
+//!   and the block is scored with the rest.)
+
+use faer::linalg::solvers::DenseSolveCore;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use thermokin_chain::{JointKind, Robot};
+use thermokin_io::units;
+
+use crate::fit::{identifiable, residuals};
+use crate::model::{DriftShape, Effect, gravity_torques};
+use crate::validation::Ctx;
+use crate::{DiagnoseError, NEARLY_DEPENDENT};
+
+/// The thresholds of eligibility ([`crate::Config::eligibility`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Eligibility {
+    /// Fraction of a joint's travel (between its limits; a revolution without limits) the data must
+    /// cover for an effect that is a function of the joint's angle — and of the gravity-torque range for
+    /// a compliance. Default 0.25.
+    pub min_travel_fraction: f64,
+    /// Temperature span (K) a per-kelvin drift needs. Default 2 K.
+    pub min_temperature_span_k: f64,
+}
+
+impl Default for Eligibility {
+    fn default() -> Self {
+        Self { min_travel_fraction: 0.25, min_temperature_span_k: 2.0 }
+    }
+}
+
+/// A candidate the data cannot pin down: not selectable, reported with what to measure.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Refusal {
+    /// The candidate's label.
+    pub effect: String,
+    /// Why the data cannot pin it down.
+    pub reason: String,
+    /// What to measure so that they could.
+    pub remedy: String,
+}
+
+/// Splits `candidates` into the selectable ones and the refused ones. `nuisance` are the always-estimated
+/// blocks.
+pub(crate) fn check(
+    ctx: &Ctx<'_>,
+    nuisance: &[Effect],
+    candidates: &[Effect],
+    rules: &Eligibility,
+) -> Result<(Vec<Effect>, Vec<Refusal>), DiagnoseError> {
+    let mut eligible = Vec::new();
+    let mut refused = Vec::new();
+    for &c in candidates {
+        let verdict = match coverage(ctx, c, rules) {
+            Some(r) => Some(r),
+            None => nuisance_trade(ctx, nuisance, c)?,
+        };
+        match verdict {
+            Some(r) => refused.push(r),
+            None => eligible.push(c),
+        }
+    }
+    Ok((eligible, refused))
+}
+
+/// The arc `(lowest, highest)` joint `j` covers in the data.
+pub(crate) fn arc(ctx: &Ctx<'_>, j: usize) -> (f64, f64) {
+    ctx.data
+        .measurements
+        .iter()
+        .map(|m| m.q[j])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)))
+}
+
+/// The travel of joint `j`: between its limits, a revolution without.
+pub(crate) fn travel(robot: &Robot, j: usize) -> f64 {
+    robot.chain().joints()[j].limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower)
+}
+
+/// The arc an effect of joint `j` needs: a fraction of the travel, half a revolution for a cyclic error.
+pub(crate) fn needed_arc(robot: &Robot, e: Effect, rules: &Eligibility) -> f64 {
+    let t = travel(robot, e.joint().map_or(0, |j| j.index()));
+    match e {
+        Effect::Periodic(_) => std::f64::consts::PI.min(t),
+        _ => rules.min_travel_fraction * t,
+    }
+}
+
+fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
+    let robot = ctx.robot;
+    match e {
+        Effect::JointScale(j) | Effect::Periodic(j)
+            if robot.chain().joints()[j.index()].kind == JointKind::Revolute =>
+        {
+            let (lo, hi) = arc(ctx, j.index());
+            let need = needed_arc(robot, e, rules);
+            let t = travel(robot, j.index());
+            (hi - lo < need).then(|| Refusal {
+                effect: e.label(),
+                reason: format!(
+                    "joint {} covers {:.1}° … {:.1}° only ({:.0}% of its {:.0}° travel); {} needs {:.0}°",
+                    j.number(),
+                    units::degrees(lo),
+                    units::degrees(hi),
+                    100.0 * (hi - lo) / t,
+                    units::degrees(t),
+                    e.kind_name(),
+                    units::degrees(need)
+                ),
+                remedy: format!(
+                    "measure joint {} over at least {:.0}° of its travel",
+                    j.number(),
+                    units::degrees(need)
+                ),
+            })
+        }
+        Effect::JointCompliance(j) => {
+            let j = j.index();
+            let (lo, hi) = ctx
+                .pre
+                .torques
+                .iter()
+                .map(|t| t[j])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+            let bound = torque_bound(robot, j);
+            if bound <= 0.0 {
+                return None; // No gravity torque: the identifiability gate says it moves nothing.
+            }
+            let fraction = (hi - lo) / (2.0 * bound);
+            (fraction < rules.min_travel_fraction).then(|| Refusal {
+                effect: e.label(),
+                reason: format!(
+                    "the gravity torque about joint {} spans {lo:.1} … {hi:.1} N·m only ({:.0}% of ±{bound:.1} N·m)",
+                    j + 1,
+                    100.0 * fraction
+                ),
+                remedy: format!(
+                    "measure poses that load joint {} over at least {:.0}% of its gravity-torque range (arm stretched out on both sides)",
+                    j + 1,
+                    100.0 * rules.min_travel_fraction
+                ),
+            })
+        }
+        Effect::ThermalDrift(j, DriftShape::Temperature) => {
+            let j = j.index();
+            let (lo, hi) = ctx
+                .pre
+                .rise
+                .iter()
+                .map(|r| r[j])
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+            (hi - lo < rules.min_temperature_span_k).then(|| Refusal {
+                effect: e.label(),
+                reason: format!(
+                    "the temperature it follows moves by {:.2} K only (a per-kelvin drift needs {} K)",
+                    hi - lo,
+                    rules.min_temperature_span_k
+                ),
+                remedy: format!(
+                    "measure through a warm-up with joint {}'s temperature logged (a `temp_j{}` column)",
+                    j + 1,
+                    j + 1
+                ),
+            })
+        }
+        _ => None,
+    }
+}
+
+/// The largest gravity torque about joint `j` over its robot's joint space (2,000 seeded configurations
+/// within the limits, ±π without), N·m.
+pub(crate) fn torque_bound(robot: &Robot, j: usize) -> f64 {
+    let mut rng = ChaCha8Rng::seed_from_u64(0x7a0e);
+    let joints = robot.chain().joints();
+    (0..2000)
+        .map(|_| {
+            let q: Vec<f64> = joints
+                .iter()
+                .map(|jt| {
+                    let (lo, hi) =
+                        jt.limits.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| (l.lower, l.upper));
+                    rng.random_range(lo..=hi)
+                })
+                .collect();
+            gravity_torques(robot.chain(), robot.masses(), &q)[j].abs()
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The refusal of a candidate one of whose identifiable parameters is estimated in a nearly
+/// unidentifiable pair with a parameter of the always-estimated blocks: correlation of the two estimates
+/// above [`NEARLY_DEPENDENT`] (the report's own criterion for naming a pair), linearised at the start on
+/// all data.
+fn nuisance_trade(ctx: &Ctx<'_>, nuisance: &[Effect], c: Effect) -> Result<Option<Refusal>, DiagnoseError> {
+    if nuisance.is_empty() {
+        return Ok(None);
+    }
+    let all: Vec<usize> = (0..ctx.data.len()).collect();
+    let mut effects = nuisance.to_vec();
+    effects.push(c);
+    let model = ctx.model(&effects, &all)?;
+    let (_, jac) = residuals(ctx.robot, &model, &model.initial(), ctx.data, &all, &ctx.pre, true)?;
+    let names = model.parameter_names();
+    let (free, _) = identifiable(&jac, &names, &vec![true; model.len()]);
+    let cols: Vec<usize> = (0..model.len()).filter(|&k| free[k]).collect();
+    let start = model.offsets()[model.offsets().len() - 1];
+    let m = jac.nrows();
+    let mut a = faer::Mat::<f64>::zeros(m, cols.len());
+    for (k, &col) in cols.iter().enumerate() {
+        let n = (0..m).map(|r| jac[(r, col)].powi(2)).sum::<f64>().sqrt().max(1e-300);
+        for r in 0..m {
+            a[(r, k)] = jac[(r, col)] / n;
+        }
+    }
+    let ata = a.transpose() * &a;
+    let Ok(llt) = ata.llt(faer::Side::Lower) else { return Ok(None) };
+    let inv = llt.inverse();
+    let mut worst: Option<(usize, usize, f64)> = None;
+    for (i, &ci) in cols.iter().enumerate() {
+        if ci < start {
+            continue;
+        }
+        for (j, &cj) in cols.iter().enumerate() {
+            if cj >= start {
+                continue;
+            }
+            let rho = inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
+            if rho.abs() > NEARLY_DEPENDENT && worst.is_none_or(|w| rho.abs() > w.2.abs()) {
+                worst = Some((ci, cj, rho));
+            }
+        }
+    }
+    Ok(worst.map(|(k, n, rho)| Refusal {
+        effect: c.label(),
+        reason: format!("{} would be estimated together with {} (correlation {rho:+.4}, beyond ±{NEARLY_DEPENDENT}): the data determine their combination, not each", names[k], names[n]),
+        remedy: match c.joint() {
+            Some(j) => format!(
+                "measure joint {} over more of its travel, or give the base or tool frame (--frame base, --tool known)",
+                j.number()
+            ),
+            None => "give the base or tool frame (--frame base, --tool known)".to_string(),
+        },
+    }))
+}
