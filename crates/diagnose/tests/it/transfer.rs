@@ -3,7 +3,6 @@
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
 use rand::SeedableRng;
-use rand::seq::SliceRandom;
 use thermokin_diagnose::{Config, FrameMode, ToolMode, Validation, diagnose};
 use thermokin_testdata::workspace;
 
@@ -16,20 +15,17 @@ fn ur10() -> thermokin_diagnose::Robot {
 
 #[test]
 fn ur10_series_c_transfers_to_series_b() {
-    // The full run (all 2,773 poses of C) is recorded in docs/diagnosis.md; here a seeded subsample of
-    // 500 poses of C is diagnosed, nested, and the chosen model is scored on all 1,495 poses of B (its
-    // registration and probe refitted there, the effects kept): the bound is 0.65 mm mean (an
-    // independent full-geometry + compliance fit: 0.587; nominal 1.025).
+    // All 2,773 poses of C diagnosed, nested, as a user runs it, and the chosen model scored on all
+    // 1,495 poses of B (its registration and probe refitted there, the effects kept): the bound
+    // is 0.65 mm mean (an independent full-geometry + compliance fit: 0.587; nominal 1.025). A seeded
+    // 500-pose subsample of C does not meet it (0.754 mm: joint 2 then covers 8 % of its travel and the
+    // compliance is not found) — recorded in docs/diagnosis.md; the claim is tested on the whole file.
     let robot = ur10();
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
     let c = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_C.csv"), &kinds).unwrap();
     let b = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_B.csv"), &kinds).unwrap();
     assert_eq!((c.len(), b.len()), (2773, 1495));
-    let mut rows: Vec<usize> = (0..c.len()).collect();
-    rows.shuffle(&mut rand_chacha::ChaCha8Rng::seed_from_u64(2773));
-    rows.truncate(500);
-    rows.sort_unstable();
-    let train = c.subset(&rows);
+    let train = c;
     let config = Config {
         frame: FrameMode::Tracker,
         tool: ToolMode::Unknown,
