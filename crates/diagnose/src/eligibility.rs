@@ -32,7 +32,7 @@ use thermokin_io::units;
 use crate::fit::{identifiable, residuals};
 use crate::model::{DriftShape, Effect, gravity_torques};
 use crate::validation::Ctx;
-use crate::{DiagnoseError, NEARLY_DEPENDENT};
+use crate::{Dataset, DiagnoseError, NEARLY_DEPENDENT};
 
 /// The thresholds of eligibility ([`crate::Config::eligibility`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -85,13 +85,14 @@ pub(crate) fn check(
     Ok((eligible, refused))
 }
 
+/// The lowest and highest of `values`.
+pub(crate) fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)))
+}
+
 /// The arc `(lowest, highest)` joint `j` covers in the data.
-pub(crate) fn arc(ctx: &Ctx<'_>, j: usize) -> (f64, f64) {
-    ctx.data
-        .measurements
-        .iter()
-        .map(|m| m.q[j])
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)))
+pub(crate) fn arc(data: &Dataset, j: usize) -> (f64, f64) {
+    span(data.measurements.iter().map(|m| m.q[j]))
 }
 
 /// The travel of joint `j`: between its limits, a revolution without.
@@ -99,13 +100,10 @@ pub(crate) fn travel(robot: &Robot, j: usize) -> f64 {
     robot.chain().joints()[j].limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower)
 }
 
-/// The arc an effect of joint `j` needs: a fraction of the travel, half a revolution for a cyclic error.
-pub(crate) fn needed_arc(robot: &Robot, e: Effect, rules: &Eligibility) -> f64 {
-    let t = travel(robot, e.joint().map_or(0, |j| j.index()));
-    match e {
-        Effect::Periodic(_) => std::f64::consts::PI.min(t),
-        _ => rules.min_travel_fraction * t,
-    }
+/// The arc an effect of a joint of this `travel` needs: a fraction of the travel, half a revolution (or
+/// the whole travel, if shorter) for a cyclic error.
+pub(crate) fn needed_arc(travel: f64, cyclic: bool, rules: &Eligibility) -> f64 {
+    if cyclic { std::f64::consts::PI.min(travel) } else { rules.min_travel_fraction * travel }
 }
 
 fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
@@ -114,9 +112,9 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
         Effect::JointScale(j) | Effect::Periodic(j)
             if robot.chain().joints()[j.index()].kind == JointKind::Revolute =>
         {
-            let (lo, hi) = arc(ctx, j.index());
-            let need = needed_arc(robot, e, rules);
+            let (lo, hi) = arc(ctx.data, j.index());
             let t = travel(robot, j.index());
+            let need = needed_arc(t, matches!(e, Effect::Periodic(_)), rules);
             (hi - lo < need).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(
@@ -138,12 +136,7 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
         }
         Effect::JointCompliance(j) => {
             let j = j.index();
-            let (lo, hi) = ctx
-                .pre
-                .torques
-                .iter()
-                .map(|t| t[j])
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+            let (lo, hi) = span(ctx.pre.torques.iter().map(|t| t[j]));
             let bound = torque_bound(robot, j);
             if bound <= 0.0 {
                 return None; // No gravity torque: the identifiability gate says it moves nothing.
@@ -165,12 +158,7 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
         }
         Effect::ThermalDrift(j, DriftShape::Temperature) => {
             let j = j.index();
-            let (lo, hi) = ctx
-                .pre
-                .rise
-                .iter()
-                .map(|r| r[j])
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+            let (lo, hi) = span(ctx.pre.rise.iter().map(|r| r[j]));
             (hi - lo < rules.min_temperature_span_k).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(

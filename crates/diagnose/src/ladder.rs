@@ -298,28 +298,21 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
         ));
     }
     // Coverage: an effect of a joint identified over a small part of the joint's travel is an
-    // extrapolation elsewhere. A quarter of the range between the limits (all of ±180° without limits),
-    // or half a revolution for a cyclic error, whose once- and twice-per-revolution terms trade against
-    // an offset and a scale over a short arc.
+    // extrapolation elsewhere — the arc eligibility asks of a scale or cyclic error (`eligibility`),
+    // said here of every chosen joint effect.
     for e in &report.effects {
         let Some(&number) = e.joints.first() else { continue };
         let j = number - 1;
-        let joint = &robot.chain().joints()[j];
-        let (lo, hi) = data
-            .measurements
-            .iter()
-            .map(|m| m.q[j])
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
-        let covered = hi - lo;
-        let travel = joint.limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower);
-        let need = if e.effect == "periodic" { std::f64::consts::PI.min(travel) } else { 0.25 * travel };
-        if joint.kind == thermokin_chain::JointKind::Revolute && covered < need {
+        let (lo, hi) = crate::eligibility::arc(data, j);
+        let travel = crate::eligibility::travel(robot, j);
+        let need = crate::eligibility::needed_arc(travel, e.effect == "periodic", &config.eligibility);
+        if robot.chain().joints()[j].kind == thermokin_chain::JointKind::Revolute && hi - lo < need {
             out.push(format!(
                 "{} was identified with joint {number} between {:.1}° and {:.1}° only ({:.0}% of its travel): it may not hold outside that range — measure poses across the joint's travel",
                 e.label,
                 units::degrees(lo),
                 units::degrees(hi),
-                100.0 * covered / travel
+                100.0 * (hi - lo) / travel
             ));
         }
     }
@@ -334,20 +327,21 @@ fn warnings(robot: &Robot, data: &Dataset, config: &Config, report: &Report) -> 
     out
 }
 
-/// The sentence said first when the chosen model does not beat the nominal one where it was not fitted:
-/// the nested validation's mean error (or one of its outer folds), or the hold-out set's.
+/// The sentence said first when the diagnosis does not beat the nominal model where it was not fitted:
+/// the nested validation's mean error, any of its outer folds (also when the selection on all data
+/// chose nothing: the procedure itself is then not to be trusted on these data), or the hold-out set's.
 fn honest_end(report: &Report) -> Option<String> {
-    if report.effects.is_empty() {
-        return None;
-    }
     let mut out = Vec::new();
     if let Some(n) = &report.nested {
-        if n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm {
+        if n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
+            || (!report.effects.is_empty() && n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm)
+        {
             out.push(format!(
-                "on outer folds the selection never saw, the chosen model's mean error {:.4} mm does not beat the nominal model's {:.4} mm",
+                "on outer folds the selection never saw, its choices' mean error {:.4} mm does not beat the nominal model's {:.4} mm",
                 n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm
             ));
-        } else if !n.worse_than_nominal.is_empty() {
+        }
+        if !n.worse_than_nominal.is_empty() {
             let list: Vec<String> = n.worse_than_nominal.iter().map(ToString::to_string).collect();
             out.push(format!(
                 "in outer fold{} {} the model chosen there predicts worse than the nominal one",
@@ -357,6 +351,7 @@ fn honest_end(report: &Report) -> Option<String> {
         }
     }
     if let Some(h) = &report.holdout
+        && !report.effects.is_empty()
         && h.selected.heldout_mean_mm >= h.nominal.heldout_mean_mm
     {
         out.push(format!(
@@ -364,14 +359,34 @@ fn honest_end(report: &Report) -> Option<String> {
             h.selected.heldout_mean_mm, h.nominal.heldout_mean_mm
         ));
     }
-    (!out.is_empty()).then(|| format!("the chosen model does not transfer: {}", out.join("; ")))
+    (!out.is_empty()).then(|| format!("the diagnosis does not transfer: {}", out.join("; ")))
 }
 
 /// Whether what the effects leave is the noise: the nested held-out RMS (or the selection's own CV
 /// without nesting) against `√3 · σ` of the stated per-axis noise (`√(3σ² + 3(lever · σ_rot)²)` with
 /// orientations fitted), with a factor 1.5 of margin (the 3-D RMS of Gaussian noise scatters by ~10 %
-/// over 100 poses; a model error shows as more).
+/// over 100 poses; a model error shows as more). With nested validation the median and 95th percentile
+/// follow, robust to a few wild poses, and an outer fold holding most of the squared error is named.
 fn verdict(config: &Config, report: &Report) -> String {
+    let robust = match &report.nested {
+        Some(n) => {
+            let mut t = format!(
+                " (nested held-out median {:.4} mm, 95th percentile {:.4} mm",
+                n.selected.heldout_median_mm, n.selected.heldout_p95_mm
+            );
+            if let Some(k) = n.dominated_by {
+                t +=
+                    &format!("; outer fold {k} holds more than half of the squared error: the RMS is mostly that fold");
+            }
+            t + ")"
+        }
+        None => String::new(),
+    };
+    verdict_sentence(config, report) + &robust
+}
+
+/// The verdict's sentence, on the RMS.
+fn verdict_sentence(config: &Config, report: &Report) -> String {
     let (held, how) = match &report.nested {
         Some(n) => (n.selected.heldout_rms_mm, "nested held-out"),
         None => (

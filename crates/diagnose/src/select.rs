@@ -20,9 +20,9 @@ use thermokin_chain::Robot;
 use thermokin_io::units;
 
 use crate::eligibility::Refusal;
-use crate::fit::{fit, observability, residuals};
+use crate::fit::{Fit, fit, observability, residuals};
 use crate::ladder::{Config, FoldGrouping, FrameMode, ToolMode};
-use crate::model::{DriftShape, Effect, JointIndex};
+use crate::model::{DriftShape, Effect, JointIndex, Model};
 use crate::report::{
     EffectReport, ExportModel, FittedFrames, Identifiability, ParameterValue, PoseReport, Report, Stats, TableRow,
     breakdown,
@@ -201,21 +201,20 @@ pub(crate) fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(
     backward(&ctx, config, &mut sel)?;
     parsimony(&ctx, config, &mut sel, &eligible)?;
     // 6.
-    let report = report(&ctx, config, sel, &catalogue)?;
-    let effects = report.1;
-    Ok((report.0, effects))
+    report(&ctx, config, sel, &catalogue)
 }
 
-/// Scores `c` added to `effects` on the selection's folds; `None` when it adds nothing identifiable.
-fn score(ctx: &Ctx<'_>, effects: &[Effect], c: Effect) -> Result<Option<Candidate>, DiagnoseError> {
-    let (new_free, _) = ctx.new_free(effects, c)?;
+/// Scores `c` added to `effects` on the selection's folds; `Err(reason)` when it adds nothing
+/// identifiable (the reason names the block a parameter duplicates).
+fn score(ctx: &Ctx<'_>, effects: &[Effect], c: Effect) -> Result<Result<Candidate, String>, DiagnoseError> {
+    let (new_free, fixed) = ctx.new_free(effects, c)?;
     if new_free == 0 {
-        return Ok(None);
+        return Ok(Err(fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone())));
     }
     let mut with = effects.to_vec();
     with.push(c);
     let (stats, errors) = ctx.heldout_errors(&with, &ctx.folds)?;
-    Ok(Some(Candidate { effect: c, new_free, stats, errors }))
+    Ok(Ok(Candidate { effect: c, new_free, stats, errors }))
 }
 
 /// Phase 3: forward steps. Each round scores every remaining candidate (in parallel); an exponential
@@ -227,9 +226,11 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
         let is_exp = |c: &Effect| matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential));
         let first: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
         let effects = sel.effects.clone();
-        let mut scored: Vec<(Effect, Option<Candidate>)> =
+        let mut scored: Vec<(Effect, Result<Candidate, String>)> =
             first.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
-        let gain = |s: &Option<Candidate>| s.as_ref().map(|s| sel.current.heldout_rms_mm - s.stats.heldout_rms_mm);
+        let gain = |s: &Result<Candidate, String>| {
+            s.as_ref().ok().map(|s| sel.current.heldout_rms_mm - s.stats.heldout_rms_mm)
+        };
         let best_gain = scored.iter().filter_map(|(_, s)| gain(s)).fold(0.0, f64::max);
         let linear_gain = |j: Option<JointIndex>| {
             scored
@@ -243,22 +244,19 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
             .copied()
             .filter(|c| is_exp(c) && best_gain > 0.0 && linear_gain(c.joint()) >= 0.5 * best_gain)
             .collect();
-        let more: Vec<(Effect, Option<Candidate>)> =
+        let more: Vec<(Effect, Result<Candidate, String>)> =
             second.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
         scored.extend(more);
         let mut still: Vec<Effect> = pool.iter().copied().filter(|c| is_exp(c) && !second.contains(c)).collect();
         let mut results: Vec<Candidate> = Vec::new();
         for (c, s) in scored {
             match s {
-                None => {
-                    let (_, fixed) = ctx.new_free(&sel.effects, c)?;
-                    let reason =
-                        fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone());
+                Err(reason) => {
                     if c.is_reported() && !sel.skipped.iter().any(|(l, _)| *l == c.label()) {
                         sel.skipped.push((c.label(), reason));
                     }
                 }
-                Some(s) => {
+                Ok(s) => {
                     still.push(c);
                     results.push(s);
                 }
@@ -298,7 +296,9 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
                     continue;
                 }
             }
-            if let Some(reason) = implausible(ctx, &with, cand.effect, &config.plausibility)? {
+            // One fit on all data serves the plausibility bounds and the information criterion.
+            let (model, full) = ctx.full_fit(&with)?;
+            if let Some(reason) = implausible(ctx, &model, &full, cand.effect, &config.plausibility) {
                 sel.refused.push(Refusal {
                     effect: cand.effect.label(),
                     reason,
@@ -307,7 +307,7 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
                 pool.retain(|c| *c != cand.effect);
                 continue;
             }
-            let b = ctx.bic(&with)?;
+            let b = ctx.bic_of(&full);
             if b >= *sel.bic.last().unwrap_or(&f64::INFINITY) {
                 continue;
             }
@@ -321,24 +321,17 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
     Ok(())
 }
 
-/// Why the fitted values of `effect` (in the model `with`, on all data) are beyond [`Plausibility`];
-/// `None` when they are within.
-fn implausible(
-    ctx: &Ctx<'_>,
-    with: &[Effect],
-    effect: Effect,
-    p: &Plausibility,
-) -> Result<Option<String>, DiagnoseError> {
-    let (model, f) = ctx.full_fit(with)?;
-    let k = with.len() - 1;
-    let o = model.offsets()[k];
+/// Why the fitted values of `effect` (the last block of `model`, fitted `f` on all data) are beyond
+/// [`Plausibility`]; `None` when they are within.
+fn implausible(ctx: &Ctx<'_>, model: &Model, f: &Fit, effect: Effect, p: &Plausibility) -> Option<String> {
+    let o = model.offsets()[model.offsets().len() - 1];
     let v = &f.theta[o..o + effect.len()];
     let deg = units::degrees;
     let over = |what: &str, value: f64, bound: f64, unit: &str| {
         (value.abs() > bound)
             .then(|| format!("{what} fitted at {value:.4} {unit} (beyond the plausible {bound} {unit})"))
     };
-    let reason = match effect {
+    match effect {
         Effect::LinkDeviation(_) | Effect::ThermalDrift(..) => {
             let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
             let r = deg(v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt());
@@ -356,8 +349,7 @@ fn implausible(
             over("the deflection at the largest gravity torque", deg(v[0] * bound), p.compliance_deflection_deg, "°")
         }
         _ => None,
-    };
-    Ok(reason)
+    }
 }
 
 /// Phase 4: backward elimination. While some chosen effect can leave without the gate rejecting the

@@ -295,10 +295,14 @@ impl<'a> Ctx<'a> {
     }
 
     pub(crate) fn bic(&self, effects: &[Effect]) -> Result<f64, DiagnoseError> {
-        let (_, f) = self.full_fit(effects)?;
+        Ok(self.bic_of(&self.full_fit(effects)?.1))
+    }
+
+    /// The Bayesian information criterion of a fit on all of the data.
+    pub(crate) fn bic_of(&self, f: &Fit) -> f64 {
         let m = (self.data.len() * self.pre.stride()) as f64;
         let k = f.free.iter().filter(|&&x| x).count() as f64;
-        Ok(m * (f.ssr / m).max(1e-300).ln() + k * m.ln())
+        m * (f.ssr / m).max(1e-300).ln() + k * m.ln()
     }
 }
 

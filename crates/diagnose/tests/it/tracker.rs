@@ -85,3 +85,31 @@ pub fn measure_6d(
         .collect();
     Dataset { measurements, temperature_names: Vec::new() }
 }
+
+/// `n` poses as [`random_q`] draws them, but joint `joint` (0-based) kept between `lo_deg` and `hi_deg`
+/// — a calibration set that covers a short arc of one joint; the robot stands at `actual(commanded)`,
+/// measured without noise.
+pub fn measure_short_arc(
+    chain: &Chain,
+    n: usize,
+    seed: u64,
+    (joint, lo_deg, hi_deg): (usize, f64, f64),
+    actual: impl Fn(&[f64]) -> Vec<f64>,
+) -> Dataset {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let measurements = (0..n)
+        .map(|_| {
+            let mut q = random_q(chain, &mut rng);
+            q[joint] = rng.random_range(lo_deg.to_radians()..hi_deg.to_radians());
+            Measurement {
+                time_min: 0.0,
+                position_mm: chain.tool_pose(&actual(&q)).unwrap().translation.vector,
+                q,
+                orientation: None,
+                position_std_mm: None,
+                temps: Vec::new(),
+            }
+        })
+        .collect();
+    Dataset { measurements, temperature_names: Vec::new() }
+}
