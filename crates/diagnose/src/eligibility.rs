@@ -252,3 +252,20 @@ fn nuisance_trade(ctx: &Ctx<'_>, nuisance: &[Effect], c: Effect) -> Result<Optio
         },
     }))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_arc_needed_is_a_fraction_of_the_travel_or_half_a_revolution() {
+        let rules = Eligibility::default();
+        let pi = std::f64::consts::PI;
+        assert!((needed_arc(4.0 * pi, false, &rules) - pi).abs() < 1e-12);
+        assert!((needed_arc(4.0 * pi, true, &rules) - pi).abs() < 1e-12);
+        // A joint shorter than half a revolution needs all of it for a cyclic error.
+        assert!((needed_arc(2.0, true, &rules) - 2.0).abs() < 1e-12);
+        assert!((needed_arc(2.0, false, &rules) - 0.5).abs() < 1e-12);
+        assert_eq!(span([3.0, -1.0, 2.0].into_iter()), (-1.0, 3.0));
+    }
+}

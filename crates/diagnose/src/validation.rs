@@ -420,3 +420,84 @@ fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
         norm(&v) < crate::fit::DEPENDENT
     })
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use super::*;
+    use crate::Measurement;
+
+    fn at(q: &[f64]) -> Measurement {
+        Measurement {
+            time_min: 0.0,
+            q: q.to_vec(),
+            position_mm: nalgebra::Vector3::zeros(),
+            orientation: None,
+            position_std_mm: None,
+            temps: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn single_pose_blocks_give_the_paired_standard_error() {
+        // a² − b² = 1 + (−1)^i · 0.5: mean 1, sample sd 0.5·√(n/(n−1)); 1 > z·SE for z up to ~ 2√n.
+        let n = 16;
+        let a: Vec<f64> = (0..n).map(|i| (2.0f64 + if i % 2 == 0 { 0.5 } else { -0.5 }).sqrt()).collect();
+        let b = vec![1.0; n];
+        let blocks: Vec<usize> = (0..n).collect();
+        let se = 0.5 * (n as f64 / (n - 1) as f64).sqrt() / (n as f64).sqrt();
+        assert!(significantly_better(&a, &b, 0.99 / se, &blocks));
+        assert!(!significantly_better(&a, &b, 1.01 / se, &blocks));
+    }
+
+    #[test]
+    fn a_gain_held_by_one_block_is_not_significant_over_blocks() {
+        // Every pose of block 0 gains a lot, the others nothing: per pose the gain looks consistent
+        // (one SE passes), over four blocks it is one block's luck (it does not).
+        let a: Vec<f64> = (0..40).map(|i| if i < 10 { 2.0 } else { 1.0 }).collect();
+        let b = vec![1.0; 40];
+        let per_pose: Vec<usize> = (0..40).collect();
+        let per_block: Vec<usize> = (0..40).map(|i| i / 10).collect();
+        assert!(significantly_better(&a, &b, 1.0, &per_pose));
+        assert!(!significantly_better(&a, &b, 2.0, &per_block));
+        // Equal gains in every block stay significant.
+        let even: Vec<f64> = (0..40).map(|i| if i % 10 < 5 { 2.0 } else { 1.5 }).collect();
+        assert!(significantly_better(&even, &b, 2.0, &per_block));
+    }
+
+    #[test]
+    fn clusters_hold_neighbouring_configurations() {
+        // Two tight groups of configurations far apart: two clusters, each one group.
+        let mut data = Dataset::default();
+        for k in 0..20 {
+            let d = 0.001 * k as f64;
+            data.measurements.push(at(&[d, 0.0, 0.0]));
+            data.measurements.push(at(&[2.0 + d, 1.0, -1.0]));
+        }
+        let label = configuration_clusters(&data, 2, 7);
+        assert!((0..40).step_by(2).all(|i| label[i] == label[0]));
+        assert!((1..40).step_by(2).all(|i| label[i] == label[1]));
+        assert_ne!(label[0], label[1]);
+    }
+
+    #[test]
+    fn neighbourhood_folds_never_split_a_block_and_test_every_pose_once() {
+        let data = Dataset {
+            measurements: (0..200)
+                .map(|i| at(&[(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos(), i as f64 * 0.01]))
+                .collect(),
+            temperature_names: Vec::new(),
+        };
+        let p = neighbourhood_folds(&data, 5, 3);
+        let mut tested = vec![0; 200];
+        for (train, test) in &p.folds {
+            for &i in test {
+                tested[i] += 1;
+                assert!(train.iter().all(|&t| p.block[t] != p.block[i]), "block {} on both sides", p.block[i]);
+            }
+            assert_eq!(train.len() + test.len(), 200);
+        }
+        assert!(tested.iter().all(|&c| c == 1));
+        assert_eq!(p.test_blocks().len(), 200);
+    }
+}
