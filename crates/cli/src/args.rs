@@ -357,6 +357,10 @@ pub struct DiagnoseArgs {
     /// Write --export even when the chosen model does not beat the nominal one held out.
     #[arg(long)]
     pub force_export: bool,
+    /// No progress on stderr (by default a bar on a terminal, a line per stage with the time left
+    /// otherwise).
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// `--folds-by`.

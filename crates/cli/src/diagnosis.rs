@@ -76,20 +76,39 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         }
         None => robot.clone(),
     };
-    // Progress on stderr (hidden when stderr is not a terminal): one step per stage — the selection,
-    // each outer fold of the nested validation, the hold-out set.
-    let bar = indicatif::ProgressBar::new(0).with_style(
-        indicatif::ProgressStyle::with_template("{spinner} diagnosing: {msg} [{bar:20}] {pos}/{len} ({elapsed})")
+    // Progress on stderr, one step per stage — the selection, each outer fold of the nested validation,
+    // the hold-out set: a bar on a terminal, a line per stage with an estimate of the time left
+    // otherwise (a log file, CI), nothing with --quiet. Stages cost about the same, so the estimate is
+    // the mean time per stage so far times the stages left.
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if a.quiet || !terminal {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let bar = indicatif::ProgressBar::new(0).with_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} diagnosing: {msg} [{bar:20}] {pos}/{len} ({elapsed}, ETA {eta})",
+            )
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-    );
-    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-    bar.enable_steady_tick(std::time::Duration::from_millis(250));
-    bar.set_message("selection on all measurements");
+        );
+        bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        bar.enable_steady_tick(std::time::Duration::from_millis(250));
+        bar.set_message("selection on all measurements");
+        bar
+    };
+    let started = std::time::Instant::now();
     let report =
         thermokin_diagnose::diagnose_with_progress(&fitted_robot, &data, holdout.as_ref(), &config, &mut |p| {
             bar.set_length(p.total as u64);
             bar.set_position(p.done as u64);
             bar.set_message(format!("done: {}", p.stage));
+            if !a.quiet && !terminal {
+                let elapsed = started.elapsed().as_secs_f64();
+                let left = elapsed / p.done.max(1) as f64 * (p.total - p.done) as f64;
+                eprintln!(
+                    "diagnose: {}/{} {} — {elapsed:.1} s elapsed, about {left:.0} s left",
+                    p.done, p.total, p.stage
+                );
+            }
         })
         .map_err(Failure::input);
     bar.finish_and_clear();

@@ -414,6 +414,9 @@ fn simulate_then_diagnose() {
         "0.005",
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
+    // stderr is a pipe here, not a terminal: a line per stage with the time left, ending at 6 of 6.
+    assert!(stderr(&o).lines().any(|l| l.starts_with("diagnose: 1/6 selection on all measurements")), "{}", stderr(&o));
+    assert!(stderr(&o).lines().any(|l| l.starts_with("diagnose: 6/6 ") && l.contains("s left")), "{}", stderr(&o));
     assert!(stdout(&o).contains("effects, main cause first (the one whose removal raises the held-out error most):"));
     assert!(stdout(&o).contains("verdict: explained"), "{}", stdout(&o));
     // The exported robot carries the identified offset: joint 2's zero moved by ~0.05°, so FK at the
@@ -989,4 +992,27 @@ fn compensate_replays_the_authors_increments_on_request() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--accumulate increments needs a transient run"), "{}", stderr(&o));
+}
+
+#[test]
+fn diagnose_quiet_prints_no_progress() {
+    let m = tmp("sim-quiet.csv");
+    let o = thermokin(&[
+        "simulate",
+        "--robot",
+        ROBOT,
+        "--effect",
+        "joint_offset:2=0.05",
+        "--poses",
+        "60",
+        "--minutes",
+        "0",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = thermokin(&["diagnose", "--quiet", "--robot", ROBOT, "--measurements", m.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).is_empty(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("verdict:"));
 }
