@@ -158,23 +158,8 @@ fn outer_folds_worse_than_nominal_are_named_and_said_first() {
     // offset fitted on folds that hold that branch is applied to folds that do not, which it makes
     // worse. Leave-one-configuration-out nested validation must name those folds, and the report must
     // say first that the chosen model does not transfer.
-    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    let data = measure(robot.chain(), 200, 303, |q| {
-        let mut a = q.to_vec();
-        if q[4] > 0.0 {
-            a[1] += 0.1f64.to_radians();
-        }
-        a
-    });
-    let config = Config { folds_by: FoldGrouping::JointConfiguration, ..Config::default() };
-    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let report = nested_by_configuration(303, |q| q[4] > 0.0);
     let n = report.nested.as_ref().unwrap();
-    for f in &n.folds {
-        eprintln!(
-            "outer {}: {:.4} → {:.4} mm RMS {:?}",
-            f.fold, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm, f.effects
-        );
-    }
     eprintln!("{:?}", report.honest_end);
     assert!(!n.worse_than_nominal.is_empty());
     for &k in &n.worse_than_nominal {
@@ -199,22 +184,8 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
     let mut elbow: Vec<f64> = plain.measurements.iter().map(|m| m.q[2]).collect();
     elbow.sort_by(f64::total_cmp);
     let median = elbow[elbow.len() / 2];
-    let data = measure(robot.chain(), 200, 304, |q| {
-        let mut a = q.to_vec();
-        if q[2] > median && q[4] > 0.0 {
-            a[1] += 0.1f64.to_radians();
-        }
-        a
-    });
-    let config = Config { folds_by: FoldGrouping::JointConfiguration, ..Config::default() };
-    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let report = nested_by_configuration(304, |q| q[2] > median && q[4] > 0.0);
     let n = report.nested.as_ref().unwrap();
-    for f in &n.folds {
-        eprintln!(
-            "outer {} ({} poses): {:.4} → {:.4} mm RMS {:?}",
-            f.fold, f.poses, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm, f.effects
-        );
-    }
     eprintln!("{}", report.verdict);
     let k = n.dominated_by.expect("a dominating fold");
     // The dominating fold is the configuration with the error: its poses all carry it.
@@ -226,4 +197,26 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
         "{}",
         report.verdict
     );
+}
+
+/// Joint 2 off by 0.1° on the poses where `on(commanded)` holds (200 poses of the independent tracker,
+/// seeded), diagnosed with leave-one-configuration-out folds; the outer folds printed.
+fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_diagnose::Report {
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let data = measure(robot.chain(), 200, seed, |q| {
+        let mut a = q.to_vec();
+        if on(q) {
+            a[1] += 0.1f64.to_radians();
+        }
+        a
+    });
+    let config = Config { folds_by: FoldGrouping::JointConfiguration, ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    for f in &report.nested.as_ref().unwrap().folds {
+        eprintln!(
+            "outer {} ({} poses): {:.4} → {:.4} mm RMS {:?}",
+            f.fold, f.poses, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm, f.effects
+        );
+    }
+    report
 }
