@@ -343,6 +343,11 @@ impl Chain {
         Chain::new(base, self.joints.clone(), self.tool.clone())
     }
 
+    /// `Ok` when `q` has one finite value per joint: the check every evaluation makes first.
+    pub fn check_joint_count(&self, q: &[f64]) -> Result<(), ChainError> {
+        self.check_q(q)
+    }
+
     fn check_q(&self, q: &[f64]) -> Result<(), ChainError> {
         if q.len() != self.dof() {
             return Err(ChainError::WrongJointCount { expected: self.dof(), got: q.len() });

@@ -3,9 +3,14 @@
 //! readers build them, every algorithm crate takes them; they live in the core so that readers sit below
 //! the algorithms.
 
-use nalgebra::{Isometry3, Vector3};
+use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
 use crate::{Chain, ChainError};
+
+/// Standard gravity, m/s²: a link mass in kg and a lever in mm give N·mm, divided by 1000 for N·m.
+const STANDARD_GRAVITY: f64 = 9.806_65;
+/// Millimetres per metre: the lever of a gravity torque is in mm, the torque in N·m.
+const MM_PER_M: f64 = 1000.0;
 
 /// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
 /// one link: what gravity compliance needs. Description data carried beside the chain.
@@ -130,18 +135,102 @@ impl Robot {
         &self.ratings
     }
 
+    /// Gravity torque about each joint's axis at configuration `q`, N·m, from the link masses, gravity
+    /// pointing along `down` in the chain's world frame (the frame its base row maps into; `−Z` for a
+    /// floor-mounted robot whose base row is level):
+    /// `τ_j = z_j · Σ_{l ≥ j} (c_l − o_j) × m_l g`, with `z_j` and `o_j` joint j's axis and origin and `c_l`
+    /// link l's centre of mass, all in the world frame. A link without a mass contributes nothing.
+    ///
+    /// ```
+    /// use nalgebra::{Vector3, Isometry3};
+    /// use thermokin_chain::{Chain, FixedRow, Joint, LinkMass, Robot};
+    ///
+    /// // One horizontal Y axis carrying 2 kg at 500 mm along X: τ = 0.5 m · 2 kg · g about +Y.
+    /// let chain = Chain::new(
+    ///     FixedRow::identity(),
+    ///     vec![Joint::revolute("A1", Vector3::zeros(), Vector3::y_axis())],
+    ///     FixedRow::from_isometry(&Isometry3::identity()),
+    /// )?;
+    /// let robot = Robot::new("arm", chain)
+    ///     .with_masses(vec![Some(LinkMass { mass_kg: 2.0, com_mm: Vector3::new(500.0, 0.0, 0.0) })])?;
+    /// let tau = robot.gravity_torques(&[0.0], &-Vector3::z_axis())?;
+    /// assert!((tau[0] - 0.5 * 2.0 * 9.80665).abs() < 1e-12);
+    /// # Ok::<(), thermokin_chain::ChainError>(())
+    /// ```
+    pub fn gravity_torques(&self, q: &[f64], down: &Unit<Vector3<f64>>) -> Result<Vec<f64>, ChainError> {
+        gravity_torques(&self.chain, &self.masses, q, down)
+    }
+
     /// The robot's parts: name, chain, masses, ratings.
     pub fn into_parts(self) -> (String, Chain, Vec<Option<LinkMass>>, Vec<JointRatings>) {
         (self.name, self.chain, self.masses, self.ratings)
     }
 }
 
+/// [`Robot::gravity_torques`] of a chain and its link masses (one per joint; missing entries carry
+/// nothing), without building a robot: the identification's hot path.
+pub fn gravity_torques(
+    chain: &Chain,
+    masses: &[Option<LinkMass>],
+    q: &[f64],
+    down: &Unit<Vector3<f64>>,
+) -> Result<Vec<f64>, ChainError> {
+    let frames = chain.joint_frames(q)?;
+    let weight = down.into_inner() * STANDARD_GRAVITY;
+    let n = chain.dof();
+    let coms: Vec<Option<(f64, Vector3<f64>)>> = (0..n)
+        .map(|l| masses.get(l).copied().flatten().map(|m| (m.mass_kg, (frames[l] * Point3::from(m.com_mm)).coords)))
+        .collect();
+    Ok((0..n)
+        .map(|j| {
+            let axis = frames[j].rotation * chain.joints()[j].axis.into_inner();
+            let origin = frames[j].translation.vector;
+            let moment_nmm: Vector3<f64> =
+                coms.iter().skip(j).flatten().map(|(m, c)| (c - origin).cross(&(weight * *m))).sum();
+            axis.dot(&moment_nmm) / MM_PER_M
+        })
+        .collect())
+}
+
 fn check_len(field: &'static str, expected: usize, got: usize) -> Result<(), ChainError> {
     if expected == got { Ok(()) } else { Err(ChainError::DescriptionLength { field, expected, got }) }
 }
 
-/// A programmed target: a label (`P1`, …) and the TCP pose to reach in the base frame (mm). What a
-/// targets file holds and what a compensation run solves for; `line` is where it was read, when it was.
+/// The state a robot operates in, beyond its joint values: what its state-dependent corrections (thermal
+/// drift, gravity compliance) are evaluated at. Plain data; every part is optional — an empty state is
+/// the robot cold (time 0, no temperature rise) carrying only what its file says it carries.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct OperatingState {
+    /// Operating time since the cold start of a warm-up, minutes.
+    pub time_min: Option<f64>,
+    /// Sensor readings, °C, by sensor name (`temp_j2`, …: the names of the measurement files).
+    pub temperatures_c: Vec<(String, f64)>,
+    /// The payload on the flange (kg; centre in mm, in the flange's same-orientation frame), replacing the
+    /// one the robot file carries.
+    pub payload: Option<LinkMass>,
+}
+
+impl OperatingState {
+    /// The state at operating time `time_min`.
+    pub fn at_time(time_min: f64) -> Self {
+        Self { time_min: Some(time_min), ..Self::default() }
+    }
+
+    /// The reading of sensor `name`, °C.
+    pub fn temperature(&self, name: &str) -> Option<f64> {
+        self.temperatures_c.iter().find(|(n, _)| n == name).map(|&(_, t)| t)
+    }
+
+    /// `true` when nothing is given.
+    pub fn is_empty(&self) -> bool {
+        self.time_min.is_none() && self.temperatures_c.is_empty() && self.payload.is_none()
+    }
+}
+
+/// A programmed target: a label (`P1`, …), the TCP pose to reach in the base frame (mm) and the state the
+/// robot is in when it reaches it (a time of the warm-up, sensor readings; empty when the file gives
+/// none). What a targets file holds and what a compensation run solves for; `line` is where it was read,
+/// when it was.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Target {
     /// Label (`P1`, …).
@@ -150,11 +239,19 @@ pub struct Target {
     pub pose: Isometry3<f64>,
     /// Line of the file it was read from, if any (for messages).
     pub line: Option<usize>,
+    /// The operating state at this target (its `time_min` and `temp_*` columns).
+    pub state: OperatingState,
 }
 
 impl Target {
-    /// A target not read from a file.
+    /// A target not read from a file, in no particular state.
     pub fn new(label: impl Into<String>, pose: Isometry3<f64>) -> Self {
-        Self { label: label.into(), pose, line: None }
+        Self { label: label.into(), pose, line: None, state: OperatingState::default() }
+    }
+
+    /// The same target in `state`.
+    pub fn in_state(mut self, state: OperatingState) -> Self {
+        self.state = state;
+        self
     }
 }

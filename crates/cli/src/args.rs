@@ -93,7 +93,7 @@ pub enum UrdfCommand {
     )]
     Export {
         #[command(flatten)]
-        robot: RobotArgs,
+        robot: Box<RobotArgs>,
         /// Output URDF (written atomically).
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
@@ -135,9 +135,21 @@ pub struct RobotArgs {
     /// interpolated), or a profile TOML file.
     #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
     pub profile: Option<TimeProfile>,
-    /// Operating time for fk/ik with --profile, minutes.
+    /// Operating time, minutes since the cold start of a warm-up: for a robot file whose rows drift with
+    /// time (a calibrated robot, `[[drift]]`), and for fk/ik with --profile. A targets file's `time_min`
+    /// column overrides it per target.
     #[arg(long, value_name = "MIN")]
     pub time: Option<f64>,
+    /// Sensor readings, °C, for a robot file whose rows drift per kelvin: `temp_j2=35.1,temp_j3=30.2`
+    /// (the names of the measurement files' temp_ columns; the prefix may be left out). A targets file's
+    /// `temp_*` columns override them per target.
+    #[arg(long, value_name = "NAME=C,...")]
+    pub temperature: Option<String>,
+    /// A payload on the flange (the probe, a gripper, a load): `KG@X,Y,Z`, its centre in the flange's
+    /// frame in mm, e.g. `2.5@0,0,80`. Gravity compliance of a calibrated robot bends under it (it replaces
+    /// the payload the robot file was calibrated with); the diagnosis merges it with the last link's mass.
+    #[arg(long, value_name = "KG@X,Y,Z")]
+    pub payload: Option<String>,
     /// How the table acts on the robot: canonical (Table 7: Trans·Rx·Ry·Rz at each joint) or
     /// coppeliasim (the authors' scene: world shift and Euler-angle addition of each joint object, at home).
     #[arg(long, value_enum, default_value_t = Semantics::Canonical)]
@@ -230,10 +242,11 @@ pub struct CompensateArgs {
     /// pandas and SQL), json ({"summary": …, "rows": […]}) or joints (time_min,label,A1..An,status).
     #[arg(long, value_enum, default_value_t = ResultsFormat::Authors)]
     pub format: ResultsFormat,
-    /// Transient cycle length, minutes (with --profile).
-    #[arg(long, value_name = "MIN", default_value_t = 200.0)]
-    pub duration: f64,
-    /// Model update interval, minutes (with --profile).
+    /// Transient cycle length, minutes: with --profile (default 200), or to run a calibrated robot's
+    /// warm-up (every target at every step).
+    #[arg(long, value_name = "MIN")]
+    pub duration: Option<f64>,
+    /// Model update interval, minutes (transient runs).
     #[arg(long, value_name = "MIN", default_value_t = 1.0)]
     pub step: f64,
     /// How each update brings the table into force (with --profile): from-nominal (the profile's share
@@ -303,10 +316,6 @@ pub struct DiagnoseArgs {
     /// refitted on it when they are estimated); it never influences the selection.
     #[arg(long, value_name = "FILE")]
     pub holdout: Option<PathBuf>,
-    /// A payload on the flange for gravity compliance (the probe, a gripper): `KG@X,Y,Z`, its centre in
-    /// the flange's frame in mm, e.g. `2.5@0,0,80`; merged with the last link's mass.
-    #[arg(long, value_name = "KG@X,Y,Z")]
-    pub payload: Option<String>,
     /// Frame of the measurements: base (a base misalignment is a candidate) or tracker (an unknown
     /// registration, always estimated).
     #[arg(long, value_enum, default_value_t = FrameArg::Base)]

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use crate::args::{
     AccumulateArg, Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
 };
-use crate::input::{Loaded, joints, load, pose, program, progress_bar, working_chain};
+use crate::input::{Loaded, joints, load, pose, program, progress_bar, working_model};
 use crate::{Failure, exit, plots, reproduce};
 
 /// Runs a parsed command line; returns the exit status.
@@ -86,10 +86,12 @@ fn outside_limits(chain: &Chain, q: &[f64]) -> Vec<String> {
 
 fn fk(a: FkArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
-    let chain = working_chain(&a.robot, &loaded)?;
-    let q = joints(&chain, "joints", &a.joints)?;
-    let pose = chain.tool_pose(&q).map_err(Failure::input)?;
-    let outside = outside_limits(&chain, &q);
+    let model = working_model(&a.robot, &loaded)?;
+    let chain = model.robot().chain();
+    let q = joints(chain, "joints", &a.joints)?;
+    // The commanded joints on the robot as it is in the flags' state (drift, joint corrections, payload).
+    let pose = model.tool_pose(&q, &loaded.state).map_err(Failure::input)?;
+    let outside = outside_limits(chain, &q);
     for o in &outside {
         eprintln!("warning: {o} (the pose is computed anyway)");
     }
@@ -105,7 +107,9 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
 
 fn ik(a: IkArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
-    let chain = working_chain(&a.robot, &loaded)?;
+    let model = working_model(&a.robot, &loaded)?;
+    // IK on the chain in force in this state; the joint corrections are inverted after (`commanded`).
+    let chain = model.chain_at(&loaded.state).map_err(Failure::input)?;
     let target = if a.position_only {
         let v = parse_list("pose", &a.pose).map_err(Failure::input)?;
         if v.len() < 3 {
@@ -122,7 +126,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
         Goal::Pose(pose(&a.pose, "pose", a.robot.orientation)?)
     };
     if a.branches {
-        return ik_branches(&a, &chain, &target);
+        return ik_branches(&a, &model, &loaded.state, &chain, &target);
     }
     let seed = match &a.seed {
         Some(s) => joints(&chain, "seed", s)?,
@@ -130,7 +134,9 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     };
     let params = Params { restarts: a.restarts, ..Params::default() };
     let mut ws = Workspace::new(chain.dof());
-    let s = solve(&chain, &target, &seed, &params, &mut ws, 0).map_err(Failure::input)?;
+    let seed = model.joint_values(&seed, &loaded.state).map_err(Failure::input)?;
+    let mut s = solve(&chain, &target, &seed, &params, &mut ws, 0).map_err(Failure::input)?;
+    commanded(&model, &loaded.state, &target, &params, &mut s)?;
     let deg = joints_to_external(&chain, &s.q);
     if a.json {
         println!(
@@ -153,17 +159,61 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
 }
 
+/// A solution on the chain in force turned into the joint values to command on a calibrated robot (its
+/// joint corrections inverted), its errors measured again through the whole model: `Converged` stays only
+/// if that independent measurement is within the tolerances.
+fn commanded(
+    model: &thermokin_deform::RobotModel,
+    state: &thermokin_chain::OperatingState,
+    target: &Goal,
+    params: &Params,
+    s: &mut thermokin_ik::Solution,
+) -> Result<(), Failure> {
+    if model.joint_corrections().iter().all(|c| c.is_none()) {
+        return Ok(());
+    }
+    let Ok(q) = model.commanded_for(&s.q, state) else {
+        s.status = thermokin_ik::Status::Unverified;
+        return Ok(());
+    };
+    let reached = model.tool_pose(&q, state).map_err(Failure::input)?;
+    let (dp, dr) = match target {
+        Goal::Pose(p) => (
+            (p.translation.vector - reached.translation.vector).norm(),
+            thermokin_compensate::orientation_error(p, &reached).norm(),
+        ),
+        Goal::Position(p) => ((p - reached.translation.vector).norm(), 0.0),
+    };
+    // The inversion leaves < 1e-12 rad: 1e-9 mm of slack over the IK's tolerance at any reach.
+    if s.converged() && (dp > params.position_tolerance_mm + 1e-9 || dr > params.orientation_tolerance_rad + 1e-12) {
+        s.status = thermokin_ik::Status::Unverified;
+    }
+    s.q = q;
+    s.position_error_mm = dp;
+    s.orientation_error_rad = dr;
+    Ok(())
+}
+
 /// `ik --branches`: every configuration of a closed-form arm, refined on the working robot.
-fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> {
+fn ik_branches(
+    a: &IkArgs,
+    model: &thermokin_deform::RobotModel,
+    state: &thermokin_chain::OperatingState,
+    chain: &Chain,
+    target: &Goal,
+) -> Result<u8, Failure> {
     let Goal::Pose(goal) = target else {
         return Err(Failure::input(anyhow!("--branches needs a full pose (drop --position-only)")));
     };
     let mut ws = Workspace::new(chain.dof());
-    let Some(found) = solve_branches(chain, goal, &Params::default(), &mut ws).map_err(Failure::input)? else {
+    let Some(mut found) = solve_branches(chain, goal, &Params::default(), &mut ws).map_err(Failure::input)? else {
         return Err(Failure::input(anyhow!(
             "--branches: this robot has no closed form (it needs six revolute joints with axes 2 and 3 parallel and a spherical wrist, or axes 2, 3, 4 parallel)"
         )));
     };
+    for (_, s) in &mut found {
+        commanded(model, state, target, &Params::default(), s)?;
+    }
     let rows: Vec<serde_json::Value> = found
         .iter()
         .map(|(_, s)| {
@@ -215,9 +265,17 @@ fn ik_branches(a: &IkArgs, chain: &Chain, target: &Goal) -> Result<u8, Failure> 
     Ok(if any { exit::OK } else { exit::PARTIAL })
 }
 
+/// The paper's cycle length, minutes (section 4: 200 minutes, every minute).
+const PAPER_CYCLE_MIN: f64 = 200.0;
+
 fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
-    let table = loaded.table.clone().ok_or_else(|| Failure::input(anyhow!("compensate needs --deformation")))?;
+    // A robot file with corrections, or an operating state: every target on the robot as it is in its
+    // state. A plain robot with a deviation table: the paper's static and transient runs, unchanged.
+    let table = match &loaded.table {
+        Some(table) if loaded.model.is_plain() && loaded.state.is_empty() => table.clone(),
+        _ => return compensate_model_run(&a, &loaded),
+    };
     if a.robot.time.is_some() {
         return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
     }
@@ -248,7 +306,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
             (compensate_static(chain, &table, &prog, &settings).map_err(Failure::input)?, false)
         }
         Some(profile) => {
-            let cycle = Cycle { duration_min: a.duration, step_min: a.step };
+            let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
             let steps = cycle.times().map_err(Failure::input)?.len();
             let bar = progress_bar(steps as u64, "compensating");
             let run = compensate_transient(chain, &table, profile, cycle, &prog, &settings, |done, _| {
@@ -263,6 +321,72 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
         }
     };
     write_outputs(&a, &loaded, &run, transient)?;
+    print_summary(&run.summary, a.json);
+    Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
+}
+
+/// `compensate` on a calibrated robot (its drift, joint corrections and payload; a deviation table added
+/// to its rows with its profile): each target solved in its own state — the targets file's `time_min` and
+/// `temp_*` columns, else `--time`, `--temperature`, `--payload` — or, with `--duration` (or a growing
+/// `--profile`), every target at every step of a warm-up.
+fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failure> {
+    let mut model = loaded.model.clone();
+    let profile = a.robot.profile.clone().unwrap_or(TimeProfile::Static);
+    if let Some(table) = &loaded.table {
+        if loaded.semantics != thermokin_deform::TableSemantics::Canonical {
+            return Err(Failure::input(anyhow!(
+                "--semantics coppeliasim applies to a plain robot's table; a calibrated robot's rows drift canonically"
+            )));
+        }
+        if matches!(profile, TimeProfile::Temperature { .. }) {
+            return Err(Failure::input(anyhow!(
+                "a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead"
+            )));
+        }
+        model = model.with_table(table, &profile).map_err(Failure::input)?;
+    }
+    if a.accumulate == AccumulateArg::Increments {
+        return Err(Failure::input(anyhow!(
+            "--accumulate increments replays the authors' CoppeliaSim updates on a plain robot's table"
+        )));
+    }
+    if a.stream {
+        return Err(Failure::input(anyhow!(
+            "--stream runs a plain robot's static case; a calibrated robot's run holds its targets in memory"
+        )));
+    }
+    let chain = model.robot().chain();
+    let start = match &a.seed {
+        Some(s) => joints(chain, "seed", s)?,
+        None => vec![0.0; chain.dof()],
+    };
+    let settings = RunSettings {
+        semantics: loaded.semantics.clone(),
+        accumulation: a.accumulate.into(),
+        ik: Params::default(),
+        start,
+    };
+    let prog = program(&a.targets)?;
+    let growing = !matches!(profile, TimeProfile::Static);
+    let run = if a.duration.is_some() || growing {
+        let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
+        let steps = cycle.times().map_err(Failure::input)?.len();
+        let bar = progress_bar(steps as u64, "compensating");
+        let started = std::time::Instant::now();
+        let run =
+            thermokin_compensate::compensate_model_cycle(&model, cycle, &prog, &loaded.state, &settings, |done, _| {
+                if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
+                    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+                }
+                bar.set_position(done as u64);
+            });
+        bar.finish_and_clear();
+        run.map_err(Failure::input)?
+    } else {
+        thermokin_compensate::compensate_model(&model, &prog, &loaded.state, &settings).map_err(Failure::input)?
+    };
+    let with_time = run.rows.iter().any(|r| r.time_min != 0.0);
+    write_outputs(a, loaded, &run, with_time)?;
     print_summary(&run.summary, a.json);
     Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
 }
@@ -447,9 +571,13 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
         }
         UrdfCommand::Export { robot, out } => {
             let loaded = load(&robot)?;
-            let chain = working_chain(&robot, &loaded)?;
-            let working = loaded.robot.with_chain(chain).map_err(Failure::input)?;
-            let xml = thermokin_urdf::export_robot(&working);
+            let model = working_model(&robot, &loaded)?;
+            let working = model.robot();
+            let beyond = model.beyond_urdf();
+            for line in &beyond {
+                eprintln!("note: not in the URDF (kept in the TOML): {line}");
+            }
+            let xml = thermokin_urdf::export_robot_noting(working, &beyond);
             write_atomic(&out, xml.as_bytes()).map_err(Failure::internal)?;
             println!("{}: {} joints → {}", working.name(), working.chain().dof(), out.display());
         }

@@ -20,15 +20,22 @@ use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
-    if a.robot.profile.is_some() || a.robot.time.is_some() {
+    if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
-            "diagnose takes a static robot: drop --profile/--time (thermal drift is a candidate effect)"
+            "diagnose takes a static robot: drop --profile/--time/--temperature (thermal drift is a candidate effect; the data's time_min and temp_* columns drive it)"
         )));
     }
     if a.folds < 2 {
         return Err(Failure::input(anyhow!("--folds must be at least 2")));
     }
     let loaded = load(&a.robot)?;
+    if !loaded.model.is_plain() {
+        return Err(Failure::input(anyhow!(
+            "{} carries identified corrections ({}): diagnose the robot they were identified on (its geometry is the starting point), or the calibrated geometry alone",
+            a.robot.robot.display(),
+            loaded.model.beyond_urdf().join("; ")
+        )));
+    }
     let chain = working_chain(&a.robot, &loaded)?;
     let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
     let units = MeasurementFormat {
@@ -70,10 +77,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     };
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     // The robot as the fit sees it: with the payload (gravity only; the export keeps the file's masses).
-    let fitted_robot = match &a.payload {
-        Some(spec) => {
-            robot.clone().with_payload(parse_payload(spec).map_err(Failure::input)?).map_err(Failure::input)?
-        }
+    let fitted_robot = match &a.robot.payload {
+        Some(spec) => robot
+            .clone()
+            .with_payload(crate::input::parse_payload(spec).map_err(Failure::input)?)
+            .map_err(Failure::input)?,
         None => robot.clone(),
     };
     // Progress on stderr, one step per stage — the selection, each outer fold of the nested validation,
@@ -120,39 +128,38 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         return Err(Failure::input(anyhow!("not writing {}: {why} (--force-export writes it anyway)", p.display())));
     }
     if let Some(p) = &a.export {
-        let calibrated = robot.with_chain(report.calibrated.clone()).map_err(Failure::internal)?.renamed(format!(
-            "{} (calibrated on {})",
-            robot.name(),
-            a.measurements.display()
-        ));
-        let text = if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
-            thermokin_urdf::export_robot(&calibrated)
+        // The model scored, on the file's robot (its own masses; the payload the data were measured with
+        // kept as the robot's default payload, which a later --payload replaces).
+        let payload =
+            a.robot.payload.as_deref().map(crate::input::parse_payload).transpose().map_err(Failure::input)?;
+        let named = robot
+            .with_chain(report.identified.robot().chain().clone())
+            .map_err(Failure::internal)?
+            .renamed(format!("{} (calibrated on {})", robot.name(), a.measurements.display()));
+        let model = report
+            .identified
+            .clone()
+            .with_robot(named)
+            .and_then(|m| m.with_payload(payload))
+            .map_err(Failure::internal)?;
+        let beyond = model.beyond_urdf();
+        let urdf = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+        let text = if urdf {
+            thermokin_urdf::export_robot_noting(model.robot(), &beyond)
         } else {
-            thermokin_io::robot_to_toml(&calibrated)
+            thermokin_io::robot_model_to_toml(&model)
         };
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+        let carried: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
         println!(
-            "
-identified robot → {}",
-            p.display()
+            "\nidentified robot → {}: {}",
+            p.display(),
+            if carried.is_empty() { "the frames only".to_string() } else { carried.join(", ") }
         );
-        if let Some(x) = &report.export {
-            println!(
-                "  a robot file cannot hold {} yet: the model written is the others refitted without {} — {}",
-                x.left_out.join(", "),
-                if x.left_out.len() > 1 { "them" } else { "it" },
-                if x.effects.is_empty() { "the frames only".to_string() } else { x.effects.join(", ") }
-            );
-            let s = &x.heldout;
-            println!(
-                "  its held-out error (selection's folds): mean {:.4}, RMS {:.4}, max {:.4} mm",
-                s.heldout_mean_mm, s.heldout_rms_mm, s.heldout_max_mm
-            );
-            if let Some(h) = &x.holdout {
-                println!(
-                    "  on the hold-out set: mean {:.4}, RMS {:.4}, max {:.4} mm",
-                    h.heldout_mean_mm, h.heldout_rms_mm, h.heldout_max_mm
-                );
+        if urdf && !beyond.is_empty() {
+            println!("  URDF cannot hold (named in the file's header; write .toml for the complete record):");
+            for line in &beyond {
+                println!("    {line}");
             }
         }
     }
@@ -388,15 +395,6 @@ fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
     write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
 }
 
-/// Parses `--payload KG@X,Y,Z` (kg; mm in the flange's frame).
-fn parse_payload(spec: &str) -> anyhow::Result<thermokin_chain::LinkMass> {
-    let (kg, at) = spec.split_once('@').ok_or_else(|| anyhow!("--payload {spec}: expected KG@X,Y,Z (kg @ mm)"))?;
-    let mass_kg: f64 = kg.trim().parse().map_err(|_| anyhow!("--payload {spec}: mass `{kg}` is not a number"))?;
-    let c = crate::args::parse_list("payload", at)?;
-    anyhow::ensure!(c.len() == 3, "--payload {spec}: the centre takes 3 values (mm), got {}", c.len());
-    Ok(thermokin_chain::LinkMass { mass_kg, com_mm: nalgebra::Vector3::new(c[0], c[1], c[2]) })
-}
-
 /// Parses `KIND[:JOINT][=VALUES]` into a hidden effect (report units → internal), with a seeded random
 /// effect of typical size when no values are given.
 fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Result<HiddenEffect> {
@@ -455,6 +453,13 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         return Err(Failure::input(anyhow!("--orientation-noise must be ≥ 0 degrees")));
     }
     let loaded = load(&a.robot)?;
+    if !loaded.model.is_plain() {
+        return Err(Failure::input(anyhow!(
+            "{} carries identified corrections ({}): simulate hides effects on a plain robot (--effect)",
+            a.robot.robot.display(),
+            loaded.model.beyond_urdf().join("; ")
+        )));
+    }
     let chain = working_chain(&a.robot, &loaded)?;
     let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;

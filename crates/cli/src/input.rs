@@ -7,26 +7,30 @@ use std::path::Path;
 use anyhow::anyhow;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Translation3, Vector3};
-use thermokin_chain::{Chain, FixedRow};
+use thermokin_chain::{Chain, FixedRow, OperatingState};
 use thermokin_compensate::Target;
-use thermokin_deform::{CoppeliaSimEdits, DeviationTable, TableSemantics};
+use thermokin_deform::{CoppeliaSimEdits, DeviationTable, RobotModel, TableSemantics};
 use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
-use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_with, read_targets};
+use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_model_with, read_targets};
 
 use crate::Failure;
 use crate::args::{RobotArgs, Semantics, parse_list};
 
-/// The loaded robot, its deviation table (if any) and the semantics.
+/// The loaded robot with the corrections its file carries, its deviation table (if any), the semantics,
+/// and the operating state the flags give (`--time`, `--temperature`, `--payload`).
 pub struct Loaded {
     pub robot: Robot,
+    pub model: RobotModel,
     pub table: Option<DeviationTable>,
     pub semantics: TableSemantics,
+    pub state: OperatingState,
 }
 
-/// Reads the robot, applies `--tool-pose` / `--base-pose`, reads the deviation table.
+/// Reads the robot, applies `--tool-pose` / `--base-pose`, reads the deviation table and the state.
 pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
     let options = RobotOptions { base: args.base.clone(), tip: args.tip.clone() };
-    let mut robot = read_robot_with(&args.robot, &options).map_err(Failure::input)?;
+    let model = read_robot_model_with(&args.robot, &options).map_err(Failure::input)?;
+    let mut robot = model.robot().clone();
     if let Some(text) = &args.tool_pose {
         let flange_from_tool = pose(text, "tool-pose", args.orientation)?;
         let chain = robot.chain().with_tool(FixedRow::from_isometry(&flange_from_tool)).map_err(Failure::input)?;
@@ -41,14 +45,82 @@ pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
         Some(p) => Some(read_deviation_table_for(p, robot.chain().dof()).map_err(Failure::input)?),
         None => None,
     };
-    if table.is_none() && (args.profile.is_some() || args.time.is_some()) {
-        return Err(Failure::input(anyhow!("--profile and --time need --deformation")));
+    let model = model.with_robot(robot.clone()).map_err(Failure::input)?;
+    let (drifts_with_time, sensors) = model.needs();
+    if table.is_none() && args.profile.is_some() {
+        return Err(Failure::input(anyhow!("--profile needs --deformation")));
+    }
+    if table.is_none() && args.time.is_some() && !drifts_with_time {
+        return Err(Failure::input(anyhow!(
+            "--time: {} has no row drifting with time (give --deformation and --profile to deform it)",
+            args.robot.display()
+        )));
     }
     if let Some(p) = &args.profile {
         p.validate(robot.chain().dof()).map_err(Failure::input)?;
     }
+    let mut state = OperatingState { time_min: args.time, ..OperatingState::default() };
+    if let Some(text) = &args.temperature {
+        state.temperatures_c = temperatures(text).map_err(Failure::input)?;
+        if let Some((unknown, _)) = state.temperatures_c.iter().find(|(n, _)| !sensors.contains(n)) {
+            let known = if sensors.is_empty() { "none".to_string() } else { sensors.join(", ") };
+            return Err(Failure::input(anyhow!(
+                "--temperature: {} has no row drifting with sensor `{unknown}` (its sensors: {known})",
+                args.robot.display()
+            )));
+        }
+    }
+    if let Some(spec) = &args.payload {
+        state.payload = Some(parse_payload(spec).map_err(Failure::input)?);
+    }
     let semantics = semantics(args.semantics, robot.chain().dof());
-    Ok(Loaded { robot, table, semantics })
+    Ok(Loaded { robot, model, table, semantics, state })
+}
+
+/// Parses `--temperature temp_j2=35.1,temp_j3=30.2` (°C; the `temp_` prefix added when left out).
+pub fn temperatures(text: &str) -> anyhow::Result<Vec<(String, f64)>> {
+    let mut out: Vec<(String, f64)> = Vec::new();
+    for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+        let (name, value) = item
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--temperature `{item}`: expected NAME=°C, e.g. temp_j2=35.1"))?;
+        let name = name.trim();
+        let name = if name.len() > 5 && name[..5].eq_ignore_ascii_case("temp_") {
+            format!("temp_{}", &name[5..])
+        } else {
+            format!("temp_{name}")
+        };
+        let value: f64 = value
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| anyhow!("--temperature `{item}`: `{}` is not a temperature in °C", value.trim()))?;
+        anyhow::ensure!(!out.iter().any(|(n, _)| *n == name), "--temperature: `{name}` given twice");
+        out.push((name, value));
+    }
+    anyhow::ensure!(!out.is_empty(), "--temperature: no reading given");
+    Ok(out)
+}
+
+/// Parses `--payload KG@X,Y,Z` (kg; mm in the flange's frame).
+pub fn parse_payload(spec: &str) -> anyhow::Result<thermokin_chain::LinkMass> {
+    let (kg, at) = spec.split_once('@').ok_or_else(|| anyhow!("--payload {spec}: expected KG@X,Y,Z (kg @ mm)"))?;
+    let mass_kg: f64 = kg.trim().parse().map_err(|_| anyhow!("--payload {spec}: mass `{kg}` is not a number"))?;
+    let c = crate::args::parse_list("payload", at)?;
+    anyhow::ensure!(c.len() == 3, "--payload {spec}: the centre takes 3 values (mm), got {}", c.len());
+    Ok(thermokin_chain::LinkMass { mass_kg, com_mm: nalgebra::Vector3::new(c[0], c[1], c[2]) })
+}
+
+/// The robot fk/ik work on: the file's model, with the deviation table (at `--time` under `--profile`)
+/// added to its chain when one is given.
+pub fn working_model(args: &RobotArgs, loaded: &Loaded) -> Result<RobotModel, Failure> {
+    if loaded.table.is_none() {
+        return Ok(loaded.model.clone());
+    }
+    let chain = working_chain(args, loaded)?;
+    let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
+    loaded.model.clone().with_robot(robot).map_err(Failure::input)
 }
 
 pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
@@ -64,6 +136,8 @@ pub fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure
     let table = match (&args.profile, args.time) {
         (Some(p), Some(t)) => p.table_at(table, t).map_err(Failure::input)?,
         (Some(_), None) => return Err(Failure::input(anyhow!("--profile needs --time (minutes)"))),
+        // --time for the robot file's own drift: the table is in force in full.
+        (None, Some(_)) if loaded.model.needs().0 => table.clone(),
         (None, Some(_)) => return Err(Failure::input(anyhow!("--time needs --profile"))),
         (None, None) => table.clone(),
     };

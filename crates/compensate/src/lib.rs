@@ -12,11 +12,13 @@
 //! on the deformed robot).
 
 mod export;
+mod model_run;
 mod program;
 mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
+pub use model_run::{compensate_model, compensate_model_cycle, state_or};
 pub use program::{
     AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, kuka_status, kuka_turn, programs,
 };
@@ -37,6 +39,17 @@ pub enum CompensateError {
     /// The IK inputs were invalid.
     #[error(transparent)]
     Ik(#[from] thermokin_ik::IkError),
+    /// A target whose operating state the robot model cannot evaluate (a drifting robot without a time,
+    /// a sensor without a reading).
+    #[error("target {label}{}: {message}", line.map(|l| format!(" (line {l})")).unwrap_or_default())]
+    TargetState {
+        /// The target's label.
+        label: String,
+        /// Its line in the targets file, if read from one.
+        line: Option<usize>,
+        /// What is missing.
+        message: String,
+    },
     /// A cycle setting out of its range.
     #[error("{field} must be {expected}, got {value} min")]
     Cycle {

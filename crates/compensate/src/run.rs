@@ -88,8 +88,11 @@ pub struct TargetResult {
     pub programmed: Isometry3<f64>,
     /// Pose the deformed robot reaches with the compensated joints.
     pub reached: Isometry3<f64>,
-    /// Compensated joint values, radians (mm for prismatic joints).
+    /// Compensated joint values to command, radians (mm for prismatic joints).
     pub joints: Vec<f64>,
+    /// The joint values the chain takes with them: [`TargetResult::joints`] unless a calibrated robot
+    /// corrects its joint values (gear ratio, cyclic error, compliance; [`crate::compensate_model`]).
+    pub chain_joints: Vec<f64>,
     /// Programmed − reached position, mm (the authors' sign).
     pub position_deviation_mm: [f64; 3],
     /// Orientation error as a rotation vector ([`orientation_error`]), radians.
@@ -216,7 +219,7 @@ pub struct RunOutput {
 }
 
 impl RunOutput {
-    fn new(chain: &Chain, rows: Vec<TargetResult>) -> Self {
+    pub(crate) fn new(chain: &Chain, rows: Vec<TargetResult>) -> Self {
         let transient = rows.iter().any(|r| r.time_min != 0.0);
         let mut summary = SummaryBuilder::new(transient, usize::MAX);
         rows.iter().for_each(|r| summary.add(r));
@@ -245,6 +248,7 @@ pub(crate) fn record(
         programmed: target.pose,
         reached,
         joints: solution.q.clone(),
+        chain_joints: solution.q.clone(),
         position_deviation_mm: [dp.x, dp.y, dp.z],
         orientation_deviation_rad: [dr.x, dr.y, dr.z],
         uncompensated_error_mm: (target.pose.translation.vector - uncompensated.translation.vector).norm(),

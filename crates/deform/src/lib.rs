@@ -6,9 +6,11 @@
 //! parameter Jacobian lives with the kinematics ([`Chain::parameter_jacobian`]) and is re-exported here.
 
 mod coppeliasim;
+mod model;
 mod profile;
 
 pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
+pub use model::{DriftLaw, DriftRow, JointCorrection, RobotModel};
 pub use profile::{AfterStabilization, RowFactors, TemperatureLog, TimeProfile};
 pub use thermokin_chain::{ErrorParams, ParameterLayout};
 
@@ -51,6 +53,28 @@ pub enum DeformError {
         time_min: f64,
         /// Why it cannot be answered.
         reason: String,
+    },
+    /// The operating state lacks what a correction needs (a time, a sensor reading).
+    #[error("this robot needs {needed}: {why}")]
+    MissingState {
+        /// What to give.
+        needed: String,
+        /// Which correction needs it.
+        why: String,
+    },
+    /// A joint correction out of its domain.
+    #[error("joint {joint}: {message}")]
+    BadCorrection {
+        /// 1-based joint number.
+        joint: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The joint corrections could not be inverted (never expected for corrections below the checked slope).
+    #[error("the joint corrections could not be inverted: {gap:e} rad left")]
+    NotInvertible {
+        /// Largest remaining joint error, radians.
+        gap: f64,
     },
     /// The deformed chain is invalid (non-finite values).
     #[error(transparent)]

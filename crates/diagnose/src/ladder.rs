@@ -209,10 +209,6 @@ pub fn diagnose_with_progress(
         let score = |e: &[Effect]| transfer_score(&ctx, h, e, config);
         let refitted = always.iter().map(Effect::label).collect();
         report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
-        if let Some(export) = &mut report.export {
-            let kept: Vec<Effect> = effects.iter().filter(|e| e.is_static()).copied().collect();
-            export.holdout = Some(score(&kept)?);
-        }
         tell("hold-out set".into());
     }
     report.warnings = warnings(robot, data, config, &report);

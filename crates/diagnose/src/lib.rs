@@ -26,8 +26,7 @@ pub use model::{
     DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques, sensor_joint,
 };
 pub use report::{
-    Breakdown, EffectReport, ExportModel, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue, Report,
-    Stats, TableRow,
+    Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue, Report, Stats, TableRow,
 };
 pub use select::Plausibility;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
@@ -43,6 +42,15 @@ pub enum DiagnoseError {
     /// The model could not be evaluated.
     #[error(transparent)]
     Chain(#[from] ChainError),
+    /// The identified robot could not be built (a correction out of its domain).
+    #[error(transparent)]
+    Deform(#[from] thermokin_deform::DeformError),
+    /// A temperature drift identified from data that hold no temperature readings.
+    #[error("{effect} needs temperature readings in the data")]
+    NoTemperatures {
+        /// The effect's label.
+        effect: String,
+    },
     /// An effect names a joint the robot does not have.
     #[error("joint {joint} is not in 1..={dof}")]
     NoSuchJoint {

@@ -4,7 +4,7 @@
 use nalgebra::{Isometry3, Matrix3, Matrix6xX, Vector3};
 use serde::Serialize;
 use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, Robot};
-use thermokin_deform::{AfterStabilization, TimeProfile};
+use thermokin_deform::{AfterStabilization, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TimeProfile};
 
 use crate::{Dataset, DiagnoseError, Measurement};
 
@@ -409,6 +409,79 @@ impl Model {
         Ok((chain, left_out))
     }
 
+    /// The identified robot with every effect of this model at `theta` — what a robot file carries and
+    /// every command evaluates ([`RobotModel`]): the static effects in the chain
+    /// ([`Model::calibrated_chain`]); gear-ratio, cyclic and compliance terms as joint corrections; each
+    /// thermal drift as a drift row with its own law — linear and exponential as the deform profile whose
+    /// factor at 180 minutes is 1 after dividing by `f(180)` ([`DriftShape::reference_factor`]), a
+    /// temperature drift per kelvin of the joint's own sensor (or of the mean of all, as fitted), each
+    /// against its reading at the earliest measurement of `data` (the fit's reference). Gravity keeps its
+    /// direction in the robot's base frame while the registration turns the base row into the tracker's.
+    ///
+    /// Its forward model equals [`Model::predict`]'s at every measurement (a test checks it to 1e-9 mm).
+    pub fn robot_model(&self, robot: &Robot, theta: &[f64], data: &Dataset) -> Result<RobotModel, DiagnoseError> {
+        let (chain, _) = self.static_chain(robot, theta)?;
+        let down = {
+            let world_from_base_fitted = chain.base().pose().rotation;
+            let world_from_base_given = robot.chain().base().pose().rotation;
+            world_from_base_fitted * world_from_base_given.inverse() * -Vector3::z_axis()
+        };
+        let dof = robot.chain().dof();
+        let mut joints = vec![JointCorrection::NONE; dof];
+        let mut drift = Vec::new();
+        let first = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min));
+        for (e, &o) in self.effects.iter().zip(&self.offsets) {
+            match *e {
+                Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
+                Effect::JointScale(j) => joints[j.index()].scale += theta[o],
+                Effect::Periodic(j) => {
+                    for (c, t) in joints[j.index()].cyclic_rad.iter_mut().zip(&theta[o..o + 4]) {
+                        *c += t;
+                    }
+                }
+                Effect::ThermalDrift(j, shape) => {
+                    let tau = theta.get(o + 6).copied().unwrap_or(0.0).clamp(1e-3, MAX_TAU_MIN);
+                    let at_reference = six_at(theta, o);
+                    let law = match shape.profile(tau) {
+                        Some(profile) => DriftLaw::Time(profile),
+                        None => DriftLaw::PerKelvin { sensors: self.sensors_of(j.index(), data, first)? },
+                    };
+                    let deviation = at_reference.scaled(1.0 / shape.reference_factor(tau));
+                    drift.push(DriftRow { row: Row::Joint(j.index()), deviation, law });
+                }
+                _ => {}
+            }
+        }
+        let base = robot.with_chain(chain)?;
+        Ok(RobotModel::new(base).with_gravity(down).with_joint_corrections(joints)?.with_drift(drift)?)
+    }
+
+    /// The sensors a temperature drift of joint `j` follows (its own, or all), named as in files
+    /// (`temp_j2`), each with its reading at the earliest measurement.
+    fn sensors_of(
+        &self,
+        j: usize,
+        data: &Dataset,
+        first: Option<&Measurement>,
+    ) -> Result<Vec<(String, f64)>, DiagnoseError> {
+        let dof = data.measurements.first().map_or(0, |m| m.q.len());
+        let reading = |c: usize| first.and_then(|m| m.temps.get(c).copied());
+        let own = data.temperature_names.iter().position(|n| sensor_joint(n, dof) == Some(j));
+        let columns: Vec<usize> = match own {
+            Some(c) => vec![c],
+            None => (0..data.temperature_names.len()).collect(),
+        };
+        columns
+            .into_iter()
+            .map(|c| {
+                let name = format!("temp_{}", data.temperature_names[c]);
+                reading(c)
+                    .map(|t| (name.clone(), t))
+                    .ok_or(DiagnoseError::NoTemperatures { effect: format!("thermal_drift[{}] (temperature)", j + 1) })
+            })
+            .collect()
+    }
+
     /// The chain with the static effects at `theta` (registered), and its joint rows' errors: the part
     /// of a prediction that is the same for every measurement.
     fn static_chain(&self, robot: &Robot, theta: &[f64]) -> Result<(Chain, Vec<ErrorParams>), DiagnoseError> {
@@ -557,28 +630,11 @@ impl Model {
     }
 }
 
-/// Gravity torque about each joint's axis at configuration `q`, N·m, from the link masses (gravity along
-/// the base's −Z): `τ_j = z_j · Σ_{l ≥ j} (c_l − o_j) × m_l g`.
+/// Gravity torque about each joint's axis at configuration `q`, N·m, from the link masses, gravity along
+/// the chain's world −Z ([`thermokin_chain::gravity_torques`], the law a robot file's compliance is
+/// evaluated with at use); zeros where FK fails (a wrong-length `q` is refused before any fit).
 pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) -> Vec<f64> {
-    let n = chain.dof();
-    let Ok(frames) = chain.joint_frames(q) else { return vec![0.0; n] };
-    let g = Vector3::new(0.0, 0.0, -9.81);
-    let coms: Vec<Option<(f64, Vector3<f64>)>> = (0..n)
-        .map(|l| {
-            masses.get(l).copied().flatten().map(|m| (m.mass_kg, (frames[l] * nalgebra::Point3::from(m.com_mm)).coords))
-        })
-        .collect();
-    (0..n)
-        .map(|j| {
-            let z = frames[j].rotation * chain.joints()[j].axis.into_inner();
-            let o = frames[j].translation.vector;
-            let mut moment = Vector3::zeros();
-            for (m, c) in coms.iter().skip(j).flatten() {
-                moment += (c - o).cross(&(g * *m));
-            }
-            z.dot(&moment) / 1000.0 // N·mm → N·m
-        })
-        .collect()
+    thermokin_chain::gravity_torques(chain, masses, q, &-Vector3::z_axis()).unwrap_or_else(|_| vec![0.0; chain.dof()])
 }
 
 /// The joint (0-based) a temperature column belongs to, from its name without the `temp_` prefix:

@@ -168,20 +168,6 @@ pub struct OuterFold {
     pub effects: Vec<String>,
 }
 
-/// The model `--export` writes when the chosen one holds effects a robot file cannot hold: the others,
-/// refitted on all measurements without them, scored the same way — the figures beside the export.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct ExportModel {
-    /// The effects it holds.
-    pub effects: Vec<String>,
-    /// The chosen effects it leaves out.
-    pub left_out: Vec<String>,
-    /// Its held-out error on the selection's folds.
-    pub heldout: Stats,
-    /// Its error on the hold-out set, when one was given.
-    pub holdout: Option<Stats>,
-}
-
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HoldoutStats {
@@ -205,17 +191,14 @@ pub struct Report {
     /// Nominal and selected model on an explicit hold-out set, when one was given (it never influences
     /// the selection).
     pub holdout: Option<HoldoutStats>,
-    /// The robot as identified: the chain of the model that `diagnose --export` writes, fitted on all
-    /// measurements (registration as the base row, tool, base, offsets, link deviations) — the chosen
-    /// model when a robot file holds all of it, otherwise [`Report::export`]'s model (the others refitted
-    /// without what it cannot hold), never a subset of a joint fit. Not in the JSON: it is the robot file.
+    /// The chain of the identified robot: its static effects (frames, registration in the base row, tool,
+    /// offsets, link deviations), fitted on all measurements.
     #[serde(skip)]
     pub calibrated: thermokin_chain::Chain,
-    /// Effects of the final model the calibrated robot cannot hold (compliance, thermal drift).
-    pub not_in_calibrated: Vec<String>,
-    /// When `not_in_calibrated` is not empty: the model [`Report::calibrated`] is — the others refitted
-    /// without them — and its own held-out figures.
-    pub export: Option<ExportModel>,
+    /// The identified robot with every chosen effect — the chain above, gear-ratio, cyclic and compliance
+    /// terms, thermal drift rows each with its law: the model the report scores and `--export` writes.
+    #[serde(skip)]
+    pub identified: thermokin_deform::RobotModel,
     /// Said first when the chosen model does not beat the nominal one on data it never saw (nested
     /// validation, the hold-out set): `--export` then refuses unless forced.
     pub honest_end: Option<String>,

@@ -24,8 +24,7 @@ use crate::fit::{Fit, fit, observability, residuals};
 use crate::ladder::{Config, FoldGrouping, FrameMode, ToolMode};
 use crate::model::{DriftShape, Effect, JointIndex, Model};
 use crate::report::{
-    EffectReport, ExportModel, FittedFrames, Identifiability, ParameterValue, PoseReport, Report, Stats, TableRow,
-    breakdown,
+    EffectReport, FittedFrames, Identifiability, ParameterValue, PoseReport, Report, Stats, TableRow, breakdown,
 };
 use crate::validation::{Ctx, Relation, significantly_better};
 use crate::{Dataset, DiagnoseError};
@@ -550,22 +549,9 @@ fn report(
             units::degrees3([r.x, r.y, r.z])
         }),
     };
-    // What a robot file cannot hold is not dropped from a joint fit: the others are refitted without it,
-    // and that model — the one written — is scored the same way.
-    let (calibrated, export) = if left_out.is_empty() {
-        (calibrated, None)
-    } else {
-        let kept: Vec<Effect> = effects.iter().filter(|e| e.is_static()).copied().collect();
-        let (kept_model, kept_fit) = ctx.full_fit(&kept)?;
-        let (chain, _) = kept_model.calibrated_chain(robot, &kept_fit.theta)?;
-        let export = ExportModel {
-            effects: kept.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
-            left_out: left_out.iter().map(Effect::label).collect(),
-            heldout: ctx.heldout(&kept, &ctx.folds)?,
-            holdout: None,
-        };
-        (chain, Some(export))
-    };
+    // The identified robot carries every chosen effect: the model written is the model scored.
+    let identified = model.robot_model(robot, &final_fit.theta, data)?;
+    debug_assert!(left_out.iter().all(|e| !e.is_static()));
     let report = Report {
         frames,
         warnings: Vec::new(),
@@ -575,8 +561,7 @@ fn report(
         nested: None,
         holdout: None,
         calibrated,
-        not_in_calibrated: left_out.iter().map(Effect::label).collect(),
-        export,
+        identified,
         validation: validation_label(data, config),
         orientation_lever_mm: ctx.pre.lever_mm,
         effects: reports,

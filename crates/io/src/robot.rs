@@ -19,6 +19,7 @@ use std::path::Path;
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use thermokin_chain::{Chain, DhConvention, DhRow, DhTable, FixedRow, Joint, JointKind, JointLimits, xyz_rotation};
+use thermokin_deform::{DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TimeProfile};
 use toml::Spanned;
 
 use crate::{IoError, line_of, read_text, units};
@@ -48,6 +49,46 @@ struct RobotFile {
     joint: Vec<Spanned<JointSpec>>,
     #[serde(default)]
     dh: Vec<Spanned<DhSpec>>,
+    /// Gravity's direction in the file's world frame (default `[0, 0, -1]`).
+    gravity: Option<Spanned<[f64; 3]>>,
+    /// The payload the robot carries by default (the one it was calibrated with).
+    payload: Option<Spanned<PayloadSpec>>,
+    /// Rows drifting with operating time or temperature.
+    #[serde(default)]
+    drift: Vec<Spanned<DriftSpec>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PayloadSpec {
+    mass_kg: f64,
+    #[serde(default)]
+    com_mm: [f64; 3],
+}
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RowName {
+    Joint(i64),
+    Name(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PerKelvinSpec {
+    sensors: Vec<String>,
+    reference_c: Vec<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DriftSpec {
+    /// A joint number (1-based), `"base"` or `"tool"`.
+    row: RowName,
+    /// mm and degrees: at the profile's factor 1, or per kelvin.
+    error: [f64; 6],
+    profile: Option<TimeProfile>,
+    per_kelvin: Option<PerKelvinSpec>,
 }
 
 #[derive(Deserialize)]
@@ -89,6 +130,12 @@ struct JointSpec {
     /// Limits: degrees (revolute) or mm (prismatic).
     limits: Option<[f64; 2]>,
     error: Option<[f64; 6]>,
+    /// Gear-ratio error: Δq = scale · q.
+    scale: Option<f64>,
+    /// Cyclic encoder error, degrees: [sin q, cos q, sin 2q, cos 2q] coefficients.
+    cyclic_deg: Option<[f64; 4]>,
+    /// Gravity compliance, degrees per N·m.
+    compliance_deg_per_nm: Option<f64>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
     /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
@@ -111,14 +158,39 @@ struct DhSpec {
     limits: Option<[f64; 2]>,
 }
 
-/// Reads a robot TOML file.
+/// Reads a robot TOML file that carries no state-dependent corrections (see [`read_robot_model`]).
 pub fn read_robot(path: &Path) -> Result<Robot, IoError> {
     let text = read_text(path)?;
     parse_robot_toml(path, &text)
 }
 
-/// Parses robot TOML text; `path` is used in error messages.
+/// Reads a robot TOML file with every correction it carries: joint scale, cyclic and compliance terms,
+/// drift rows, the default payload and gravity's direction.
+pub fn read_robot_model(path: &Path) -> Result<RobotModel, IoError> {
+    let text = read_text(path)?;
+    parse_robot_model_toml(path, &text)
+}
+
+/// Parses robot TOML text into the robot alone; a file carrying corrections (which the robot alone would
+/// silently drop) is refused with a pointer to [`parse_robot_model_toml`]. `path` is used in messages.
 pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
+    let model = parse_robot_model_toml(path, text)?;
+    if !model.is_plain() {
+        let what = model.beyond_urdf().join("; ");
+        return Err(IoError::input(
+            path,
+            None,
+            "drift, scale, cyclic_deg, compliance_deg_per_nm",
+            format!(
+                "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
+            ),
+        ));
+    }
+    Ok(model.robot().clone())
+}
+
+/// Parses robot TOML text with every correction it carries; `path` is used in error messages.
+pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoError> {
     let file: RobotFile = toml::from_str(text).map_err(|e| {
         let line = e.span().map(|s| line_of(text, s.start));
         let message = e.message().to_string();
@@ -273,7 +345,118 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         }
     };
     let described = |e: thermokin_chain::ChainError| IoError::input(path, None, "joint", e.to_string());
-    Robot::new(name, chain).with_masses(masses).and_then(|r| r.with_ratings(ratings)).map_err(described)
+    let robot = Robot::new(name, chain).with_masses(masses).and_then(|r| r.with_ratings(ratings)).map_err(described)?;
+    corrections(path, text, &file, robot)
+}
+
+/// The corrections of a parsed file on its robot: per-joint scale, cyclic and compliance terms, drift rows,
+/// payload, gravity.
+fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Result<RobotModel, IoError> {
+    let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
+    let mut joints = vec![JointCorrection::NONE; robot.chain().dof()];
+    for (i, spanned) in file.joint.iter().enumerate() {
+        let (line, spec) = (at(spanned.span()), spanned.get_ref());
+        let field = |f: &str| format!("joint[{}].{f}", i + 1);
+        let c = &mut joints[i];
+        if let Some(v) = spec.scale {
+            finite(path, line, &field("scale"), &[v])?;
+            c.scale = v;
+        }
+        if let Some(v) = spec.cyclic_deg {
+            finite(path, line, &field("cyclic_deg"), &v)?;
+            c.cyclic_rad = v.map(units::radians);
+        }
+        if let Some(v) = spec.compliance_deg_per_nm {
+            finite(path, line, &field("compliance_deg_per_nm"), &[v])?;
+            c.compliance_rad_per_nm = units::radians(v);
+        }
+    }
+    let mut model = RobotModel::new(robot).with_joint_corrections(joints).map_err(|e| {
+        let joint = match &e {
+            thermokin_deform::DeformError::BadCorrection { joint, .. } => *joint,
+            _ => 1,
+        };
+        let line = file.joint.get(joint - 1).and_then(|s| at(s.span()));
+        IoError::input(path, line, format!("joint[{joint}]"), e.to_string())
+    })?;
+    let mut drift = Vec::with_capacity(file.drift.len());
+    for (i, spanned) in file.drift.iter().enumerate() {
+        let (line, spec) = (at(spanned.span()), spanned.get_ref());
+        drift.push(drift_row(path, line, i, spec, model.robot().chain().dof())?);
+    }
+    model = model.with_drift(drift).map_err(|e| IoError::input(path, None, "drift", e.to_string()))?;
+    if let Some(spanned) = &file.payload {
+        let (line, p) = (at(spanned.span()), spanned.get_ref());
+        finite(path, line, "payload.com_mm", &p.com_mm)?;
+        let payload = LinkMass { mass_kg: p.mass_kg, com_mm: Vector3::from(p.com_mm) };
+        model = model.with_payload(Some(payload)).map_err(|e| IoError::input(path, line, "payload", e.to_string()))?;
+    }
+    if let Some(spanned) = &file.gravity {
+        let (line, g) = (at(spanned.span()), Vector3::from(*spanned.get_ref()));
+        let norm = g.norm();
+        if !(norm.is_finite() && norm > 1e-9) {
+            return Err(IoError::input(path, line, "gravity", "gravity's direction must be a finite non-zero vector"));
+        }
+        model = model.with_gravity(Unit::new_normalize(g));
+    }
+    Ok(model)
+}
+
+/// One `[[drift]]` table.
+fn drift_row(path: &Path, line: Option<usize>, i: usize, spec: &DriftSpec, dof: usize) -> Result<DriftRow, IoError> {
+    let field = |f: &str| format!("drift[{}].{f}", i + 1);
+    let row = match &spec.row {
+        RowName::Joint(n) if (1..=dof as i64).contains(n) => Row::Joint(*n as usize - 1),
+        RowName::Name(n) if n.eq_ignore_ascii_case("base") => Row::Base,
+        RowName::Name(n) if n.eq_ignore_ascii_case("tool") => Row::Tool,
+        RowName::Joint(n) => {
+            return Err(IoError::input(path, line, field("row"), format!("joint {n} of a robot with {dof} joints")));
+        }
+        RowName::Name(n) => {
+            return Err(IoError::input(
+                path,
+                line,
+                field("row"),
+                format!("`{n}`: a joint number, \"base\" or \"tool\""),
+            ));
+        }
+    };
+    finite(path, line, &field("error"), &spec.error)?;
+    let law = match (&spec.profile, &spec.per_kelvin) {
+        (Some(TimeProfile::Temperature { .. }), None) => {
+            return Err(IoError::input(
+                path,
+                line,
+                field("profile"),
+                "a drift row follows named sensors with per_kelvin = { sensors, reference_c }, not a temperature log",
+            ));
+        }
+        (Some(p), None) => {
+            p.validate(dof).map_err(|e| IoError::input(path, line, field("profile"), e.to_string()))?;
+            DriftLaw::Time(p.clone())
+        }
+        (None, Some(k)) => {
+            if k.sensors.len() != k.reference_c.len() {
+                return Err(IoError::input(
+                    path,
+                    line,
+                    field("per_kelvin"),
+                    format!("{} sensors and {} reference temperatures", k.sensors.len(), k.reference_c.len()),
+                ));
+            }
+            finite(path, line, &field("per_kelvin.reference_c"), &k.reference_c)?;
+            DriftLaw::PerKelvin { sensors: k.sensors.iter().cloned().zip(k.reference_c.iter().copied()).collect() }
+        }
+        _ => {
+            return Err(IoError::input(
+                path,
+                line,
+                field("profile"),
+                "give exactly one law: profile = { kind = \"linear\" | \"exponential\" | … } or per_kelvin = { sensors, reference_c }",
+            ));
+        }
+    };
+    Ok(DriftRow { row, deviation: units::error_params_in(spec.error), law })
 }
 
 /// The key named in a serde message such as "unknown field `foo`, expected …".
@@ -359,15 +542,39 @@ pub struct RobotOptions {
     pub tip: Option<String>,
 }
 
-/// Reads a robot from TOML or, by extension, URDF (`.urdf`, `.xml`), converting metres to millimetres.
+/// Reads a robot from TOML or, by extension, URDF (`.urdf`, `.xml`), converting metres to millimetres. A
+/// TOML file carrying state-dependent corrections is refused (see [`read_robot_model_with`]).
 pub fn read_robot_with(path: &Path, options: &RobotOptions) -> Result<Robot, IoError> {
-    let is_urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xml"));
-    if !is_urdf {
-        if options.base.is_some() || options.tip.is_some() {
-            return Err(IoError::input(path, None, "--base/--tip", "only URDF robots take a base or tip link"));
-        }
-        return read_robot(path);
+    if is_urdf(path) {
+        read_urdf(path, options)
+    } else {
+        no_link_options(path, options).and_then(|()| read_robot(path))
     }
+}
+
+/// Reads a robot with every correction its file carries: TOML ([`read_robot_model`]) or URDF (geometry
+/// only: a model without corrections).
+pub fn read_robot_model_with(path: &Path, options: &RobotOptions) -> Result<RobotModel, IoError> {
+    if is_urdf(path) {
+        read_urdf(path, options).map(RobotModel::new)
+    } else {
+        no_link_options(path, options)?;
+        read_robot_model(path)
+    }
+}
+
+fn is_urdf(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf") || e.eq_ignore_ascii_case("xml"))
+}
+
+fn no_link_options(path: &Path, options: &RobotOptions) -> Result<(), IoError> {
+    if options.base.is_some() || options.tip.is_some() {
+        return Err(IoError::input(path, None, "--base/--tip", "only URDF robots take a base or tip link"));
+    }
+    Ok(())
+}
+
+fn read_urdf(path: &Path, options: &RobotOptions) -> Result<Robot, IoError> {
     let text = read_text(path)?;
     let name = path.display().to_string();
     let opts = thermokin_urdf::ImportOptions { base: options.base.clone(), tip: options.tip.clone() };
@@ -433,45 +640,120 @@ fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
 /// The robot as TOML in the extended convention (what `read_robot` reads back), millimetres and
 /// degrees, numbers rounded to 1e-12 (`FILE_DECIMALS`).
 pub fn robot_to_toml(robot: &Robot) -> String {
+    robot_model_to_toml(&RobotModel::new(robot.clone()))
+}
+
+/// The robot with every correction it carries as TOML (what [`read_robot_model`] reads back): per joint
+/// `scale`, `cyclic_deg`, `compliance_deg_per_nm` beside the geometry; `gravity`, `[payload]` and one
+/// `[[drift]]` table per drifting row with its law. Millimetres and degrees, numbers rounded to 1e-12.
+pub fn robot_model_to_toml(model: &RobotModel) -> String {
+    let robot = model.robot();
     let mut s = format!(
         "# Written by thermokin: the same-orientation extended table, mm and degrees.\nname = {:?}\nconvention = \"extended\"\n",
         robot.name()
     );
-    for (i, j) in robot.chain().joints().iter().enumerate() {
-        let to_file = |v: f64| units::joint_value_out(j.kind, v);
+    if model.gravity().into_inner() != -Vector3::z() {
         s.push_str(&format!(
-            "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
-            j.name,
-            axis_toml(&j.axis),
-            fmt3(&j.offset)
+            "# Gravity's direction in this file's world frame (the base row turns the robot in it).\ngravity = {}\n",
+            fmt3(&model.gravity())
         ));
-        if j.kind == JointKind::Prismatic {
-            s.push_str("type = \"prismatic\"\n");
-        }
-        if j.zero != 0.0 {
-            s.push_str(&format!("zero = {}\n", num(to_file(j.zero))));
-        }
-        if let Some(l) = j.limits {
-            s.push_str(&format!("limits = [{}, {}]\n", num(to_file(l.lower)), num(to_file(l.upper))));
-        }
-        if !j.error.is_zero() {
-            s.push_str(&format!("error = {}\n", fmt6(units::error_params_out(&j.error))));
-        }
-        if let Some(r) = robot.ratings().get(i) {
-            if let Some(v) = r.velocity {
-                s.push_str(&format!("max_velocity = {}\n", num(to_file(v))));
-            }
-            if let Some(e) = r.effort {
-                s.push_str(&format!("max_effort = {}\n", num(e)));
-            }
-        }
-        if let Some(Some(m)) = robot.masses().get(i) {
-            s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
-        }
+    }
+    for (i, j) in robot.chain().joints().iter().enumerate() {
+        joint_toml(&mut s, robot, i, j, &model.joint_corrections()[i]);
     }
     if robot.chain().base() != &FixedRow::identity() {
         row_toml(&mut s, "base", robot.chain().base());
     }
     row_toml(&mut s, "tool", robot.chain().tool());
+    if let Some(p) = model.payload() {
+        s.push_str(&format!(
+            "\n# The payload the robot carries unless told otherwise (the one it was calibrated with).\n[payload]\nmass_kg = {}\ncom_mm = {}\n",
+            num(p.mass_kg),
+            fmt3(&p.com_mm)
+        ));
+    }
+    for d in model.drift() {
+        let row = match d.row {
+            Row::Base => "\"base\"".to_string(),
+            Row::Joint(j) => (j + 1).to_string(),
+            Row::Tool => "\"tool\"".to_string(),
+        };
+        let law = match &d.law {
+            DriftLaw::Time(p) => format!("profile = {}", profile_toml(p)),
+            DriftLaw::PerKelvin { sensors } => {
+                let names: Vec<String> = sensors.iter().map(|(n, _)| format!("{n:?}")).collect();
+                let refs: Vec<String> = sensors.iter().map(|(_, t)| num(*t)).collect();
+                format!("per_kelvin = {{ sensors = [{}], reference_c = [{}] }}", names.join(", "), refs.join(", "))
+            }
+        };
+        s.push_str(&format!(
+            "\n[[drift]]\nrow = {row}\nerror = {}\n{law}\n",
+            fmt6(units::error_params_out(&d.deviation))
+        ));
+    }
     s
+}
+
+/// One `[[joint]]` table.
+fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorrection) {
+    let to_file = |v: f64| units::joint_value_out(j.kind, v);
+    s.push_str(&format!(
+        "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
+        j.name,
+        axis_toml(&j.axis),
+        fmt3(&j.offset)
+    ));
+    if j.kind == JointKind::Prismatic {
+        s.push_str("type = \"prismatic\"\n");
+    }
+    if j.zero != 0.0 {
+        s.push_str(&format!("zero = {}\n", num(to_file(j.zero))));
+    }
+    if let Some(l) = j.limits {
+        s.push_str(&format!("limits = [{}, {}]\n", num(to_file(l.lower)), num(to_file(l.upper))));
+    }
+    if !j.error.is_zero() {
+        s.push_str(&format!("error = {}\n", fmt6(units::error_params_out(&j.error))));
+    }
+    if c.scale != 0.0 {
+        s.push_str(&format!("scale = {:e}\n", c.scale));
+    }
+    if c.cyclic_rad != [0.0; 4] {
+        s.push_str(&format!("cyclic_deg = [{}]\n", c.cyclic_rad.map(|v| num(units::degrees(v))).join(", ")));
+    }
+    if c.compliance_rad_per_nm != 0.0 {
+        s.push_str(&format!("compliance_deg_per_nm = {:e}\n", units::degrees(c.compliance_rad_per_nm)));
+    }
+    if let Some(r) = robot.ratings().get(i) {
+        if let Some(v) = r.velocity {
+            s.push_str(&format!("max_velocity = {}\n", num(to_file(v))));
+        }
+        if let Some(e) = r.effort {
+            s.push_str(&format!("max_effort = {}\n", num(e)));
+        }
+    }
+    if let Some(Some(m)) = robot.masses().get(i) {
+        s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
+    }
+}
+
+/// A time profile as an inline table (`{ kind = "exponential", tau_min = 45.0 }`), the form the reader's
+/// `profile` key takes. Every number in full precision: a time constant is not rounded.
+fn profile_toml(p: &TimeProfile) -> String {
+    match p {
+        TimeProfile::Static => "{ kind = \"static\" }".into(),
+        TimeProfile::Linear { stabilization_min, after } => {
+            let after = match after {
+                thermokin_deform::AfterStabilization::Plateau => "plateau",
+                thermokin_deform::AfterStabilization::KeepGrowing => "keep_growing",
+            };
+            format!("{{ kind = \"linear\", stabilization_min = {stabilization_min:?}, after = \"{after}\" }}")
+        }
+        TimeProfile::Exponential { tau_min } => format!("{{ kind = \"exponential\", tau_min = {tau_min:?} }}"),
+        TimeProfile::Cubic { coefficients: [a, b, c] } => {
+            format!("{{ kind = \"cubic\", coefficients = [{a:?}, {b:?}, {c:?}] }}")
+        }
+        // Refused by the model (a drift row's law is per kelvin instead); written for completeness.
+        TimeProfile::Temperature { .. } => "{ kind = \"temperature\" }".into(),
+    }
 }

@@ -5,6 +5,10 @@
 //! - `QW,QX,QY,QZ`: a unit quaternion.
 //!
 //! Without orientation columns every target gets X-Y-Z Euler (0, 90, 0), the orientation of Table 12.
+//!
+//! Optional state columns say when each target is reached: `time_min` (operating time of a warm-up,
+//! minutes) and `temp_<name>` (a sensor's reading, °C, named as in measurement files: `temp_j2`). A robot
+//! with thermal drift is solved as it is at that moment ([`Target::state`]).
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -103,6 +107,10 @@ struct Layout {
     position: [usize; 3],
     orientation: Option<(Orientation, &'static [&'static str], Vec<usize>)>,
     label: Option<usize>,
+    /// `time_min`: the operating time at the target.
+    time: Option<usize>,
+    /// `temp_<name>` columns: sensor readings at the target, °C (named with the prefix, `temp_j2`).
+    temps: Vec<(usize, String)>,
 }
 
 impl Layout {
@@ -143,8 +151,18 @@ impl Layout {
             orientation = Some((convention, names, cols.into_iter().flatten().collect()));
         }
         let orientation_cols: &[usize] = orientation.as_ref().map_or(&[], |(_, _, c)| c.as_slice());
-        let label = (0..header.cells.len()).find(|i| !position.contains(i) && !orientation_cols.contains(i));
-        Ok(Self { columns: header.cells.len(), position, orientation, label })
+        let time = find("time_min");
+        let temps: Vec<(usize, String)> = header
+            .cells
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.len() > 5 && c[..5].eq_ignore_ascii_case("temp_"))
+            .map(|(i, c)| (i, format!("temp_{}", &c[5..])))
+            .collect();
+        let state_col = |i: &usize| time == Some(*i) || temps.iter().any(|(c, _)| c == i);
+        let label =
+            (0..header.cells.len()).find(|i| !position.contains(i) && !orientation_cols.contains(i) && !state_col(i));
+        Ok(Self { columns: header.cells.len(), position, orientation, label, time, temps })
     }
 
     /// Row `r`, the `index`-th target of the file (0-based, for the default label `P{index + 1}`).
@@ -175,6 +193,17 @@ impl Layout {
             .filter(|s| !s.is_empty())
             .unwrap_or_else(|| format!("P{}", index + 1));
         let pose = Isometry3::from_parts(Translation3::from(p), rotation);
-        Ok(Target { label, pose, line: Some(r.line) })
+        let mut state = thermokin_chain::OperatingState::default();
+        if let Some(c) = self.time {
+            let t = number(path, r.line, "time_min", &r.cells[c])?;
+            if t < 0.0 {
+                return Err(IoError::input(path, Some(r.line), "time_min", format!("{t} is negative")));
+            }
+            state.time_min = Some(t);
+        }
+        for (c, name) in &self.temps {
+            state.temperatures_c.push((name.clone(), number(path, r.line, name, &r.cells[*c])?));
+        }
+        Ok(Target { label, pose, line: Some(r.line), state })
     }
 }

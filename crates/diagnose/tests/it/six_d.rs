@@ -52,9 +52,7 @@ fn a_tool_rotation_and_a_gear_ratio_at_once_from_6d_poses() {
     );
     // The identified tool (the tool_frame block of the model the report scores, fitted jointly with the
     // gear ratio) against the probe as mounted, compared as poses (no convention shared): at
-    // configurations with joint 2 at zero, where the gear-ratio error is nil. (`report.calibrated` is the
-    // robot file's model — the gear ratio cannot be written yet, so it is the tool refitted without it,
-    // scored on its own in `report.export`.)
+    // configurations with joint 2 at zero, where the gear-ratio error is nil.
     let tool = report.effects.iter().find(|e| e.label == "tool_frame").unwrap();
     let p = |n: &str| tool.parameters[&format!("tool_frame.{n}")].value;
     let tool_error =
@@ -63,8 +61,8 @@ fn a_tool_rotation_and_a_gear_ratio_at_once_from_6d_poses() {
     let zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
     let errors: Vec<_> = chain.joints().iter().map(|j| j.error).collect();
     let identified_chain = chain.with_errors_and_zeros(chain.base().error, &errors, tool_error, &zeros).unwrap();
-    let export = report.export.as_ref().expect("the gear ratio is not in a robot file: the export model is named");
-    assert_eq!(export.left_out, vec!["joint_scale[2]".to_string()]);
+    // The identified robot carries the gear ratio it scored (joint 2's scale, as hidden).
+    assert!(report.identified.joint_corrections()[1].scale != 0.0);
     for k in 0..20 {
         let t = k as f64 * 0.3;
         let q = [t.sin(), 0.0, 0.3 * t.cos(), -t, 0.5 + 0.2 * t.sin(), t];

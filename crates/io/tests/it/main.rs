@@ -2,6 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail; case tables are tuples.
 
 mod bad_input;
+mod calibrated_robot;
 mod fuzz_replay;
 mod irb140;
 mod orientation;

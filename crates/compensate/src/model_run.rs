@@ -1,0 +1,174 @@
+//! Compensation on a calibrated robot ([`RobotModel`]): every target solved on the robot as it is in the
+//! target's own operating state — its time of the warm-up, its sensor readings, its payload — and the
+//! joint-space corrections inverted, so that the joints written are the values to command.
+//!
+//! Per target: the chain in force at the state ([`RobotModel::chain_at`]), IK on it for the joint values
+//! the chain must take, [`RobotModel::commanded_for`] for the values to command; then the reached pose is
+//! measured again through the whole model ([`RobotModel::tool_pose`] of the commanded values), and a
+//! target is `Converged` only if that independent measurement is within the IK's tolerances.
+
+use thermokin_chain::{OperatingState, Target};
+use thermokin_deform::RobotModel;
+use thermokin_ik::{Goal, Seeds, Solution, Status, solve_batch};
+
+use crate::CompensateError;
+use crate::run::{Cycle, RunOutput, RunSettings, TargetResult, orientation_error};
+
+/// Slack of the independent re-measurement over the IK's tolerances, mm (and, divided by the IK's length
+/// scale, radians): the inversion leaves at most 1e-12 rad (1e-14 sought), 1e-10 mm at a 100 mm lever —
+/// the IK's own check cannot see it, this one must not fail on it.
+const REMEASURE_SLACK_MM: f64 = 1e-9;
+
+/// `state` completed by `defaults` where it says nothing (a targets file's columns override the command
+/// line's `--time`, `--temperature`, `--payload`).
+pub fn state_or(state: &OperatingState, defaults: &OperatingState) -> OperatingState {
+    let mut out = state.clone();
+    if out.time_min.is_none() {
+        out.time_min = defaults.time_min;
+    }
+    for (name, t) in &defaults.temperatures_c {
+        if out.temperature(name).is_none() {
+            out.temperatures_c.push((name.clone(), *t));
+        }
+    }
+    if out.payload.is_none() {
+        out.payload = defaults.payload;
+    }
+    out
+}
+
+/// A program on a robot model: each target solved on the robot in the target's state (its own, completed
+/// by `defaults`). The uncompensated program is the IK of the model's cold chain (no drift, no joint
+/// corrections: the file's geometry alone), chained from `settings.start`, run on the same states.
+///
+/// A state the model cannot evaluate (a drifting robot without a time, a sensor not read) is an error
+/// naming the target. Semantics and accumulation settings do not apply (a model's drift is canonical and
+/// depends on the state alone).
+pub fn compensate_model(
+    model: &RobotModel,
+    program: &[Target],
+    defaults: &OperatingState,
+    settings: &RunSettings,
+) -> Result<RunOutput, CompensateError> {
+    let states: Vec<OperatingState> = program.iter().map(|t| state_or(&t.state, defaults)).collect();
+    let nominal = cold_program(model, program, settings)?;
+    let seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
+    let rows = solve_in_states(model, program, &states, &seeds, &nominal, settings)?;
+    Ok(RunOutput::new(model.robot().chain(), rows))
+}
+
+/// A warm-up on a robot model: at each time of `cycle`, every target solved on the robot at that time
+/// (its other state from the target and `defaults`), seeded from its previous solution.
+pub fn compensate_model_cycle(
+    model: &RobotModel,
+    cycle: Cycle,
+    program: &[Target],
+    defaults: &OperatingState,
+    settings: &RunSettings,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<RunOutput, CompensateError> {
+    let times = cycle.times()?;
+    let nominal = cold_program(model, program, settings)?;
+    let mut seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
+    let mut rows = Vec::with_capacity(times.len() * program.len());
+    for (k, &t) in times.iter().enumerate() {
+        let states: Vec<OperatingState> = program
+            .iter()
+            .map(|target| OperatingState { time_min: Some(t), ..state_or(&target.state, defaults) })
+            .collect();
+        let step = solve_in_states(model, program, &states, &seeds, &nominal, settings)?;
+        for (seed, r) in seeds.iter_mut().zip(&step) {
+            if r.converged() {
+                // The IK's seed is in the chain's joint values; the row holds commanded ones, which differ
+                // by the small corrections only — a seed, not an answer.
+                seed.clone_from(&r.chain_joints);
+            }
+        }
+        rows.extend(step);
+        progress(k + 1, times.len());
+    }
+    Ok(RunOutput::new(model.robot().chain(), rows))
+}
+
+/// The program solved on the model's cold chain, chained target to target.
+fn cold_program(
+    model: &RobotModel,
+    program: &[Target],
+    settings: &RunSettings,
+) -> Result<Vec<Solution>, CompensateError> {
+    let goals: Vec<Goal> = program.iter().map(|t| Goal::Pose(t.pose)).collect();
+    Ok(solve_batch(model.robot().chain(), &goals, Seeds::ChainPrevious(&settings.start), &settings.ik)?)
+}
+
+/// Every target in its state: runs of consecutive targets in one state share one chain and one
+/// (parallel) batch solve.
+fn solve_in_states(
+    model: &RobotModel,
+    program: &[Target],
+    states: &[OperatingState],
+    seeds: &[Vec<f64>],
+    nominal: &[Solution],
+    settings: &RunSettings,
+) -> Result<Vec<TargetResult>, CompensateError> {
+    let mut rows = Vec::with_capacity(program.len());
+    let mut start = 0;
+    while start < program.len() {
+        let state = &states[start];
+        let end = start + states[start..].iter().take_while(|s| *s == state).count();
+        let in_state = |e: thermokin_deform::DeformError| {
+            let t = &program[start];
+            CompensateError::TargetState { label: t.label.clone(), line: t.line, message: e.to_string() }
+        };
+        let chain = model.chain_at(state).map_err(in_state)?;
+        let goals: Vec<Goal> = program[start..end].iter().map(|t| Goal::Pose(t.pose)).collect();
+        let solutions = solve_batch(&chain, &goals, Seeds::PerTarget(&seeds[start..end]), &settings.ik)?;
+        for (k, s) in solutions.iter().enumerate() {
+            let i = start + k;
+            rows.push(record(model, &program[i], &states[i], s, &nominal[i].q, settings).map_err(in_state)?);
+        }
+        start = end;
+    }
+    Ok(rows)
+}
+
+/// One target's record: the commanded joints, and the pose the whole model reaches with them, measured
+/// independently of the IK. A solve that converged on the chain but whose commanded joints cannot be
+/// inverted, or whose re-measured pose misses the tolerances, is `Unverified`.
+fn record(
+    model: &RobotModel,
+    target: &Target,
+    state: &OperatingState,
+    solution: &Solution,
+    nominal_q: &[f64],
+    settings: &RunSettings,
+) -> Result<TargetResult, thermokin_deform::DeformError> {
+    let (joints, mut status) = match model.commanded_for(&solution.q, state) {
+        Ok(q) => (q, solution.status),
+        Err(_) => (solution.q.clone(), Status::Unverified),
+    };
+    let reached = model.tool_pose(&joints, state)?;
+    let uncompensated = model.tool_pose(nominal_q, state)?;
+    let dp = target.pose.translation.vector - reached.translation.vector;
+    let dr = orientation_error(&target.pose, &reached);
+    let tol = &settings.ik;
+    let slack_rad = REMEASURE_SLACK_MM / tol.length_scale_mm;
+    if status == Status::Converged
+        && (dp.norm() > tol.position_tolerance_mm + REMEASURE_SLACK_MM
+            || dr.norm() > tol.orientation_tolerance_rad + slack_rad)
+    {
+        status = Status::Unverified;
+    }
+    Ok(TargetResult {
+        time_min: state.time_min.unwrap_or(0.0),
+        label: target.label.clone(),
+        programmed: target.pose,
+        reached,
+        joints,
+        chain_joints: solution.q.clone(),
+        position_deviation_mm: [dp.x, dp.y, dp.z],
+        orientation_deviation_rad: [dr.x, dr.y, dr.z],
+        uncompensated_error_mm: (target.pose.translation.vector - uncompensated.translation.vector).norm(),
+        status,
+        iterations: solution.iterations,
+    })
+}

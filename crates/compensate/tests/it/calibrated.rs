@@ -1,0 +1,165 @@
+//! Compensation on a calibrated robot (`compensate_model`): the authors' table with one profile as drift
+//! rows gives today's runs exactly; a robot with joint corrections, compliance and per-row drift laws is
+//! put on its targets, checked by a forward model written here by hand.
+
+use nalgebra::{Point3, Vector3};
+use thermokin_chain::{Chain, ErrorParams, LinkMass, OperatingState, Robot, Target};
+use thermokin_compensate::{
+    Cycle, RunSettings, compensate_model, compensate_model_cycle, compensate_static, compensate_transient,
+};
+use thermokin_deform::{
+    AfterStabilization, DeviationTable, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TableSemantics,
+    TimeProfile,
+};
+use thermokin_ik::{Params, Status};
+use thermokin_io::{read_deviation_table, read_robot, read_targets};
+use thermokin_testdata::{error_mm_deg, workspace};
+
+fn robot() -> Robot {
+    read_robot(&workspace("configs/irb140.toml")).unwrap()
+}
+
+fn program() -> Vec<Target> {
+    read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap()
+}
+
+fn table() -> DeviationTable {
+    read_deviation_table(&workspace("fixtures/paper/deformations-case-study.toml")).unwrap()
+}
+
+fn settings() -> RunSettings {
+    RunSettings {
+        semantics: TableSemantics::Canonical,
+        accumulation: Default::default(),
+        ik: Params::default(),
+        start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec(),
+    }
+}
+
+/// Largest joint difference between two runs' rows, radians.
+fn gap(a: &thermokin_compensate::RunOutput, b: &thermokin_compensate::RunOutput) -> f64 {
+    assert_eq!(a.rows.len(), b.rows.len());
+    a.rows
+        .iter()
+        .zip(&b.rows)
+        .flat_map(|(x, y)| {
+            assert_eq!((x.label.as_str(), x.time_min, x.status), (y.label.as_str(), y.time_min, y.status));
+            x.joints.iter().zip(&y.joints).map(|(p, q)| (p - q).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn the_case_study_table_as_drift_rows_gives_todays_runs() {
+    let r = robot();
+    // Static: the full table, every target.
+    let model = RobotModel::new(r.clone()).with_table(&table(), &TimeProfile::Static).unwrap();
+    let today = compensate_static(r.chain(), &table(), &program(), &settings()).unwrap();
+    let as_rows = compensate_model(&model, &program(), &OperatingState::default(), &settings()).unwrap();
+    let g = gap(&today, &as_rows);
+    assert!(g <= 1e-9, "{g:e} rad");
+    assert!((today.summary.max_uncompensated_error_mm - as_rows.summary.max_uncompensated_error_mm).abs() <= 1e-9);
+    // Transient: the authors' growth (linear, no plateau), 200 minutes every minute, under the canonical
+    // reading (the CoppeliaSim reading is a property of their scene, not of a robot file).
+    let profile = TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::KeepGrowing };
+    let model = RobotModel::new(r.clone()).with_table(&table(), &profile).unwrap();
+    let cycle = Cycle { duration_min: 200.0, step_min: 10.0 };
+    let today = compensate_transient(r.chain(), &table(), &profile, cycle, &program(), &settings(), |_, _| {}).unwrap();
+    let as_rows =
+        compensate_model_cycle(&model, cycle, &program(), &OperatingState::default(), &settings(), |_, _| {}).unwrap();
+    let g = gap(&today, &as_rows);
+    assert!(g <= 1e-9, "{g:e} rad");
+}
+
+/// Gravity torques about every joint, N·m, from the link masses (gravity along the base's −Z), computed
+/// here from the chain's joint frames.
+fn torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) -> Vec<f64> {
+    let frames = chain.joint_frames(q).unwrap();
+    (0..6)
+        .map(|j| {
+            let axis = frames[j].rotation * chain.joints()[j].axis.into_inner();
+            let origin = frames[j].translation.vector;
+            let moment: Vector3<f64> = (j..6)
+                .filter_map(|l| masses[l].map(|m| (m.mass_kg, (frames[l] * Point3::from(m.com_mm)).coords)))
+                .map(|(m, c)| (c - origin).cross(&Vector3::new(0.0, 0.0, -9.80665 * m)))
+                .sum();
+            axis.dot(&moment) / 1000.0
+        })
+        .collect()
+}
+
+#[test]
+fn commanded_joints_put_a_calibrated_robot_on_its_targets_in_their_states() {
+    let r = robot();
+    let mut joints = vec![JointCorrection::NONE; 6];
+    joints[0].scale = 4e-4;
+    joints[2].cyclic_rad = [0.03f64.to_radians(), -0.01f64.to_radians(), 0.0, 0.008f64.to_radians()];
+    joints[1].compliance_rad_per_nm = 0.002f64.to_radians();
+    let row2 = error_mm_deg([0.2, -0.1, 0.3, 0.01, 0.02, 0.005]);
+    let row3 = error_mm_deg([0.05, 0.02, -0.04, 0.004, 0.0, 0.003]);
+    let drift = vec![
+        DriftRow {
+            row: Row::Joint(1),
+            deviation: row2,
+            law: DriftLaw::Time(TimeProfile::Exponential { tau_min: 40.0 }),
+        },
+        DriftRow {
+            row: Row::Joint(2),
+            deviation: row3,
+            law: DriftLaw::PerKelvin { sensors: vec![("temp_j3".into(), 21.5)] },
+        },
+    ];
+    let model = RobotModel::new(r.clone()).with_joint_corrections(joints).unwrap().with_drift(drift).unwrap();
+    // Each target at its own time and joint-3 temperature.
+    let program: Vec<Target> = program()
+        .into_iter()
+        .enumerate()
+        .map(|(k, t)| {
+            let state = OperatingState {
+                time_min: Some(4.0 * k as f64),
+                temperatures_c: vec![("temp_j3".into(), 21.5 + 0.1 * k as f64)],
+                payload: None,
+            };
+            t.in_state(state)
+        })
+        .collect();
+    let run = compensate_model(&model, &program, &OperatingState::default(), &settings()).unwrap();
+    assert_eq!(run.summary.failures, 0, "{:?}", run.summary.failed);
+    for (row, target) in run.rows.iter().zip(&program) {
+        assert_eq!(row.status, Status::Converged);
+        // By hand: the rows in force, the joint values the robot takes for the commanded ones.
+        let t = target.state.time_min.unwrap();
+        let rise = target.state.temperatures_c[0].1 - 21.5;
+        let mut rows = vec![ErrorParams::ZERO; 6];
+        rows[1] = row2.scaled(1.0 - (-t / 40.0).exp());
+        rows[2] = row3.scaled(rise);
+        let warm = r.chain().with_errors(ErrorParams::ZERO, &rows, ErrorParams::ZERO).unwrap();
+        let c = &row.joints;
+        let tau = torques(r.chain(), r.masses(), c);
+        let mut q = c.clone();
+        q[0] += 4e-4 * c[0];
+        q[2] += 0.03f64.to_radians() * c[2].sin() - 0.01f64.to_radians() * c[2].cos()
+            + 0.008f64.to_radians() * (2.0 * c[2]).cos();
+        q[1] += 0.002f64.to_radians() * tau[1];
+        let reached = warm.tool_pose(&q).unwrap();
+        let dp = (reached.translation.vector - target.pose.translation.vector).norm();
+        let dr = reached.rotation.angle_to(&target.pose.rotation).to_degrees();
+        // The IK's tolerance is 1e-9 mm; the hand model repeats the library's arithmetic in another order.
+        assert!(dp <= 1e-6 && dr <= 1e-6, "{}: {dp:e} mm, {dr:e}°", row.label);
+    }
+    // The corrections matter: commanding the cold robot's IK would miss by a tenth of a millimetre or more.
+    assert!(run.summary.max_uncompensated_error_mm > 0.1, "{}", run.summary.max_uncompensated_error_mm);
+}
+
+#[test]
+fn a_target_in_a_state_the_robot_cannot_evaluate_is_named() {
+    let r = robot();
+    let drift = vec![DriftRow {
+        row: Row::Joint(1),
+        deviation: error_mm_deg([0.2, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        law: DriftLaw::Time(TimeProfile::Exponential { tau_min: 40.0 }),
+    }];
+    let model = RobotModel::new(r).with_drift(drift).unwrap();
+    let e = compensate_model(&model, &program(), &OperatingState::default(), &settings()).unwrap_err().to_string();
+    assert!(e.contains("target P1") && e.contains("operating time") && e.contains("joint 2"), "{e}");
+}

@@ -1,0 +1,471 @@
+//! The robot as a calibration identifies it: its chain (geometry, zero offsets, link errors) and the
+//! corrections that depend on the joint values or on the operating state — gear-ratio and cyclic errors of
+//! the joint variables, gravity compliance, thermal drift of rows each with its own law. What a robot file
+//! carries ([`RobotModel`]) and every command evaluates at an [`OperatingState`].
+//!
+//! The forward model, in the order it is evaluated:
+//!
+//! 1. the joint values the chain sees: `q_j = c_j + Δq_j(c)` for the commanded values `c`, with
+//!    `Δq_j = s_j c_j + a₁ sin c_j + b₁ cos c_j + a₂ sin 2c_j + b₂ cos 2c_j + k_j τ_j(c)` — a gear-ratio
+//!    error `s`, the encoder's once- and twice-per-revolution error, and the compliance `k` (rad/(N·m))
+//!    under the gravity torque `τ_j` of the link masses and the payload at the commanded configuration;
+//! 2. the chain in force: the chain's own error parameters plus, for each drift row, its deviation times
+//!    its law's factor at the state — a [`TimeProfile`]'s `f(t)` (the paper's table grown with operating
+//!    time, section 4) or the mean temperature rise of named sensors over their reference (per kelvin);
+//! 3. eq. 22 of that chain at `q`.
+//!
+//! The authors' case studies — one deviation table, one profile for every row — are the special case
+//! [`RobotModel::with_table`]: the chain in force is `profile.table_at(table, t)` applied canonically.
+//!
+//! Inverse kinematics solves step 3 for `q` on the chain in force, and [`RobotModel::commanded_for`]
+//! inverts step 1 (a fixed point: the corrections' derivative is far below 1), so that a program carries
+//! the values to command.
+
+use nalgebra::{Isometry3, Unit, Vector3};
+use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, OperatingState, Robot};
+
+use crate::{DeformError, DeviationTable, Row, TableSemantics, TimeProfile};
+
+/// Joint-variable corrections of one joint, beyond the zero offset the chain holds: `Δq = s·q + a₁ sin q
+/// + b₁ cos q + a₂ sin 2q + b₂ cos 2q + k·τ` (radians; mm for a prismatic joint's scale).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct JointCorrection {
+    /// Gear-ratio (scale) error `s`, dimensionless.
+    pub scale: f64,
+    /// Cyclic encoder error `[a₁, b₁, a₂, b₂]`, radians (revolute joints only).
+    pub cyclic_rad: [f64; 4],
+    /// Gravity compliance `k`, radians per N·m (revolute joints only).
+    pub compliance_rad_per_nm: f64,
+}
+
+impl JointCorrection {
+    /// No correction.
+    pub const NONE: JointCorrection = JointCorrection { scale: 0.0, cyclic_rad: [0.0; 4], compliance_rad_per_nm: 0.0 };
+
+    /// `true` when every coefficient is zero.
+    pub fn is_none(&self) -> bool {
+        *self == Self::NONE
+    }
+
+    /// `Δq` at commanded value `q` under gravity torque `torque_nm`.
+    pub fn delta(&self, q: f64, torque_nm: f64) -> f64 {
+        let [a1, b1, a2, b2] = self.cyclic_rad;
+        let cyclic = if self.cyclic_rad == [0.0; 4] {
+            0.0
+        } else {
+            a1 * q.sin() + b1 * q.cos() + a2 * (2.0 * q).sin() + b2 * (2.0 * q).cos()
+        };
+        self.scale * q + cyclic + self.compliance_rad_per_nm * torque_nm
+    }
+}
+
+/// How much of a drift row's deviation is in force in a given state.
+#[derive(Clone, Debug, PartialEq)]
+pub enum DriftLaw {
+    /// The row is a deviation-table row grown by this profile's factor `f(t)` at operating time `t`
+    /// (linear with or without plateau, exponential, cubic — [`TimeProfile::time_factor`]).
+    Time(TimeProfile),
+    /// The row is a deviation per kelvin of the mean rise of these sensors over their reference readings:
+    /// `(name, reference °C)`. One sensor: the joint's own; several: their mean (how the diagnosis reads
+    /// a joint without a sensor of its own).
+    PerKelvin {
+        /// `(sensor name, reference temperature °C)`.
+        sensors: Vec<(String, f64)>,
+    },
+}
+
+impl DriftLaw {
+    /// A short description for messages: `exponential (τ = 45 min)`, `per kelvin of temp_j2`.
+    pub fn describe(&self) -> String {
+        match self {
+            DriftLaw::Time(TimeProfile::Static) => "static".into(),
+            DriftLaw::Time(TimeProfile::Linear { stabilization_min, after }) => {
+                format!("linear over {stabilization_min} min ({after:?})").to_lowercase()
+            }
+            DriftLaw::Time(TimeProfile::Exponential { tau_min }) => format!("exponential (τ = {tau_min} min)"),
+            DriftLaw::Time(TimeProfile::Cubic { .. }) => "cubic in time".into(),
+            DriftLaw::Time(TimeProfile::Temperature { .. }) => "a temperature log".into(),
+            DriftLaw::PerKelvin { sensors } => {
+                let names: Vec<&str> = sensors.iter().map(|(n, _)| n.as_str()).collect();
+                format!("per kelvin of {}", names.join(" + "))
+            }
+        }
+    }
+
+    /// The factor in force at `state`; an error naming what the state lacks.
+    pub fn factor(&self, state: &OperatingState, row: Row) -> Result<f64, DeformError> {
+        match self {
+            // A static row is in force at every time: no time needed.
+            DriftLaw::Time(TimeProfile::Static) => Ok(1.0),
+            DriftLaw::Time(profile) => {
+                let t = state.time_min.ok_or_else(|| DeformError::MissingState {
+                    needed: "an operating time (minutes)".into(),
+                    why: format!("{} drifts with operating time, {}", row_name(row), self.describe()),
+                })?;
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(DeformError::BadTime { time_min: t, reason: "time must be finite and ≥ 0".into() });
+                }
+                profile.time_factor(t).ok_or_else(|| DeformError::BadProfile {
+                    field: "law",
+                    message: "a drift row's time law cannot be a temperature log; use a per-kelvin law".into(),
+                })
+            }
+            DriftLaw::PerKelvin { sensors } => {
+                let mut rise = 0.0;
+                for (name, reference) in sensors {
+                    let now = state.temperature(name).ok_or_else(|| DeformError::MissingState {
+                        needed: format!("the reading of sensor `{name}` (°C)"),
+                        why: format!("{} drifts {}", row_name(row), self.describe()),
+                    })?;
+                    if !now.is_finite() {
+                        return Err(DeformError::MissingState {
+                            needed: format!("a finite reading of sensor `{name}`"),
+                            why: format!("got {now}"),
+                        });
+                    }
+                    rise += now - reference;
+                }
+                Ok(rise / sensors.len() as f64)
+            }
+        }
+    }
+}
+
+/// A row of the table that drifts: its deviation (at factor 1, or per kelvin) and its law.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DriftRow {
+    /// Base, joint (0-based) or tool row.
+    pub row: Row,
+    /// The six error parameters at factor 1 (mm, radians).
+    pub deviation: ErrorParams,
+    /// How much of it is in force.
+    pub law: DriftLaw,
+}
+
+/// `joint 2's row`, `the base row`.
+fn row_name(row: Row) -> String {
+    match row {
+        Row::Base => "the base row".into(),
+        Row::Joint(j) => format!("joint {}'s row", j + 1),
+        Row::Tool => "the tool row".into(),
+    }
+}
+
+/// The largest `|Δq(c) − Δq(c′)| / |c − c′|` for which [`RobotModel::commanded_for`]'s fixed point is
+/// trusted; beyond it (a correction of the order of the joint motion itself) the model is refused.
+const MAX_CORRECTION_SLOPE: f64 = 0.1;
+/// Iterations of the fixed point: each gains a factor of at least 1/[`MAX_CORRECTION_SLOPE`]; in practice
+/// (slopes ~1e-3) three or four reach machine precision.
+const MAX_FIXED_POINT_ITERATIONS: usize = 60;
+/// Agreement sought for the inverted joint values, radians (mm): 1e-14 rad moves a point 10 m away by
+/// 1e-10 mm, a tenth of the IK's 1e-9 mm tolerance, so inverting adds nothing measurable to a compensated
+/// pose; a few ulps of a joint value of 2π (~9e-16 each).
+const INVERSION_TARGET: f64 = 1e-14;
+/// Agreement accepted when rounding stops the fixed point short of [`INVERSION_TARGET`].
+const INVERSION_TOLERANCE: f64 = 1e-12;
+
+/// A robot with every correction a calibration identified: see the module documentation for the law.
+/// Built from a [`Robot`] (a model with no corrections is the robot itself), checked on construction.
+///
+/// ```
+/// use thermokin_chain::{OperatingState, Robot};
+/// use thermokin_deform::{JointCorrection, RobotModel};
+///
+/// let robot = Robot::new("IRB 140", thermokin_testdata::irb140_table9());
+/// // Joint 1's gear ratio 0.1 % long.
+/// let mut corrections = vec![JointCorrection::NONE; 6];
+/// corrections[0].scale = 1e-3;
+/// let model = RobotModel::new(robot).with_joint_corrections(corrections)?;
+/// let commanded = [0.5, 0.1, 0.2, 0.0, 0.3, 0.0];
+/// let state = OperatingState::default();
+/// let seen = model.joint_values(&commanded, &state)?;
+/// assert!((seen[0] - 0.5 * 1.001).abs() < 1e-15);
+/// // The values to command for the joint values the chain must take:
+/// let back = model.commanded_for(&seen, &state)?;
+/// assert!((back[0] - 0.5).abs() < 1e-12);
+/// # Ok::<(), thermokin_deform::DeformError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobotModel {
+    robot: Robot,
+    joints: Vec<JointCorrection>,
+    drift: Vec<DriftRow>,
+    payload: Option<LinkMass>,
+    down: Unit<Vector3<f64>>,
+}
+
+impl RobotModel {
+    /// The robot with no corrections, no payload, gravity along its world −Z.
+    pub fn new(robot: Robot) -> Self {
+        let n = robot.chain().dof();
+        Self {
+            robot,
+            joints: vec![JointCorrection::NONE; n],
+            drift: Vec::new(),
+            payload: None,
+            down: -Vector3::z_axis(),
+        }
+    }
+
+    /// The same model with these joint corrections (one per joint; finite; cyclic terms and compliance on
+    /// revolute joints only).
+    pub fn with_joint_corrections(mut self, joints: Vec<JointCorrection>) -> Result<Self, DeformError> {
+        let chain = self.robot.chain();
+        if joints.len() != chain.dof() {
+            return Err(DeformError::RowCount { rows: joints.len(), joints: chain.dof() });
+        }
+        for (j, (c, joint)) in joints.iter().zip(chain.joints()).enumerate() {
+            let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
+            let all = [c.scale, c.compliance_rad_per_nm].into_iter().chain(c.cyclic_rad);
+            if all.clone().any(|v| !v.is_finite()) {
+                return bad("every coefficient must be finite".into());
+            }
+            if joint.kind == JointKind::Prismatic && (c.cyclic_rad != [0.0; 4] || c.compliance_rad_per_nm != 0.0) {
+                return bad("cyclic terms and gravity compliance are for revolute joints".into());
+            }
+            if c.scale.abs() + c.cyclic_rad.iter().map(|a| a.abs() * 2.0).sum::<f64>() > MAX_CORRECTION_SLOPE {
+                return bad(format!(
+                    "the scale and cyclic terms change the joint value by more than {} % of its motion: not a correction",
+                    MAX_CORRECTION_SLOPE * 100.0
+                ));
+            }
+        }
+        self.joints = joints;
+        Ok(self)
+    }
+
+    /// The same model with these drift rows (any number per row; their deviations add).
+    pub fn with_drift(mut self, drift: Vec<DriftRow>) -> Result<Self, DeformError> {
+        let dof = self.robot.chain().dof();
+        for d in &drift {
+            if let Row::Joint(j) = d.row
+                && j >= dof
+            {
+                return Err(DeformError::RowCount { rows: j + 1, joints: dof });
+            }
+            if !d.deviation.is_finite() {
+                return Err(DeformError::BadProfile {
+                    field: "deviation",
+                    message: format!("{}: every deviation must be finite", row_name(d.row)),
+                });
+            }
+            match &d.law {
+                DriftLaw::Time(TimeProfile::Temperature { .. }) => {
+                    return Err(DeformError::BadProfile {
+                        field: "law",
+                        message: format!(
+                            "{}: a per-row law is a time profile or per kelvin of named sensors",
+                            row_name(d.row)
+                        ),
+                    });
+                }
+                DriftLaw::Time(p) => p.validate(dof)?,
+                DriftLaw::PerKelvin { sensors } => {
+                    if sensors.is_empty() || sensors.iter().any(|(n, t)| n.is_empty() || !t.is_finite()) {
+                        return Err(DeformError::BadProfile {
+                            field: "sensors",
+                            message: format!(
+                                "{}: a per-kelvin law names at least one sensor, each with a finite reference temperature",
+                                row_name(d.row)
+                            ),
+                        });
+                    }
+                }
+            }
+        }
+        self.drift = drift;
+        Ok(self)
+    }
+
+    /// The authors' case: every row of `table` drifting with the one `profile` (a time profile). The chain
+    /// in force at time `t` is the table at `t` applied canonically to the robot's chain.
+    pub fn with_table(self, table: &DeviationTable, profile: &TimeProfile) -> Result<Self, DeformError> {
+        if table.dof() != self.robot.chain().dof() {
+            return Err(DeformError::RowCount { rows: table.dof(), joints: self.robot.chain().dof() });
+        }
+        let rows = std::iter::once((Row::Base, table.base))
+            .chain(table.joints.iter().enumerate().map(|(j, e)| (Row::Joint(j), *e)))
+            .chain(std::iter::once((Row::Tool, table.tool)))
+            .filter(|(_, e)| !e.is_zero())
+            .map(|(row, deviation)| DriftRow { row, deviation, law: DriftLaw::Time(profile.clone()) });
+        let mut drift = self.drift.clone();
+        drift.extend(rows);
+        self.with_drift(drift)
+    }
+
+    /// The same model carrying `payload` by default (the one it was calibrated with); a state's payload
+    /// replaces it.
+    pub fn with_payload(mut self, payload: Option<LinkMass>) -> Result<Self, DeformError> {
+        if let Some(p) = payload {
+            // The robot checks mass and centre.
+            self.robot.clone().with_payload(p)?;
+        }
+        self.payload = payload;
+        Ok(self)
+    }
+
+    /// The same model with gravity along `down` in the chain's world frame (−Z for a level floor mount;
+    /// a tracker-registered base row turns it).
+    pub fn with_gravity(mut self, down: Unit<Vector3<f64>>) -> Self {
+        self.down = down;
+        self
+    }
+
+    /// The same corrections on another robot of as many joints (a renamed robot, another tool or base
+    /// row, a chain deformed by a further table).
+    pub fn with_robot(mut self, robot: Robot) -> Result<Self, DeformError> {
+        let expected = self.robot.chain().dof();
+        if robot.chain().dof() != expected {
+            return Err(DeformError::RowCount { rows: robot.chain().dof(), joints: expected });
+        }
+        self.robot = robot;
+        Ok(self)
+    }
+
+    /// The robot (its chain: geometry, zero offsets, link errors — the model cold, unloaded).
+    pub fn robot(&self) -> &Robot {
+        &self.robot
+    }
+
+    /// The joint corrections, one per joint.
+    pub fn joint_corrections(&self) -> &[JointCorrection] {
+        &self.joints
+    }
+
+    /// The drift rows.
+    pub fn drift(&self) -> &[DriftRow] {
+        &self.drift
+    }
+
+    /// The payload carried by default.
+    pub fn payload(&self) -> Option<LinkMass> {
+        self.payload
+    }
+
+    /// Gravity's direction in the chain's world frame.
+    pub fn gravity(&self) -> Unit<Vector3<f64>> {
+        self.down
+    }
+
+    /// `true` when the model is its robot's chain alone: no joint correction and no drift.
+    pub fn is_plain(&self) -> bool {
+        self.drift.is_empty() && self.joints.iter().all(JointCorrection::is_none)
+    }
+
+    /// Whether any row drifts with operating time; the sensors some row's drift reads.
+    pub fn needs(&self) -> (bool, Vec<String>) {
+        let time = self.drift.iter().any(|d| matches!(&d.law, DriftLaw::Time(p) if *p != TimeProfile::Static));
+        let mut sensors: Vec<String> = Vec::new();
+        for d in &self.drift {
+            if let DriftLaw::PerKelvin { sensors: s } = &d.law {
+                for (n, _) in s {
+                    if !sensors.contains(n) {
+                        sensors.push(n.clone());
+                    }
+                }
+            }
+        }
+        (time, sensors)
+    }
+
+    /// What a URDF file cannot hold, one line per item (URDF has geometry and zero offsets only).
+    pub fn beyond_urdf(&self) -> Vec<String> {
+        let names: Vec<&str> = self.robot.chain().joints().iter().map(|j| j.name.as_str()).collect();
+        let mut out = Vec::new();
+        for (j, c) in self.joints.iter().enumerate() {
+            if c.scale != 0.0 {
+                out.push(format!("joint {} ({}): gear-ratio error {:.6e}", j + 1, names[j], c.scale));
+            }
+            if c.cyclic_rad != [0.0; 4] {
+                out.push(format!("joint {} ({}): cyclic encoder error", j + 1, names[j]));
+            }
+            if c.compliance_rad_per_nm != 0.0 {
+                out.push(format!("joint {} ({}): gravity compliance", j + 1, names[j]));
+            }
+        }
+        for d in &self.drift {
+            out.push(format!("{}: thermal drift, {}", row_name(d.row), d.law.describe()));
+        }
+        out
+    }
+
+    /// The deviation in force at `state`: each drift row times its law's factor, summed per row.
+    pub fn drift_at(&self, state: &OperatingState) -> Result<DeviationTable, DeformError> {
+        let mut table = DeviationTable::zeros(self.robot.chain().dof());
+        for d in &self.drift {
+            let add = d.deviation.scaled(d.law.factor(state, d.row)?);
+            match d.row {
+                Row::Base => table.base = table.base.add(&add),
+                Row::Joint(j) => table.joints[j] = table.joints[j].add(&add),
+                Row::Tool => table.tool = table.tool.add(&add),
+            }
+        }
+        Ok(table)
+    }
+
+    /// The chain in force at `state`: the robot's chain with the drift in force added to its rows.
+    pub fn chain_at(&self, state: &OperatingState) -> Result<Chain, DeformError> {
+        if self.drift.is_empty() {
+            return Ok(self.robot.chain().clone());
+        }
+        self.drift_at(state)?.apply(self.robot.chain(), &TableSemantics::Canonical)
+    }
+
+    /// Gravity torques at commanded `q` with the state's payload (or the model's), N·m.
+    fn torques(&self, q: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+        let robot = match state.payload.or(self.payload) {
+            Some(p) => &self.robot.clone().with_payload(p)?,
+            None => &self.robot,
+        };
+        Ok(robot.gravity_torques(q, &self.down)?)
+    }
+
+    /// The joint values the chain sees when `commanded` is commanded in `state` (step 1 of the law).
+    pub fn joint_values(&self, commanded: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+        self.robot.chain().check_joint_count(commanded)?;
+        if self.joints.iter().all(JointCorrection::is_none) {
+            return Ok(commanded.to_vec());
+        }
+        let torques = if self.joints.iter().any(|c| c.compliance_rad_per_nm != 0.0) {
+            self.torques(commanded, state)?
+        } else {
+            vec![0.0; commanded.len()]
+        };
+        Ok(commanded.iter().zip(&self.joints).zip(&torques).map(|((&c, k), &t)| c + k.delta(c, t)).collect())
+    }
+
+    /// The commanded values that make the chain see `actual` in `state`: the inverse of
+    /// [`RobotModel::joint_values`], by the fixed point `c ← actual − Δq(c)` (a contraction: the
+    /// corrections' slope is checked below [`MAX_CORRECTION_SLOPE`] for scale and cyclic terms, and a
+    /// compliance's is its angle per N·m times the torque's change per radian, ~1e-4). Verified: an error
+    /// unless `joint_values` of the answer is `actual` to 1e-12 (1e-14 sought).
+    pub fn commanded_for(&self, actual: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+        let mut c = actual.to_vec();
+        if self.joints.iter().all(JointCorrection::is_none) {
+            self.robot.chain().check_joint_count(actual)?;
+            return Ok(c);
+        }
+        let mut best = (f64::INFINITY, c.clone());
+        for _ in 0..MAX_FIXED_POINT_ITERATIONS {
+            let seen = self.joint_values(&c, state)?;
+            let gap = seen.iter().zip(actual).map(|(s, a)| (s - a).abs()).fold(0.0, f64::max);
+            if gap < best.0 {
+                best = (gap, c.clone());
+            }
+            if gap <= INVERSION_TARGET {
+                break;
+            }
+            for ((ci, s), a) in c.iter_mut().zip(&seen).zip(actual) {
+                *ci += a - s;
+            }
+        }
+        let (gap, c) = best;
+        if gap <= INVERSION_TOLERANCE { Ok(c) } else { Err(DeformError::NotInvertible { gap }) }
+    }
+
+    /// `base_from_tcp` when `commanded` is commanded in `state`: steps 1–3 of the law.
+    pub fn tool_pose(&self, commanded: &[f64], state: &OperatingState) -> Result<Isometry3<f64>, DeformError> {
+        let q = self.joint_values(commanded, state)?;
+        Ok(self.chain_at(state)?.tool_pose(&q)?)
+    }
+}

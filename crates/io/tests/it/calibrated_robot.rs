@@ -1,0 +1,120 @@
+//! A calibrated robot file: every correction written and read back to the same forward model, the
+//! authors' table with one profile as drift rows, targets with state columns, and located errors.
+
+use nalgebra::Vector3;
+use thermokin_chain::{LinkMass, OperatingState};
+use thermokin_deform::{AfterStabilization, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TimeProfile};
+use thermokin_io::{parse_robot_model_toml, parse_robot_toml, parse_targets, read_robot, robot_model_to_toml};
+use thermokin_testdata::{error_mm_deg, workspace};
+
+fn calibrated() -> RobotModel {
+    let robot = read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let mut joints = vec![JointCorrection::NONE; 6];
+    joints[0].scale = 3.5e-4;
+    joints[2].cyclic_rad = [0.02f64.to_radians(), 0.0, -0.004f64.to_radians(), 0.001f64.to_radians()];
+    joints[1].compliance_rad_per_nm = 0.0021f64.to_radians();
+    let drift = vec![
+        DriftRow {
+            row: Row::Joint(1),
+            deviation: error_mm_deg([0.2, -0.1, 0.3, 0.01, 0.02, 0.005]),
+            law: DriftLaw::Time(TimeProfile::Exponential { tau_min: 41.7 }),
+        },
+        DriftRow {
+            row: Row::Joint(2),
+            deviation: error_mm_deg([0.1, 0.0, -0.05, 0.0, 0.004, 0.0]),
+            law: DriftLaw::Time(TimeProfile::Linear {
+                stabilization_min: 180.0,
+                after: AfterStabilization::KeepGrowing,
+            }),
+        },
+        DriftRow {
+            row: Row::Tool,
+            deviation: error_mm_deg([0.01, 0.02, 0.0, 0.0, 0.0, 0.0]),
+            law: DriftLaw::PerKelvin { sensors: vec![("temp_j2".into(), 22.25), ("temp_j3".into(), 21.0)] },
+        },
+    ];
+    RobotModel::new(robot)
+        .with_joint_corrections(joints)
+        .unwrap()
+        .with_drift(drift)
+        .unwrap()
+        .with_payload(Some(LinkMass { mass_kg: 1.5, com_mm: Vector3::new(40.0, 0.0, 10.0) }))
+        .unwrap()
+        .with_gravity(nalgebra::Unit::new_normalize(Vector3::new(0.01, 0.0, -1.0)))
+}
+
+#[test]
+fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
+    let model = calibrated();
+    let text = robot_model_to_toml(&model);
+    let back = parse_robot_model_toml("cal.toml".as_ref(), &text).unwrap();
+    assert_eq!(back.drift().len(), 3);
+    let state = OperatingState {
+        time_min: Some(75.0),
+        temperatures_c: vec![("temp_j2".into(), 30.0), ("temp_j3".into(), 26.0)],
+        payload: None,
+    };
+    for k in 0..30 {
+        let t = k as f64 * 0.37;
+        let q = [t.sin(), 0.4 * t.cos(), -0.3 + 0.2 * t.sin(), t, 0.5 * t.cos(), -t];
+        let a = model.tool_pose(&q, &state).unwrap();
+        let b = back.tool_pose(&q, &state).unwrap();
+        // Written to 1e-12 mm and degrees (coefficients in full): the same pose to 1e-9.
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+        assert!(a.rotation.angle_to(&b.rotation) < 1e-12);
+    }
+    // The robot alone would drop the corrections: refused, naming them.
+    let e = parse_robot_toml("cal.toml".as_ref(), &text).unwrap_err().to_string();
+    assert!(e.contains("gear-ratio") && e.contains("thermal drift"), "{e}");
+}
+
+#[test]
+fn a_drifting_robot_without_its_state_says_what_to_give() {
+    let model = calibrated();
+    let q = [0.0; 6];
+    let no_time = OperatingState { temperatures_c: vec![("temp_j2".into(), 30.0)], ..Default::default() };
+    let e = model.tool_pose(&q, &no_time).unwrap_err().to_string();
+    assert!(e.contains("operating time") && e.contains("joint 2"), "{e}");
+    let one_sensor = OperatingState { time_min: Some(10.0), ..no_time };
+    let e = model.tool_pose(&q, &one_sensor).unwrap_err().to_string();
+    assert!(e.contains("temp_j3"), "{e}");
+}
+
+#[test]
+fn bad_corrections_are_located() {
+    let base = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
+    let cases = [
+        ("[[drift]]\nrow = 9\nerror = [0.1, 0, 0, 0, 0, 0]\nprofile = { kind = \"static\" }\n", "drift[1].row"),
+        ("[[drift]]\nrow = 2\nerror = [0.1, 0, 0, 0, 0, 0]\n", "drift[1].profile"),
+        (
+            "[[drift]]\nrow = 2\nerror = [0.1, 0, 0, 0, 0, 0]\nper_kelvin = { sensors = [\"temp_j2\"], reference_c = [] }\n",
+            "drift[1].per_kelvin",
+        ),
+        (
+            "[[drift]]\nrow = 2\nerror = [0.1, 0, 0, 0, 0, 0]\nprofile = { kind = \"exponential\", tau_min = -3.0 }\n",
+            "drift[1].profile",
+        ),
+        ("[payload]\nmass_kg = -2.0\n", "payload"),
+    ];
+    for (extra, field) in cases {
+        let text = format!("{base}\n{extra}");
+        let e = parse_robot_model_toml("bad.toml".as_ref(), &text).unwrap_err().to_string();
+        assert!(e.contains("bad.toml") && e.contains(field), "{field}: {e}");
+    }
+    // A cyclic error on joint 1 as large as its motion is not a correction.
+    let text = base.replacen("max_velocity = 200.0\n", "max_velocity = 200.0\ncyclic_deg = [5.0, 0.0, 0.0, 0.0]\n", 1);
+    let e = parse_robot_model_toml("bad.toml".as_ref(), &text).unwrap_err().to_string();
+    assert!(e.contains("bad.toml:") && e.contains("joint[1]"), "{e}");
+}
+
+#[test]
+fn targets_carry_their_time_and_temperatures() {
+    let text = "label,X,Y,Z,time_min,temp_j2,TEMP_J3\nP1,500,0,600,12.5,30.1,28\nP2,510,0,600,60,31,28.5\n";
+    let t = parse_targets("t.csv".as_ref(), text).unwrap();
+    assert_eq!(t[0].label, "P1");
+    assert_eq!(t[1].state.time_min, Some(60.0));
+    assert_eq!(t[1].state.temperature("temp_j2"), Some(31.0));
+    assert_eq!(t[1].state.temperature("temp_J3"), Some(28.5));
+    let e = parse_targets("t.csv".as_ref(), "label,X,Y,Z,time_min\nP1,1,2,3,-4\n").unwrap_err().to_string();
+    assert!(e.contains("t.csv:2") && e.contains("time_min"), "{e}");
+}
