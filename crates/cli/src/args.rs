@@ -45,10 +45,10 @@ pub enum Command {
         after_help = "Example:\n  thermokin ik --robot configs/irb140.toml --pose 600,0,400,0,90,0 --seed 0,30,10,0,-40,0"
     )]
     Ik(IkArgs),
-    /// Compensate a program of targets for a deviation table, static or over a warm-up cycle.
-    #[command(mut_arg("deformation", |a| a.required(true)))]
+    /// Compensate a program of targets: for a deviation table (static or over a warm-up cycle), or on a
+    /// calibrated robot file (its drift, joint corrections, compliance) in each target's state.
     #[command(
-        after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --program prog.src --controller kuka --plot plots/\n\nWithout --profile the run is static: the full table, one state. With --profile the run is transient:\nthe model is updated every --step minutes for --duration minutes and every target re-solved."
+        after_help = "Examples:\n  thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\\n      --targets fixtures/paper/table12-targets.csv --out results.csv\n  thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --program prog.src --controller kuka --plot plots/\n  thermokin compensate --robot calibrated.toml --targets program.csv --time 60 --out joints.csv --format joints --program p60.mod\n\nA plain robot with --deformation: without --profile the run is static (the full table, one state); with\n--profile it is transient (the model updated every --step minutes for --duration minutes, every target\nre-solved). A calibrated robot (the TOML `diagnose --export` writes): each target solved on the robot as it\nis at its own time_min / temp_* columns, else at --time / --temperature / --payload; with --duration, every\ntarget at every step of a warm-up. The joints written are the values to command (gear-ratio, cyclic and\ncompliance corrections inverted)."
     )]
     Compensate(CompensateArgs),
     /// URDF: import a serial chain into the extended table (TOML), or export a (deformed) robot as URDF.

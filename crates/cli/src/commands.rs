@@ -274,6 +274,12 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     // state. A plain robot with a deviation table: the paper's static and transient runs, unchanged.
     let table = match &loaded.table {
         Some(table) if loaded.model.is_plain() && loaded.state.is_empty() => table.clone(),
+        None if loaded.model.is_nominal() => {
+            return Err(Failure::input(anyhow!(
+                "nothing to compensate: {} is a robot as designed (no error parameters, zero offsets or corrections); give --deformation TABLE, or the calibrated robot `diagnose --export` writes",
+                a.robot.robot.display()
+            )));
+        }
         _ => return compensate_model_run(&a, &loaded),
     };
     if a.robot.time.is_some() {
@@ -367,8 +373,10 @@ fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failu
         start,
     };
     let prog = program(&a.targets)?;
+    // A warm-up cycle when asked for (--duration), or for a growing table with no moment given; one
+    // state per target otherwise (its own columns, else --time / --temperature / --payload).
     let growing = !matches!(profile, TimeProfile::Static);
-    let run = if a.duration.is_some() || growing {
+    let run = if a.duration.is_some() || (growing && loaded.state.time_min.is_none()) {
         let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
         let steps = cycle.times().map_err(Failure::input)?.len();
         let bar = progress_bar(steps as u64, "compensating");

@@ -24,7 +24,7 @@
 use nalgebra::{Isometry3, Unit, Vector3};
 use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, OperatingState, Robot};
 
-use crate::{DeformError, DeviationTable, Row, TableSemantics, TimeProfile};
+use crate::{AfterStabilization, DeformError, DeviationTable, Row, TableSemantics, TimeProfile};
 
 /// Joint-variable corrections of one joint, beyond the zero offset the chain holds: `Δq = s·q + a₁ sin q
 /// + b₁ cos q + a₂ sin 2q + b₂ cos 2q + k·τ` (radians; mm for a prismatic joint's scale).
@@ -79,8 +79,11 @@ impl DriftLaw {
     pub fn describe(&self) -> String {
         match self {
             DriftLaw::Time(TimeProfile::Static) => "static".into(),
-            DriftLaw::Time(TimeProfile::Linear { stabilization_min, after }) => {
-                format!("linear over {stabilization_min} min ({after:?})").to_lowercase()
+            DriftLaw::Time(TimeProfile::Linear { stabilization_min, after: AfterStabilization::Plateau }) => {
+                format!("linear, full after {stabilization_min} min")
+            }
+            DriftLaw::Time(TimeProfile::Linear { stabilization_min, after: AfterStabilization::KeepGrowing }) => {
+                format!("linear, its deviation reached at {stabilization_min} min and growing on")
             }
             DriftLaw::Time(TimeProfile::Exponential { tau_min }) => format!("exponential (τ = {tau_min} min)"),
             DriftLaw::Time(TimeProfile::Cubic { .. }) => "cubic in time".into(),
@@ -100,7 +103,11 @@ impl DriftLaw {
             DriftLaw::Time(profile) => {
                 let t = state.time_min.ok_or_else(|| DeformError::MissingState {
                     needed: "an operating time (minutes)".into(),
-                    why: format!("{} drifts with operating time, {}", row_name(row), self.describe()),
+                    why: format!(
+                        "{} drifts with operating time, {}; give --time (0 is the cold robot)",
+                        row_name(row),
+                        self.describe()
+                    ),
                 })?;
                 if !(t.is_finite() && t >= 0.0) {
                     return Err(DeformError::BadTime { time_min: t, reason: "time must be finite and ≥ 0".into() });
@@ -350,6 +357,16 @@ impl RobotModel {
     /// `true` when the model is its robot's chain alone: no joint correction and no drift.
     pub fn is_plain(&self) -> bool {
         self.drift.is_empty() && self.joints.iter().all(JointCorrection::is_none)
+    }
+
+    /// `true` for the robot as designed: plain ([`RobotModel::is_plain`]) with no error parameter and no
+    /// zero offset in its chain — nothing a compensation could correct.
+    pub fn is_nominal(&self) -> bool {
+        let chain = self.robot.chain();
+        self.is_plain()
+            && chain.base().error.is_zero()
+            && chain.tool().error.is_zero()
+            && chain.joints().iter().all(|j| j.error.is_zero() && j.zero == 0.0)
     }
 
     /// Whether any row drifts with operating time; the sensors some row's drift reads.

@@ -19,6 +19,13 @@ struct Case {
 const ROBOT: &str = "configs/irb140.toml";
 const TABLE: &str = "fixtures/paper/deformations-case-study.toml";
 const J6: &str = "0,0,0,0,0,0";
+/// The bundled IRB 140 with joint 2's row drifting exponentially: a calibrated robot file.
+const DRIFTING: &[u8] = concat!(
+    include_str!("../../../../configs/irb140.toml"),
+    "\n[[drift]]\nrow = 2\nerror = [0.2, 0.0, 0.1, 0.0, 0.01, 0.0]\nprofile = { kind = \"exponential\", tau_min = 40.0 }\n"
+)
+.as_bytes();
+
 const GOOD_DEV: &[u8] =
     b"Dx,Dy,Dz,Dox,Doy,Doz\n1,1,1,1,1,1\n1,1,1,1,1,1\n1,1,1,1,1,1\n1,1,1,1,1,1\n1,1,1,1,1,1\n1,1,1,1,1,1\n";
 const JOINT: &str = "[[joint]]\naxis = \"Z\"\noffset_mm = [0.0, 0.0, 100.0]\n";
@@ -141,7 +148,11 @@ const CASES: &[Case] = &[
     Case { name: "time without profile", files: &[], args: &["fk", "--robot", ROBOT, "--deformation", TABLE, "--time", "5", "--joints", J6], code: 2, needle: "--time needs --profile" },
     Case { name: "bad profile", files: &[], args: &["fk", "--robot", ROBOT, "--profile", "cubic:1,2", "--joints", J6], code: 2, needle: "cubic takes three coefficients" },
     Case { name: "tip on TOML", files: &[], args: &["fk", "--robot", ROBOT, "--tip", "tool0", "--joints", J6], code: 2, needle: "--base/--tip: only URDF robots take a base or tip link" },
-    Case { name: "conflicting time on compensate", files: &[("dev.csv", GOOD_DEV)], args: &["compensate", "--robot", ROBOT, "--deformation", "{dir}/dev.csv", "--profile", "linear:180", "--time", "3", "--targets", "fixtures/paper/table12-targets.csv", "--out", "{dir}/o.csv"], code: 2, needle: "--time is for fk/ik" },
+    Case { name: "negative time on compensate", files: &[("dev.csv", GOOD_DEV)], args: &["compensate", "--robot", ROBOT, "--deformation", "{dir}/dev.csv", "--profile", "linear:180", "--time=-3", "--targets", "fixtures/paper/table12-targets.csv", "--out", "{dir}/o.csv"], code: 2, needle: "target P1 (line 3): time -3 min: time must be finite and ≥ 0" },
+    Case { name: "drifting robot without its time", files: &[("cal.toml", DRIFTING)], args: &["fk", "--robot", "{dir}/cal.toml", "--joints", J6], code: 2, needle: "this robot needs an operating time (minutes): joint 2's row drifts with operating time, exponential (τ = 40 min); give --time (0 is the cold robot)" },
+    Case { name: "sensor the robot lacks", files: &[("cal.toml", DRIFTING)], args: &["fk", "--robot", "{dir}/cal.toml", "--time", "5", "--temperature", "temp_j9=30", "--joints", J6], code: 2, needle: "no row drifting with sensor `temp_j9`" },
+    Case { name: "bad temperature", files: &[("cal.toml", DRIFTING)], args: &["fk", "--robot", "{dir}/cal.toml", "--time", "5", "--temperature", "temp_j2=warm", "--joints", J6], code: 2, needle: "`warm` is not a temperature in °C" },
+    Case { name: "calibrated robot to diagnose", files: &[("cal.toml", DRIFTING)], args: &["diagnose", "--robot", "{dir}/cal.toml", "--measurements", "x.csv"], code: 2, needle: "carries identified corrections (joint 2's row: thermal drift, exponential (τ = 40 min))" },
     Case { name: "bad step", files: &[], args: &["compensate", "--robot", ROBOT, "--deformation", TABLE, "--profile", "linear:180", "--step", "0", "--targets", "fixtures/paper/table12-targets.csv", "--out", "/tmp/o.csv"], code: 2, needle: "step must be positive, got 0 min" },
     Case { name: "profile on diagnose", files: &[], args: &["diagnose", "--robot", ROBOT, "--deformation", TABLE, "--profile", "static", "--measurements", "x.csv"], code: 2, needle: "diagnose takes a static robot" },
     Case { name: "unreachable pose", files: &[], args: &["ik", "--robot", ROBOT, "--pose", "5000,0,0,0,90,0"], code: 3, needle: "status       Unreachable after 0 iterations" },

@@ -3,3 +3,4 @@
 
 mod bad_inputs;
 mod cli;
+mod warmup_loop;

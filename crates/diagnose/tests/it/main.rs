@@ -4,6 +4,7 @@
 mod catalogue;
 mod export;
 mod hidden;
+mod identified;
 mod payload;
 mod real_data;
 mod six_d;
