@@ -80,12 +80,12 @@ impl DriftLaw {
         match self {
             DriftLaw::Time(TimeProfile::Static) => "static".into(),
             DriftLaw::Time(TimeProfile::Linear { stabilization_min, after: AfterStabilization::Plateau }) => {
-                format!("linear, full after {stabilization_min} min")
+                format!("linear, full after {stabilization_min:.1} min")
             }
             DriftLaw::Time(TimeProfile::Linear { stabilization_min, after: AfterStabilization::KeepGrowing }) => {
-                format!("linear, its deviation reached at {stabilization_min} min and growing on")
+                format!("linear, its deviation reached at {stabilization_min:.1} min and growing on")
             }
-            DriftLaw::Time(TimeProfile::Exponential { tau_min }) => format!("exponential (τ = {tau_min} min)"),
+            DriftLaw::Time(TimeProfile::Exponential { tau_min }) => format!("exponential (τ = {tau_min:.1} min)"),
             DriftLaw::Time(TimeProfile::Cubic { .. }) => "cubic in time".into(),
             DriftLaw::Time(TimeProfile::Temperature { .. }) => "a temperature log".into(),
             DriftLaw::PerKelvin { sensors } => {

@@ -1016,3 +1016,38 @@ fn diagnose_quiet_prints_no_progress() {
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));
     assert!(stdout(&o).contains("verdict:"));
 }
+
+#[test]
+fn ik_on_a_calibrated_robot_gives_joints_to_command_that_fk_puts_on_the_pose() {
+    // The bundled IRB 140 with a gear ratio, a cyclic error, a compliance and a drifting row.
+    let base = std::fs::read_to_string(workspace(ROBOT)).unwrap();
+    let text = base
+        .replacen("max_velocity = 200.0\n", "max_velocity = 200.0\nscale = 4e-4\n", 1)
+        .replacen("max_velocity = 260.0\n", "max_velocity = 260.0\ncyclic_deg = [0.03, -0.01, 0.0, 0.008]\n", 1)
+        .replacen("limits = [-90.0, 110.0]\n", "limits = [-90.0, 110.0]\ncompliance_deg_per_nm = 0.002\n", 1)
+        + "\n[payload]\nmass_kg = 3.0\ncom_mm = [60.0, 0.0, 0.0]\n\n[[drift]]\nrow = 2\nerror = [0.2, -0.1, 0.3, 0.01, 0.02, 0.005]\nprofile = { kind = \"exponential\", tau_min = 40.0 }\n";
+    let robot = tmp("calibrated-corrections.toml");
+    std::fs::write(&robot, text).unwrap();
+    let robot = robot.to_str().unwrap();
+    let pose = "620,40,480,0,90,0";
+    for state in [vec!["--time", "30"], vec!["--time", "150", "--payload", "12@100,0,0"]] {
+        let mut args = vec!["ik", "--robot", robot, "--pose", pose, "--seed", "0,20,20,0,-45,0", "--json"];
+        args.extend(&state);
+        let o = thermokin(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let s: serde_json::Value = serde_json::from_str(stdout(&o).trim()).unwrap();
+        assert_eq!(s["status"], "Converged");
+        let joints: Vec<String> = s["joints_deg"].as_array().unwrap().iter().map(|v| v.to_string()).collect();
+        let joints = joints.join(",");
+        let mut args = vec!["fk", "--robot", robot, "--joints", &joints, "--json"];
+        args.extend(&state);
+        let p = fk_position(&args);
+        let want = [620.0, 40.0, 480.0];
+        // The joints are printed to 1e-12°: at ~0.7 m reach, 1e-11 mm.
+        assert!(p.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-8), "{state:?}: {p:?}");
+        // The same joints on the robot without its corrections (a plain IK would have given other
+        // joints): the corrections are inverted, not ignored.
+        let plain = fk_position(&["fk", "--robot", ROBOT, "--joints", &joints, "--json"]);
+        assert!(plain.iter().zip(want).any(|(a, b)| (a - b).abs() > 0.05), "{plain:?}");
+    }
+}
