@@ -534,48 +534,72 @@ impl Chain {
     /// The TCP position and rotation matrix with [`Chain::parameter_jacobian`], from one pass along the
     /// chain (an identification evaluates both at every measurement).
     pub fn pose_and_parameter_jacobian(&self, q: &[f64]) -> Result<PoseAndJacobian, ChainError> {
+        let mut jacobian = Matrix6xX::zeros(self.parameter_layout().len());
+        let (position, rotation) = self.pose_and_parameter_jacobian_into(q, &mut jacobian)?;
+        Ok(PoseAndJacobian { position, rotation, jacobian })
+    }
+
+    /// [`Chain::pose_and_parameter_jacobian`] into a caller's matrix (`6 × parameter_layout().len()`,
+    /// every entry overwritten): no allocation, the identification's per-measurement path. The TCP comes
+    /// first (one forward pass), then every column in a second pass along the chain: a translation
+    /// parameter's column is its direction `u`, a rotation's `[u × (p − o); u]` with `o` the row's origin
+    /// and `p` the TCP, a zero offset's the joint's own column of the geometric Jacobian.
+    pub fn pose_and_parameter_jacobian_into(
+        &self,
+        q: &[f64],
+        jac: &mut Matrix6xX<f64>,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
         self.check_q(q)?;
         let layout = self.parameter_layout();
-        // Collect (column, direction, origin, is_rotation) first; the lever arms need the TCP.
-        let mut entries: Vec<(usize, Vector3<f64>, Vector3<f64>, bool)> = Vec::with_capacity(layout.len());
-        let mut push_row = |first: usize, parent: &Frame, row_origin: Vector3<f64>, partial: &[Matrix3<f64>; 2]| {
+        if jac.ncols() != layout.len() {
+            return Err(ChainError::DescriptionLength {
+                field: "parameter jacobian",
+                expected: layout.len(),
+                got: jac.ncols(),
+            });
+        }
+        let tcp = self.tool_frame_unchecked(q);
+        let p = tcp.trans;
+        /// Column `col`: a direction (`None`: a translation) or a turn about `u` through `origin`.
+        fn put(jac: &mut Matrix6xX<f64>, p: &Vector3<f64>, col: usize, u: Vector3<f64>, origin: Option<Vector3<f64>>) {
+            let (linear, angular) = match origin {
+                Some(o) => (u.cross(&(p - o)), u),
+                None => (u, Vector3::zeros()),
+            };
+            jac.fixed_view_mut::<3, 1>(0, col).copy_from(&linear);
+            jac.fixed_view_mut::<3, 1>(3, col).copy_from(&angular);
+        }
+        /// The six columns of a row whose parent frame is `parent` and whose translation ends at `origin`.
+        fn row(
+            jac: &mut Matrix6xX<f64>,
+            p: &Vector3<f64>,
+            first: usize,
+            parent: &Frame,
+            origin: Vector3<f64>,
+            partial: &[Matrix3<f64>; 2],
+        ) {
             for k in 0..3 {
-                entries.push((first + k, parent.rot.column(k).into_owned(), row_origin, false));
+                put(jac, p, first + k, parent.rot.column(k).into_owned(), None);
             }
-            let ux = parent.rot.column(0).into_owned();
-            let uy = (parent.rot * partial[0]).column(1).into_owned();
-            let uz = (parent.rot * partial[1]).column(2).into_owned();
-            entries.push((first + 3, ux, row_origin, true));
-            entries.push((first + 4, uy, row_origin, true));
-            entries.push((first + 5, uz, row_origin, true));
-        };
+            put(jac, p, first + 3, parent.rot.column(0).into_owned(), Some(origin));
+            put(jac, p, first + 4, (parent.rot * partial[0]).column(1).into_owned(), Some(origin));
+            put(jac, p, first + 5, (parent.rot * partial[1]).column(2).into_owned(), Some(origin));
+        }
         let world = Frame::new(Matrix3::identity(), Vector3::zeros());
         let base_origin = self.base.translation + self.base.error.translation;
-        push_row(layout.base(), &world, base_origin, &self.row_partials[0]);
+        row(jac, &p, layout.base(), &world, base_origin, &self.row_partials[0]);
         let mut frame = self.base_frame;
-        let mut zero_entries = Vec::with_capacity(self.dof());
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
             let origin = frame.rot * link.fixed.trans + frame.trans;
-            push_row(layout.joint(i), &frame, origin, &link.partial);
+            row(jac, &p, layout.joint(i), &frame, origin, &link.partial);
             frame = frame.mul(&link.fixed);
             let z = frame.rot * link.axis_vec;
-            zero_entries.push((layout.zero(i), z, frame.trans, link.kind == JointKind::Revolute));
+            let revolute = link.kind == JointKind::Revolute;
+            put(jac, &p, layout.zero(i), z, revolute.then_some(frame.trans));
             Self::apply_joint(link, &mut frame, qi);
         }
         let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
-        push_row(layout.tool(), &frame, tool_origin, &self.row_partials[1]);
-        let tcp = frame.mul(&self.tool_frame);
-        let p = tcp.trans;
-        let mut jac = Matrix6xX::zeros(layout.len());
-        for (col, u, o, rotation) in entries.into_iter().chain(zero_entries) {
-            if rotation {
-                let v = u.cross(&(p - o));
-                jac.fixed_view_mut::<3, 1>(0, col).copy_from(&v);
-                jac.fixed_view_mut::<3, 1>(3, col).copy_from(&u);
-            } else {
-                jac.fixed_view_mut::<3, 1>(0, col).copy_from(&u);
-            }
-        }
-        Ok(PoseAndJacobian { position: tcp.trans, rotation: tcp.rot, jacobian: jac })
+        row(jac, &p, layout.tool(), &frame, tool_origin, &self.row_partials[1]);
+        Ok((tcp.trans, tcp.rot))
     }
 }

@@ -9,6 +9,7 @@ use crate::eligibility::Eligibility;
 use crate::fit::{Start, fit_from, initial_registration, norms, residuals};
 use crate::model::{Effect, Model, prepare_against};
 use crate::report::{HoldoutStats, Nested, OuterFold, Report, Stats};
+use crate::screen::Screen;
 use crate::select::{Plausibility, always_estimated, select};
 use crate::validation::{Ctx, folds_for};
 use crate::{Dataset, DiagnoseError};
@@ -70,6 +71,9 @@ pub struct Config {
     pub eligibility: Eligibility,
     /// Bounds on fitted values beyond which a candidate is refused as implausible ([`Plausibility`]).
     pub plausibility: Plausibility,
+    /// How many candidates a forward step fits in full after ranking all by a linearised step
+    /// ([`Screen`]; `Screen { keep: 0 }` fits every one).
+    pub screen: Screen,
 }
 
 /// How measurements are grouped into cross-validation folds.
@@ -124,6 +128,7 @@ impl Default for Config {
             orientation_noise_deg: None,
             eligibility: Eligibility::default(),
             plausibility: Plausibility::default(),
+            screen: Screen::default(),
         }
     }
 }

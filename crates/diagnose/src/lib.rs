@@ -13,6 +13,7 @@ mod fit;
 mod ladder;
 mod model;
 mod report;
+mod screen;
 mod select;
 mod simulate;
 mod validation;
@@ -28,6 +29,7 @@ pub use model::{
 pub use report::{
     Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue, Report, Stats, TableRow,
 };
+pub use screen::Screen;
 pub use select::Plausibility;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 

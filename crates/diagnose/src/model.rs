@@ -235,11 +235,15 @@ impl Effect {
     /// The functions of the commanded joint value whose weighted sum is the joint error Δq, for the
     /// effects that act on the joint variable itself: `q` for a scale error, `sin q, cos q, sin 2q,
     /// cos 2q` for a cyclic one. Empty for the others.
-    pub fn joint_basis(&self, q: f64) -> Vec<f64> {
+    pub fn joint_basis(&self, q: f64) -> JointBasis {
         match self {
-            Effect::JointScale(_) => vec![q],
-            Effect::Periodic(_) => vec![q.sin(), q.cos(), (2.0 * q).sin(), (2.0 * q).cos()],
-            _ => Vec::new(),
+            Effect::JointScale(_) => JointBasis { values: [q, 0.0, 0.0, 0.0], len: 1 },
+            Effect::Periodic(_) => {
+                let (s1, c1) = q.sin_cos();
+                // sin 2q = 2 sin q cos q, cos 2q = cos²q − sin²q: one sincos per joint.
+                JointBasis { values: [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1], len: 4 }
+            }
+            _ => JointBasis { values: [0.0; 4], len: 0 },
         }
     }
 
@@ -290,6 +294,21 @@ impl Effect {
     }
 }
 
+/// The functions of a joint value an effect's parameters weigh ([`Effect::joint_basis`]): at most four,
+/// without allocating (it is evaluated at every measurement).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointBasis {
+    values: [f64; 4],
+    len: usize,
+}
+
+impl JointBasis {
+    /// The values, in parameter order.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+}
+
 /// The six error parameters of a row block starting at `theta[o]`.
 fn six_at(theta: &[f64], o: usize) -> ErrorParams {
     ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
@@ -300,6 +319,10 @@ fn six_at(theta: &[f64], o: usize) -> ErrorParams {
 pub(crate) struct ChainCache {
     chain: Chain,
     joint_err: Vec<ErrorParams>,
+    /// Buffers reused across measurements: the joint values the chain sees, the chain's parameter
+    /// Jacobian.
+    q: Vec<f64>,
+    pj: Matrix6xX<f64>,
 }
 
 /// Reference time of the linear drift: the parameters are the deviation at 180 minutes (section 4).
@@ -544,11 +567,14 @@ impl Model {
             Some(c) => c,
             None => {
                 let (chain, joint_err) = self.static_chain(robot, theta)?;
-                cache.insert(ChainCache { chain, joint_err })
+                let pj = Matrix6xX::zeros(chain.parameter_layout().len());
+                cache.insert(ChainCache { chain, joint_err, q: Vec::with_capacity(m.q.len()), pj })
             }
         };
         // Per measurement: the joint values the joint-level effects move, and the drift rows.
-        let mut q = m.q.clone();
+        let mut q = std::mem::take(&mut cached.q);
+        q.clear();
+        q.extend_from_slice(&m.q);
         let mut drift_scale: Vec<(usize, f64, f64)> = Vec::new(); // (effect index, s, ds/dτ)
         let mut drift_rows: Vec<(usize, ErrorParams)> = Vec::new();
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
@@ -559,7 +585,7 @@ impl Model {
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) => {
                     let j = j.index();
-                    q[j] += e.joint_basis(m.q[j]).iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
+                    q[j] += e.joint_basis(m.q[j]).as_slice().iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
                 }
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
@@ -579,9 +605,15 @@ impl Model {
             cached.chain.set_joint_error(j, row)?;
         }
         let registered = &cached.chain;
-        let Some(jac) = jacobian else { return Ok(registered.tool_position_rotation(&q)?) };
-        let both = registered.pose_and_parameter_jacobian(&q)?;
-        let (pose, pj) = ((both.position, both.rotation), both.jacobian);
+        let Some(jac) = jacobian else {
+            let pose = registered.tool_position_rotation(&q);
+            cached.q = q;
+            return Ok(pose?);
+        };
+        let pose = registered.pose_and_parameter_jacobian_into(&q, &mut cached.pj);
+        cached.q = q;
+        let pose = pose?;
+        let pj = &cached.pj;
         let layout = registered.parameter_layout();
         jac.fill(0.0);
         let mut drift = drift_scale.iter();
@@ -606,7 +638,7 @@ impl Model {
                 Effect::JointScale(j) | Effect::Periodic(j) => {
                     // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
                     let j = j.index();
-                    for (k, b) in e.joint_basis(m.q[j]).iter().enumerate() {
+                    for (k, b) in e.joint_basis(m.q[j]).as_slice().iter().enumerate() {
                         copy(o + k, layout.zero(j), *b);
                     }
                 }

@@ -142,6 +142,9 @@ pub(crate) struct Selection {
     steps: Vec<(Effect, f64, f64)>,
     additive: Vec<TableRow>,
     bic: Vec<f64>,
+    /// The model's parameters fitted on all measurements (where the forward screen linearises).
+    theta: Vec<f64>,
+
     /// Candidates that add nothing identifiable: (label, reason).
     skipped: Vec<(String, String)>,
     /// Candidates refused by eligibility or plausibility.
@@ -149,7 +152,8 @@ pub(crate) struct Selection {
 }
 
 impl Selection {
-    fn accept(&mut self, c: &Candidate, bic: f64, row: String) {
+    fn accept(&mut self, c: &Candidate, bic: f64, theta: Vec<f64>, row: String) {
+        self.theta = theta;
         self.steps.push((c.effect, self.current.heldout_rms_mm, c.stats.heldout_rms_mm));
         self.effects.push(c.effect);
         self.current = c.stats;
@@ -184,6 +188,7 @@ pub(crate) fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(
     let catalogue = candidates(robot, data, config)?;
     let (eligible, refused) = crate::eligibility::check(&ctx, &always, &catalogue, &config.eligibility)?;
     let (nominal, nominal_errors) = ctx.heldout_errors(&always, &ctx.folds)?;
+    let (_, nominal_fit) = ctx.full_fit(&always)?;
     let mut sel = Selection {
         effects: always.clone(),
         always: always.len(),
@@ -191,7 +196,8 @@ pub(crate) fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(
         errors: nominal_errors,
         steps: Vec::new(),
         additive: vec![TableRow { model: "nominal".into(), stats: nominal }],
-        bic: vec![ctx.bic(&always)?],
+        bic: vec![ctx.bic_of(&nominal_fit)],
+        theta: nominal_fit.theta,
         skipped: Vec::new(),
         refused,
     };
@@ -205,6 +211,9 @@ pub(crate) fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(
 
 /// Scores `c` added to `effects` on the selection's folds; `Err(reason)` when it adds nothing
 /// identifiable (the reason names the block a parameter duplicates).
+/// Every fold's fit starts cold, at the initial values: warm starts from the current model's fold fits
+/// were tried (issue #23) and changed the UR10's choice (B 0.457 → 0.569 mm) while running slower —
+/// nearly dependent parameters leave flat valleys where the stopping rule halts elsewhere.
 fn score(ctx: &Ctx<'_>, effects: &[Effect], c: Effect) -> Result<Result<Candidate, String>, DiagnoseError> {
     let (new_free, fixed) = ctx.new_free(effects, c)?;
     if new_free == 0 {
@@ -223,8 +232,10 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
     let gate = config.gate_standard_errors;
     while sel.chosen().len() < config.max_effects && !pool.is_empty() {
         let is_exp = |c: &Effect| matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential));
-        let first: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
+        let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
         let effects = sel.effects.clone();
+        // Score before you fit: the candidates ranked by a linearised step, the shortlist fitted in full.
+        let first = crate::screen::shortlist(ctx, &effects, &sel.theta, &linear, config.screen)?;
         let mut scored: Vec<(Effect, Result<Candidate, String>)> =
             first.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
         let gain = |s: &Result<Candidate, String>| {
@@ -246,7 +257,11 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
         let more: Vec<(Effect, Result<Candidate, String>)> =
             second.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
         scored.extend(more);
-        let mut still: Vec<Effect> = pool.iter().copied().filter(|c| is_exp(c) && !second.contains(c)).collect();
+        let mut still: Vec<Effect> = pool
+            .iter()
+            .copied()
+            .filter(|c| (is_exp(c) && !second.contains(c)) || (!is_exp(c) && !first.contains(c)))
+            .collect();
         let mut results: Vec<Candidate> = Vec::new();
         for (c, s) in scored {
             match s {
@@ -310,11 +325,11 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
             if b >= *sel.bic.last().unwrap_or(&f64::INFINITY) {
                 continue;
             }
-            chosen = Some((cand.clone(), b));
+            chosen = Some((cand.clone(), b, full.theta));
             break;
         }
-        let Some((c, b)) = chosen else { break };
-        sel.accept(&c, b, format!("+ {}", c.effect.label()));
+        let Some((c, b, theta)) = chosen else { break };
+        sel.accept(&c, b, theta, format!("+ {}", c.effect.label()));
         pool.retain(|e| *e != c.effect);
     }
     Ok(())

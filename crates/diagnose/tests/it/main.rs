@@ -7,6 +7,7 @@ mod hidden;
 mod identified;
 mod payload;
 mod real_data;
+mod screen;
 mod six_d;
 mod temperature;
 mod tracker;

@@ -1,0 +1,66 @@
+//! A week of tracker data at the scale issue #23 names: a simulated UR10 (its URDF, flange `tool0`) with a
+//! joint offset, a link deviation, gravity compliance and a linear thermal drift, measured at 3,000 and
+//! 12,000 poses over a 240-minute warm-up with two joint temperature columns, diagnosed with nested
+//! validation (5 outer folds, the default). Timed once per size (minutes of work do not fit criterion's
+//! sampling); the process's peak resident memory is read after each size. Written to
+//! `target/criterion/diagnose_scale.json` for `cargo xtask bench`.
+#![allow(missing_docs, clippy::unwrap_used)] // a bench binary; it unwraps to fail.
+
+use std::time::Instant;
+
+use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
+
+/// Peak resident memory of this process, MiB (Linux `VmHWM`); `None` elsewhere.
+fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; anything else (`cargo test --benches`) runs a tiny size only.
+    let full = std::env::args().any(|a| a == "--bench");
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let options = thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) };
+    let robot = thermokin_io::read_robot_with(&root.join("fixtures/urdf/ur10.urdf"), &options).unwrap();
+    let joint = |j| JointIndex::of(&robot, j).unwrap();
+    let hidden = [
+        HiddenEffect { effect: Effect::JointOffset(joint(1)), values: vec![0.03f64.to_radians()] },
+        HiddenEffect {
+            effect: Effect::LinkDeviation(joint(2)),
+            values: vec![0.2, -0.1, 0.15, 0.01f64.to_radians(), 0.0, 0.005f64.to_radians()],
+        },
+        HiddenEffect { effect: Effect::JointCompliance(joint(1)), values: vec![0.0004f64.to_radians()] },
+        HiddenEffect {
+            effect: Effect::ThermalDrift(joint(2), DriftShape::Linear),
+            values: vec![0.1, 0.05, -0.2, 0.0, 0.004f64.to_radians(), 0.0],
+        },
+    ];
+    let sizes: &[usize] = if full { &[3_000, 12_000] } else { &[300] };
+    let mut results = serde_json::Map::new();
+    for &poses in sizes {
+        let mut data = simulate(&robot, &hidden, &SimulationConfig { poses, ..SimulationConfig::default() }).unwrap();
+        // Two joint temperature sensors warming up: what a tracker log beside the controller carries.
+        data.temperature_names = vec!["j2".into(), "j3".into()];
+        for m in &mut data.measurements {
+            let t = m.time_min;
+            m.temps = vec![22.0 + 8.0 * (1.0 - (-t / 30.0).exp()), 21.0 + 4.0 * t / 240.0];
+        }
+        let t0 = Instant::now();
+        let report = diagnose(&robot, &data, None, &Config::default()).unwrap();
+        let seconds = t0.elapsed().as_secs_f64();
+        let rss = peak_rss_mib();
+        let chosen: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
+        println!(
+            "diagnose_scale {poses} poses: {seconds:.1} s nested, peak RSS {} MiB; chose {chosen:?}",
+            rss.map_or("n/a".into(), |m| format!("{m:.1}"))
+        );
+        results
+            .insert(format!("{poses}"), serde_json::json!({"seconds": seconds, "peak_rss_mib": rss, "chosen": chosen}));
+    }
+    if full {
+        let dir = root.join("target/criterion");
+        let _ = std::fs::create_dir_all(&dir);
+        let _ = std::fs::write(dir.join("diagnose_scale.json"), serde_json::Value::Object(results).to_string());
+    }
+}
