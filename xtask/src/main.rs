@@ -145,6 +145,8 @@ fn bench(json: bool) -> Result<()> {
         "program",
         "--bench",
         "diagnose",
+        "--bench",
+        "tracker_scale",
     ]))?;
     let stream: serde_json::Value = std::fs::read_to_string("target/criterion/program_stream.json")
         .ok()
@@ -155,6 +157,10 @@ fn bench(json: bool) -> Result<()> {
             .ok()
             .and_then(|s| s.trim().parse::<f64>().ok())
     };
+    let scale: serde_json::Value = std::fs::read_to_string("target/criterion/diagnose_scale.json")
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or(serde_json::Value::Null);
     let success = rate("ik_random_success.txt");
     let k_success = rate("k_ik_near_success.txt");
     let us = |v: Option<f64>| v.map(|n| n / 1e3);
@@ -246,6 +252,25 @@ fn bench(json: bool) -> Result<()> {
             ratio(mean_ns("diagnose_scaling/selection/480"), mean_ns("diagnose_scaling/selection/60")),
             "cost growth for 8× the poses (8 = linear)",
             8.0,
+        ),
+        (
+            "diagnose_ur10_3k_s",
+            scale["3000"]["seconds"].as_f64(),
+            "simulated UR10, 3,000 poses with time and temperatures, nested diagnosis",
+            f64::NAN,
+        ),
+        ("diagnose_ur10_12k_s", scale["12000"]["seconds"].as_f64(), "the same, 12,000 poses (a tracker's week)", 30.0),
+        (
+            "diagnose_growth_12k_over_3k",
+            ratio(scale["12000"]["seconds"].as_f64(), scale["3000"]["seconds"].as_f64()),
+            "cost growth for 4× the poses (4 = linear)",
+            4.5,
+        ),
+        (
+            "diagnose_ur10_12k_peak_mib",
+            scale["12000"]["peak_rss_mib"].as_f64(),
+            "peak memory of that process, MiB",
+            300.0,
         ),
         (
             "transient_10050_s",

@@ -540,10 +540,11 @@ impl Chain {
     }
 
     /// [`Chain::pose_and_parameter_jacobian`] into a caller's matrix (`6 × parameter_layout().len()`,
-    /// every entry overwritten): no allocation, the identification's per-measurement path. The TCP comes
-    /// first (one forward pass), then every column in a second pass along the chain: a translation
-    /// parameter's column is its direction `u`, a rotation's `[u × (p − o); u]` with `o` the row's origin
-    /// and `p` the TCP, a zero offset's the joint's own column of the geometric Jacobian.
+    /// every entry overwritten): no allocation, one pass along the chain — the identification's
+    /// per-measurement path. A translation parameter's column is its direction `u`; a rotation's is
+    /// `[u × (p − o); u]` with `o` the row's origin and `p` the TCP; a zero offset's is the joint's own
+    /// column of the geometric Jacobian. The TCP is known only at the end of the pass, so a rotation
+    /// column is first written as `[o × u; u]` (that is `−u × o`) and `u × p` added once `p` is known.
     pub fn pose_and_parameter_jacobian_into(
         &self,
         q: &[f64],
@@ -558,12 +559,11 @@ impl Chain {
                 got: jac.ncols(),
             });
         }
-        let tcp = self.tool_frame_unchecked(q);
-        let p = tcp.trans;
-        /// Column `col`: a direction (`None`: a translation) or a turn about `u` through `origin`.
-        fn put(jac: &mut Matrix6xX<f64>, p: &Vector3<f64>, col: usize, u: Vector3<f64>, origin: Option<Vector3<f64>>) {
+        /// Column `col`: a direction (`None`: a translation) or a turn about `u` through `origin`, its
+        /// `u × p` part still to add.
+        fn put(jac: &mut Matrix6xX<f64>, col: usize, u: Vector3<f64>, origin: Option<Vector3<f64>>) {
             let (linear, angular) = match origin {
-                Some(o) => (u.cross(&(p - o)), u),
+                Some(o) => (o.cross(&u), u),
                 None => (u, Vector3::zeros()),
             };
             jac.fixed_view_mut::<3, 1>(0, col).copy_from(&linear);
@@ -572,34 +572,41 @@ impl Chain {
         /// The six columns of a row whose parent frame is `parent` and whose translation ends at `origin`.
         fn row(
             jac: &mut Matrix6xX<f64>,
-            p: &Vector3<f64>,
             first: usize,
             parent: &Frame,
             origin: Vector3<f64>,
             partial: &[Matrix3<f64>; 2],
         ) {
             for k in 0..3 {
-                put(jac, p, first + k, parent.rot.column(k).into_owned(), None);
+                put(jac, first + k, parent.rot.column(k).into_owned(), None);
             }
-            put(jac, p, first + 3, parent.rot.column(0).into_owned(), Some(origin));
-            put(jac, p, first + 4, (parent.rot * partial[0]).column(1).into_owned(), Some(origin));
-            put(jac, p, first + 5, (parent.rot * partial[1]).column(2).into_owned(), Some(origin));
+            put(jac, first + 3, parent.rot.column(0).into_owned(), Some(origin));
+            put(jac, first + 4, (parent.rot * partial[0]).column(1).into_owned(), Some(origin));
+            put(jac, first + 5, (parent.rot * partial[1]).column(2).into_owned(), Some(origin));
         }
         let world = Frame::new(Matrix3::identity(), Vector3::zeros());
         let base_origin = self.base.translation + self.base.error.translation;
-        row(jac, &p, layout.base(), &world, base_origin, &self.row_partials[0]);
+        row(jac, layout.base(), &world, base_origin, &self.row_partials[0]);
         let mut frame = self.base_frame;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
             let origin = frame.rot * link.fixed.trans + frame.trans;
-            row(jac, &p, layout.joint(i), &frame, origin, &link.partial);
+            row(jac, layout.joint(i), &frame, origin, &link.partial);
             frame = frame.mul(&link.fixed);
             let z = frame.rot * link.axis_vec;
             let revolute = link.kind == JointKind::Revolute;
-            put(jac, &p, layout.zero(i), z, revolute.then_some(frame.trans));
+            put(jac, layout.zero(i), z, revolute.then_some(frame.trans));
             Self::apply_joint(link, &mut frame, qi);
         }
         let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
-        row(jac, &p, layout.tool(), &frame, tool_origin, &self.row_partials[1]);
+        row(jac, layout.tool(), &frame, tool_origin, &self.row_partials[1]);
+        let tcp = frame.mul(&self.tool_frame);
+        let p = tcp.trans;
+        for col in 0..jac.ncols() {
+            let u: Vector3<f64> = jac.fixed_view::<3, 1>(3, col).into_owned();
+            let add = u.cross(&p);
+            let mut linear = jac.fixed_view_mut::<3, 1>(0, col);
+            linear += add;
+        }
         Ok((tcp.trans, tcp.rot))
     }
 }
