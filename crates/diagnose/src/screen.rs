@@ -58,32 +58,52 @@ const RIDGE: f64 = 1e-9;
 /// point (an exponential drift's τ at zero amplitude) and are left out.
 const NEGLIGIBLE_COLUMN: f64 = 1e-12;
 
+/// What the screen decided for one forward step.
+pub(crate) struct Shortlist {
+    /// The candidates to fit in full, best linearised held-out error first.
+    pub(crate) keep: Vec<Effect>,
+    /// Candidates whose values one linearised step on all data puts beyond physical bounds, with the
+    /// reason: refused without a full fit, which would run away (a block trading with the probe takes a
+    /// hundred LM iterations per fold to reach 16 mm on the UR10) and be refused.
+    pub(crate) runaway: Vec<(Effect, String)>,
+}
+
 /// The candidates to fit in full: all when `keep` is 0 or covers them, otherwise the `keep` with the
-/// lowest linearised held-out sum of squares over the selection's folds.
+/// lowest linearised held-out sum of squares over the selection's folds, after refusing those whose
+/// linearised values `implausible` (the selection's [`crate::Plausibility`] test) rejects.
 pub(crate) fn shortlist(
     ctx: &Ctx<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
     screen: Screen,
-) -> Result<Vec<Effect>, DiagnoseError> {
+    implausible: &(dyn Fn(Effect, &[f64]) -> Option<String> + Sync),
+) -> Result<Shortlist, DiagnoseError> {
     if screen.keep == 0 || candidates.len() <= screen.keep {
-        return Ok(candidates.to_vec());
+        return Ok(Shortlist { keep: candidates.to_vec(), runaway: Vec::new() });
     }
-    let predicted = linearised_heldout(ctx, effects, theta, candidates)?;
-    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    let (predicted, values) = linearised_heldout(ctx, effects, theta, candidates)?;
+    let mut runaway = Vec::new();
+    let mut order: Vec<usize> = Vec::new();
+    for (k, (&c, v)) in candidates.iter().zip(&values).enumerate() {
+        match implausible(c, v) {
+            Some(reason) => runaway.push((c, format!("{reason}, by one linearised step on all data"))),
+            None => order.push(k),
+        }
+    }
     order.sort_by(|&a, &b| predicted[a].total_cmp(&predicted[b]));
-    Ok(order.into_iter().take(screen.keep).map(|k| candidates[k]).collect())
+    Ok(Shortlist { keep: order.into_iter().take(screen.keep).map(|k| candidates[k]).collect(), runaway })
 }
 
 /// Per candidate, the held-out sum of squares (mm²) that one Gauss–Newton step from the current all-data
-/// fit on each fold's training part predicts on its test part.
+/// fit on each fold's training part predicts on its test part, and its own values after that step on all
+/// data (internal units; zeros where a column carries nothing).
 fn linearised_heldout(
     ctx: &Ctx<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
-) -> Result<Vec<f64>, DiagnoseError> {
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
     let all: Vec<usize> = (0..ctx.data.len()).collect();
     let mut joint_model: Vec<Effect> = effects.to_vec();
     joint_model.extend_from_slice(candidates);
@@ -103,6 +123,23 @@ fn linearised_heldout(
     let own: Vec<Vec<usize>> =
         candidates.iter().zip(offsets).map(|(c, &o)| (o..o + c.len()).filter_map(column).collect()).collect();
     let (n_all, g_all) = normal_equations(&a, &r, None);
+    let offsets_all = model.offsets().to_vec();
+    let values: Vec<Vec<f64>> = candidates
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let o = offsets_all[effects.len() + k];
+            let idx: Vec<usize> = current.iter().chain(&own[k]).copied().collect();
+            let mut v = vec![0.0; c.len()];
+            if let Some(step) = solve(&n_all, &g_all, &idx) {
+                for (&col, s) in idx.iter().zip(&step).skip(current.len()) {
+                    let param = used[col];
+                    v[param - o] = at[param] + s / norms[param];
+                }
+            }
+            v
+        })
+        .collect();
     let stride = ctx.pre.stride();
     let mut sse = vec![0.0; candidates.len()];
     for (_, test) in &ctx.folds {
@@ -128,7 +165,7 @@ fn linearised_heldout(
                 .sum::<f64>();
         }
     }
-    Ok(sse)
+    Ok((sse, values))
 }
 
 /// `AᵀA` and `Aᵀr` over all rows, or over `rows` only.

@@ -127,6 +127,9 @@ struct Candidate {
     stats: Stats,
     /// Held-out errors in fold order (pairs with the current model's).
     errors: Vec<f64>,
+    /// Why its values are beyond [`Plausibility`] in the fit of every fold, when they are: a fit running
+    /// away (a block trading with the probe), refused when first scored rather than refitted every step.
+    runaway: Option<String>,
 }
 
 /// Where the selection stands between phases.
@@ -214,15 +217,31 @@ pub(crate) fn select(robot: &Robot, data: &Dataset, config: &Config) -> Result<(
 /// Every fold's fit starts cold, at the initial values: warm starts from the current model's fold fits
 /// were tried (issue #23) and changed the UR10's choice (B 0.457 → 0.569 mm) while running slower —
 /// nearly dependent parameters leave flat valleys where the stopping rule halts elsewhere.
-fn score(ctx: &Ctx<'_>, effects: &[Effect], c: Effect) -> Result<Result<Candidate, String>, DiagnoseError> {
+fn score(
+    ctx: &Ctx<'_>,
+    effects: &[Effect],
+    c: Effect,
+    plausibility: &Plausibility,
+) -> Result<Result<Candidate, String>, DiagnoseError> {
     let (new_free, fixed) = ctx.new_free(effects, c)?;
     if new_free == 0 {
         return Ok(Err(fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone())));
     }
     let mut with = effects.to_vec();
     with.push(c);
-    let (stats, errors) = ctx.heldout_errors(&with, &ctx.folds)?;
-    Ok(Ok(Candidate { effect: c, new_free, stats, errors }))
+    let (stats, errors, thetas) = ctx.heldout_fits(&with, &ctx.folds)?;
+    let o: usize = effects.iter().map(Effect::len).sum();
+    let reasons: Vec<Option<String>> = thetas
+        .iter()
+        .filter(|t| t.len() >= o + c.len())
+        .map(|t| implausible_values(ctx, &t[o..o + c.len()], c, plausibility))
+        .collect();
+    let runaway = if !reasons.is_empty() && reasons.iter().all(Option::is_some) {
+        reasons.into_iter().flatten().next().map(|r| format!("{r} in the fit of every fold"))
+    } else {
+        None
+    };
+    Ok(Ok(Candidate { effect: c, new_free, stats, errors, runaway }))
 }
 
 /// Phase 3: forward steps. Each round scores every remaining candidate (in parallel); an exponential
@@ -235,9 +254,19 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
         let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exp(c)).collect();
         let effects = sel.effects.clone();
         // Score before you fit: the candidates ranked by a linearised step, the shortlist fitted in full.
-        let first = crate::screen::shortlist(ctx, &effects, &sel.theta, &linear, config.screen)?;
+        let runs_away = |c: Effect, v: &[f64]| implausible_values(ctx, v, c, &config.plausibility);
+        let screened = crate::screen::shortlist(ctx, &effects, &sel.theta, &linear, config.screen, &runs_away)?;
+        for (c, reason) in screened.runaway {
+            sel.refused.push(Refusal {
+                effect: c.label(),
+                reason,
+                remedy: "check the robot description (masses, link lengths) and the units of the data".into(),
+            });
+            pool.retain(|p| *p != c);
+        }
+        let first = screened.keep;
         let mut scored: Vec<(Effect, Result<Candidate, String>)> =
-            first.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
+            first.par_iter().map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?))).collect::<Result<_, DiagnoseError>>()?;
         let gain = |s: &Result<Candidate, String>| {
             s.as_ref().ok().map(|s| sel.current.heldout_rms_mm - s.stats.heldout_rms_mm)
         };
@@ -255,7 +284,7 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
             .filter(|c| is_exp(c) && best_gain > 0.0 && linear_gain(c.joint()) >= 0.5 * best_gain)
             .collect();
         let more: Vec<(Effect, Result<Candidate, String>)> =
-            second.par_iter().map(|&c| Ok((c, score(ctx, &effects, c)?))).collect::<Result<_, DiagnoseError>>()?;
+            second.par_iter().map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?))).collect::<Result<_, DiagnoseError>>()?;
         scored.extend(more);
         let mut still: Vec<Effect> = pool
             .iter()
@@ -270,10 +299,17 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
                         sel.skipped.push((c.label(), reason));
                     }
                 }
-                Ok(s) => {
-                    still.push(c);
-                    results.push(s);
-                }
+                Ok(s) => match &s.runaway {
+                    Some(reason) => sel.refused.push(Refusal {
+                        effect: c.label(),
+                        reason: reason.clone(),
+                        remedy: "check the robot description (masses, link lengths) and the units of the data".into(),
+                    }),
+                    None => {
+                        still.push(c);
+                        results.push(s);
+                    }
+                },
             }
         }
         pool = still;
@@ -339,7 +375,11 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
 /// [`Plausibility`]; `None` when they are within.
 fn implausible(ctx: &Ctx<'_>, model: &Model, f: &Fit, effect: Effect, p: &Plausibility) -> Option<String> {
     let o = model.offsets()[model.offsets().len() - 1];
-    let v = &f.theta[o..o + effect.len()];
+    implausible_values(ctx, &f.theta[o..o + effect.len()], effect, p)
+}
+
+/// [`implausible`] of an effect's fitted values `v` (internal units).
+fn implausible_values(ctx: &Ctx<'_>, v: &[f64], effect: Effect, p: &Plausibility) -> Option<String> {
     let deg = units::degrees;
     let over = |what: &str, value: f64, bound: f64, unit: &str| {
         (value.abs() > bound)

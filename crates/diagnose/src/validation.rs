@@ -257,19 +257,32 @@ impl<'a> Ctx<'a> {
     /// Held-out statistics and every held-out error (3-D norm, mm, in fold order: the same order for any
     /// model on the same folds, so that two models' errors pair up measurement by measurement).
     pub(crate) fn heldout_errors(&self, effects: &[Effect], folds: &Folds) -> Result<(Stats, Vec<f64>), DiagnoseError> {
+        let (stats, errors, _) = self.heldout_fits(effects, folds)?;
+        Ok((stats, errors))
+    }
+
+    /// [`Ctx::heldout_errors`] with each fold's fitted parameters (empty for an empty fold).
+    pub(crate) fn heldout_fits(
+        &self,
+        effects: &[Effect],
+        folds: &Folds,
+    ) -> Result<(Stats, Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
         // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
-        let per_fold: Vec<Vec<f64>> = folds
+        let per_fold: Vec<(Vec<f64>, Vec<f64>)> = folds
             .par_iter()
-            .filter(|(train, test)| !train.is_empty() && !test.is_empty())
             .map(|(train, test)| {
+                if train.is_empty() || test.is_empty() {
+                    return Ok((Vec::new(), Vec::new()));
+                }
                 let model = self.model(effects, train)?;
                 let f = fit(self.robot, &model, self.data, train, &self.pre)?;
                 let (r, _) = residuals(self.robot, &model, &f.theta, self.data, test, &self.pre, false)?;
-                Ok(norms(&r, self.pre.stride()))
+                Ok((norms(&r, self.pre.stride()), f.theta))
             })
             .collect::<Result<_, DiagnoseError>>()?;
-        let errors: Vec<f64> = per_fold.concat();
-        Ok((Stats::of(&errors), errors))
+        let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _)| e.iter().copied()).collect();
+        let thetas = per_fold.into_iter().map(|(_, t)| t).collect();
+        Ok((Stats::of(&errors), errors, thetas))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
