@@ -1,6 +1,7 @@
 //! The ladder: candidate effects added one at a time, each judged on held-out data, the smaller block
 //! preferred when two explain the data alike; then the final model on all data and the report.
 
+use rayon::prelude::*;
 use serde::Serialize;
 use thermokin_chain::Robot;
 use thermokin_io::units;
@@ -181,7 +182,7 @@ pub fn diagnose_with_progress(
     data: &Dataset,
     holdout: Option<&Dataset>,
     config: &Config,
-    progress: &mut dyn FnMut(Progress),
+    progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Report, DiagnoseError> {
     let outer = match config.validation {
         Validation::Nested { outer } => nested_folds(data, config, outer).len(),
@@ -440,40 +441,55 @@ fn nested(
     data: &Dataset,
     config: &Config,
     outer: usize,
-    tell: &mut dyn FnMut(String),
+    tell: &mut (dyn FnMut(String) + Send),
 ) -> Result<Nested, DiagnoseError> {
     let folds = nested_folds(data, config, outer);
     let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
     let always = always_estimated(config, data);
+    // Outer folds in parallel (each selection is parallel inside too; the outer level keeps both cores
+    // busy through the selection's sequential parts), told as each finishes, gathered in fold order.
+    let tell = std::sync::Mutex::new(tell);
+    let per_fold: Vec<Option<(OuterFold, Vec<f64>, Vec<f64>)>> = folds
+        .par_iter()
+        .enumerate()
+        .map(|(k, (train, test))| {
+            if train.is_empty() || test.is_empty() {
+                return Ok(None);
+            }
+            let subset = data.subset(train);
+            let (_, effects) = select(robot, &subset, &inner)?;
+            if let Ok(mut tell) = tell.lock() {
+                tell(format!("nested validation, outer fold {} of {}", k + 1, folds.len()));
+            }
+            let ctx = Ctx::new(robot, &subset, &inner);
+            let test_set = data.subset(test);
+            let test_pre = prepare_against(robot, &test_set, &subset, config.orientation_lever_mm);
+            let rows: Vec<usize> = (0..test.len()).collect();
+            let mut fold_norms = Vec::with_capacity(2);
+            for e in [&always, &effects] {
+                let (model, f) = ctx.full_fit(e)?;
+                let (r, _) = residuals(robot, &model, &f.theta, &test_set, &rows, &test_pre, false)?;
+                fold_norms.push(norms(&r, test_pre.stride()));
+            }
+            let selected = fold_norms.pop().unwrap_or_default();
+            let nominal = fold_norms.pop().unwrap_or_default();
+            let outcome = OuterFold {
+                fold: k + 1,
+                poses: test.len(),
+                nominal: Stats::of(&nominal),
+                selected: Stats::of(&selected),
+                effects: effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
+            };
+            Ok(Some((outcome, nominal, selected)))
+        })
+        .collect::<Result<_, DiagnoseError>>()?;
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
     let mut outcomes = Vec::new();
-    for (k, (train, test)) in folds.iter().enumerate() {
-        if train.is_empty() || test.is_empty() {
-            continue;
-        }
-        let subset = data.subset(train);
-        let (_, effects) = select(robot, &subset, &inner)?;
-        tell(format!("nested validation, outer fold {} of {}", k + 1, folds.len()));
-        let ctx = Ctx::new(robot, &subset, &inner);
-        let test_set = data.subset(test);
-        let test_pre = prepare_against(robot, &test_set, &subset, config.orientation_lever_mm);
-        let rows: Vec<usize> = (0..test.len()).collect();
-        let mut fold_stats = Vec::new();
-        for (e, errors) in [(&always, &mut nominal_norms), (&effects, &mut selected_norms)] {
-            let (model, f) = ctx.full_fit(e)?;
-            let (r, _) = residuals(robot, &model, &f.theta, &test_set, &rows, &test_pre, false)?;
-            let n = norms(&r, test_pre.stride());
-            fold_stats.push(Stats::of(&n));
-            errors.extend(n);
-        }
-        outcomes.push(OuterFold {
-            fold: k + 1,
-            poses: test.len(),
-            nominal: fold_stats[0],
-            selected: fold_stats[1],
-            effects: effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
-        });
+    for (outcome, nominal, selected) in per_fold.into_iter().flatten() {
+        nominal_norms.extend(nominal);
+        selected_norms.extend(selected);
+        outcomes.push(outcome);
     }
     let total: f64 = selected_norms.iter().map(|x| x * x).sum();
     // One fold dominates when it holds more than half of the squared error with at most twice its

@@ -87,7 +87,13 @@ pub(crate) fn shortlist(
     let mut order: Vec<usize> = Vec::new();
     for (k, (&c, v)) in candidates.iter().zip(&values).enumerate() {
         match implausible(c, v) {
-            Some(reason) => runaway.push((c, format!("{reason}, by one linearised step on all data"))),
+            // "its translation fitted at 575 mm (…)" → "one linearised step on all data puts its translation
+            // at 575 mm (…)": a prediction, not a fit — far off where the block trades with another.
+            Some(reason) => {
+                let reason =
+                    format!("one linearised step on all data puts {}", reason.replacen(" fitted at ", " at ", 1));
+                runaway.push((c, reason));
+            }
             None => order.push(k),
         }
     }

@@ -265,8 +265,10 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
             pool.retain(|p| *p != c);
         }
         let first = screened.keep;
-        let mut scored: Vec<(Effect, Result<Candidate, String>)> =
-            first.par_iter().map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?))).collect::<Result<_, DiagnoseError>>()?;
+        let mut scored: Vec<(Effect, Result<Candidate, String>)> = first
+            .par_iter()
+            .map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?)))
+            .collect::<Result<_, DiagnoseError>>()?;
         let gain = |s: &Result<Candidate, String>| {
             s.as_ref().ok().map(|s| sel.current.heldout_rms_mm - s.stats.heldout_rms_mm)
         };
@@ -283,8 +285,10 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
             .copied()
             .filter(|c| is_exp(c) && best_gain > 0.0 && linear_gain(c.joint()) >= 0.5 * best_gain)
             .collect();
-        let more: Vec<(Effect, Result<Candidate, String>)> =
-            second.par_iter().map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?))).collect::<Result<_, DiagnoseError>>()?;
+        let more: Vec<(Effect, Result<Candidate, String>)> = second
+            .par_iter()
+            .map(|&c| Ok((c, score(ctx, &effects, c, &config.plausibility)?)))
+            .collect::<Result<_, DiagnoseError>>()?;
         scored.extend(more);
         let mut still: Vec<Effect> = pool
             .iter()
