@@ -431,6 +431,9 @@ fn nested_folds(data: &Dataset, config: &Config, outer: usize) -> crate::validat
     folds_for(data, outer, config.seed ^ 0x0e7e_5eed, config.folds_by).folds
 }
 
+/// One outer fold's outcome and its test poses' errors under the nominal and the selected model.
+type OuterOutcome = (OuterFold, Vec<f64>, Vec<f64>);
+
 /// Nested cross-validation of the whole procedure: for each outer fold, the selection runs on the
 /// training part only, the model it picks is fitted there and scored on the fold's test part; the
 /// nominal model (the always-estimated blocks) is scored the same way. Every outer fold is reported on
@@ -449,7 +452,7 @@ fn nested(
     // Outer folds in parallel (each selection is parallel inside too; the outer level keeps both cores
     // busy through the selection's sequential parts), told as each finishes, gathered in fold order.
     let tell = std::sync::Mutex::new(tell);
-    let per_fold: Vec<Option<(OuterFold, Vec<f64>, Vec<f64>)>> = folds
+    let per_fold: Vec<Option<OuterOutcome>> = folds
         .par_iter()
         .enumerate()
         .map(|(k, (train, test))| {

@@ -223,6 +223,9 @@ pub(crate) struct Ctx<'a> {
     pub(crate) forward: Folds,
 }
 
+/// What [`Ctx::heldout_fits`] returns.
+pub(crate) type HeldoutFits = (Stats, Vec<f64>, Vec<Vec<f64>>);
+
 impl<'a> Ctx<'a> {
     /// The folds and per-measurement quantities of `data`.
     pub(crate) fn new(robot: &'a Robot, data: &'a Dataset, config: &crate::Config) -> Self {
@@ -261,12 +264,9 @@ impl<'a> Ctx<'a> {
         Ok((stats, errors))
     }
 
-    /// [`Ctx::heldout_errors`] with each fold's fitted parameters (empty for an empty fold).
-    pub(crate) fn heldout_fits(
-        &self,
-        effects: &[Effect],
-        folds: &Folds,
-    ) -> Result<(Stats, Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
+    /// [`Ctx::heldout_errors`] with each fold's fitted parameters (empty for an empty fold): the
+    /// statistics, the errors in fold order, the parameters per fold.
+    pub(crate) fn heldout_fits(&self, effects: &[Effect], folds: &Folds) -> Result<HeldoutFits, DiagnoseError> {
         // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
         let per_fold: Vec<(Vec<f64>, Vec<f64>)> = folds
             .par_iter()
