@@ -340,13 +340,18 @@ fn forward(ctx: &Ctx<'_>, config: &Config, sel: &mut Selection, mut pool: Vec<Ef
                 .then(a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm))
         });
         let mut chosen = None;
+        let mut forward_before: Option<f64> = None;
         for cand in eligible {
             let mut with = sel.effects.clone();
             with.push(cand.effect);
             if cand.effect.is_time_dependent() {
-                let before = ctx.heldout(&sel.effects, &ctx.forward)?;
+                // The current model's forward-chained error, once per step however many drifts are tried.
+                let before = match forward_before {
+                    Some(b) => b,
+                    None => *forward_before.insert(ctx.heldout(&sel.effects, &ctx.forward)?.heldout_rms_mm),
+                };
                 let after = ctx.heldout(&with, &ctx.forward)?;
-                if after.heldout_rms_mm >= before.heldout_rms_mm {
+                if after.heldout_rms_mm >= before {
                     continue;
                 }
             }
