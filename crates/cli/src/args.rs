@@ -355,12 +355,13 @@ pub struct DiagnoseArgs {
     /// --noise, the verdict's noise floor then includes the orientations.
     #[arg(long, value_name = "DEG")]
     pub orientation_noise: Option<f64>,
-    /// Write the identified robot — registration (as the base row, so that FK gives the measurement
-    /// frame), tool point, base frame, joint offsets, link deviations — as a robot TOML (or URDF if FILE
-    /// ends in .urdf) that fk, ik and compensate accept. When the chosen model holds effects a robot file
-    /// cannot hold yet (compliance, gear ratio, cyclic error, thermal drift), the others are refitted
-    /// without them and that model — the one written — is scored beside the export. Refused when the
-    /// chosen model does not beat the nominal one on data it never saw, unless --force-export.
+    /// Write the identified robot — every chosen effect, the model the report scores: registration (as
+    /// the base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
+    /// deviations, gear ratios, cyclic errors, gravity compliance (with the --payload measured with) and
+    /// each drifting row with its law — as a robot TOML that fk, ik and compensate accept (--time,
+    /// --temperature, --payload give the state). A FILE ending in .urdf holds the geometry and zeros only
+    /// and names in its header what it cannot hold. Refused when the chosen model does not beat the
+    /// nominal one on data it never saw, unless --force-export.
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,
     /// Write --export even when the chosen model does not beat the nominal one held out.
