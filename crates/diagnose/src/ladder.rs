@@ -451,7 +451,7 @@ fn nested(
     let always = always_estimated(config, data);
     // Outer folds in parallel (each selection is parallel inside too; the outer level keeps both cores
     // busy through the selection's sequential parts), told as each finishes, gathered in fold order.
-    let tell = std::sync::Mutex::new(tell);
+    let told = std::sync::Mutex::new((tell, 0usize));
     let per_fold: Vec<Option<OuterOutcome>> = folds
         .par_iter()
         .enumerate()
@@ -461,8 +461,11 @@ fn nested(
             }
             let subset = data.subset(train);
             let (_, effects) = select(robot, &subset, &inner)?;
-            if let Ok(mut tell) = tell.lock() {
-                tell(format!("nested validation, outer fold {} of {}", k + 1, folds.len()));
+            // Told as folds finish, counted (their order varies with the threads; the count does not).
+            if let Ok(mut state) = told.lock() {
+                state.1 += 1;
+                let n = state.1;
+                (state.0)(format!("nested validation, {n} of {} outer folds done", folds.len()));
             }
             let ctx = Ctx::new(robot, &subset, &inner);
             let test_set = data.subset(test);

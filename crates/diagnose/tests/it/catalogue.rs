@@ -133,7 +133,7 @@ fn progress_is_told_once_per_stage_and_ends_at_the_total() {
     .unwrap();
     // The selection, 5 outer folds, the hold-out set: 7 stages, told in order.
     assert_eq!(seen.iter().map(|s| (s.0, s.1)).collect::<Vec<_>>(), (1..=7).map(|k| (k, 7)).collect::<Vec<_>>());
-    assert!(seen[1].2.contains("outer fold 1 of 5") && seen[6].2 == "hold-out set", "{seen:?}");
+    assert!(seen[1].2.contains("1 of 5 outer folds done") && seen[6].2 == "hold-out set", "{seen:?}");
 }
 
 #[test]
