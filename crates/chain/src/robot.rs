@@ -22,6 +22,15 @@ pub struct LinkMass {
     pub com_mm: Vector3<f64>,
 }
 
+impl LinkMass {
+    /// Two bodies in one frame as one: masses added, centres weighted by mass (a link and the payload it
+    /// carries). The sum must be positive.
+    pub fn combined_with(self, other: LinkMass) -> LinkMass {
+        let mass_kg = self.mass_kg + other.mass_kg;
+        LinkMass { mass_kg, com_mm: (self.com_mm * self.mass_kg + other.com_mm * other.mass_kg) / mass_kg }
+    }
+}
+
 /// Rated maximum speed and effort of a joint — what URDF's `<limit velocity effort>` and a controller's
 /// axis data carry: rad/s and N·m for a revolute joint, mm/s and N for a prismatic one. Description data
 /// carried beside the chain, like [`LinkMass`]; `None` where the robot's description does not say.
@@ -107,10 +116,7 @@ impl Robot {
         };
         self.masses[last] = Some(match self.masses[last] {
             None => payload,
-            Some(link) => {
-                let mass_kg = link.mass_kg + payload.mass_kg;
-                LinkMass { mass_kg, com_mm: (link.com_mm * link.mass_kg + payload.com_mm * payload.mass_kg) / mass_kg }
-            }
+            Some(link) => link.combined_with(payload),
         });
         Ok(self)
     }

@@ -428,13 +428,18 @@ impl RobotModel {
         self.drift_at(state)?.apply(self.robot.chain(), &TableSemantics::Canonical)
     }
 
-    /// Gravity torques at commanded `q` with the state's payload (or the model's), N·m.
+    /// Gravity torques at commanded `q` with the state's payload (or the model's) on the last link, N·m —
+    /// the masses merged as [`Robot::with_payload`] merges them, without copying the chain (this runs at
+    /// every step of every inversion).
     fn torques(&self, q: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
-        let robot = match state.payload.or(self.payload) {
-            Some(p) => &self.robot.clone().with_payload(p)?,
-            None => &self.robot,
+        let Some(payload) = state.payload.or(self.payload) else {
+            return Ok(self.robot.gravity_torques(q, &self.down)?);
         };
-        Ok(robot.gravity_torques(q, &self.down)?)
+        let mut masses = self.robot.masses().to_vec();
+        if let Some(last) = masses.last_mut() {
+            *last = Some(last.map_or(payload, |link| link.combined_with(payload)));
+        }
+        Ok(thermokin_chain::gravity_torques(self.robot.chain(), &masses, q, &self.down)?)
     }
 
     /// The joint values the chain sees when `commanded` is commanded in `state` (step 1 of the law).
