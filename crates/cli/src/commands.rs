@@ -292,38 +292,21 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
         )));
     }
     let chain = loaded.robot.chain();
-    let start = match &a.seed {
-        Some(s) => joints(chain, "seed", s)?,
-        None => vec![0.0; chain.dof()],
-    };
-    let settings = RunSettings {
-        semantics: loaded.semantics.clone(),
-        accumulation: a.accumulate.into(),
-        ik: Params::default(),
-        start,
-    };
+    let settings = run_settings(&a, loaded.semantics.clone(), chain)?;
     if a.stream {
         return compensate_streamed(&a, &loaded, &table, settings);
     }
     let prog = program(&a.targets)?;
-    let started = std::time::Instant::now();
     let (run, transient) = match &a.robot.profile {
         None | Some(TimeProfile::Static) => {
             (compensate_static(chain, &table, &prog, &settings).map_err(Failure::input)?, false)
         }
         Some(profile) => {
             let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
-            let steps = cycle.times().map_err(Failure::input)?.len();
-            let bar = progress_bar(steps as u64, "compensating");
-            let run = compensate_transient(chain, &table, profile, cycle, &prog, &settings, |done, _| {
-                if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
-                    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-                }
-                bar.set_position(done as u64);
-            })
-            .map_err(Failure::input)?;
-            bar.finish_and_clear();
-            (run, true)
+            let run = with_cycle_bar(cycle, |progress| {
+                compensate_transient(chain, &table, profile, cycle, &prog, &settings, progress)
+            })?;
+            (run.map_err(Failure::input)?, true)
         }
     };
     write_outputs(&a, &loaded, &run, transient)?;
@@ -361,35 +344,17 @@ fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failu
             "--stream runs a plain robot's static case; a calibrated robot's run holds its targets in memory"
         )));
     }
-    let chain = model.robot().chain();
-    let start = match &a.seed {
-        Some(s) => joints(chain, "seed", s)?,
-        None => vec![0.0; chain.dof()],
-    };
-    let settings = RunSettings {
-        semantics: loaded.semantics.clone(),
-        accumulation: a.accumulate.into(),
-        ik: Params::default(),
-        start,
-    };
+    let settings = run_settings(a, loaded.semantics.clone(), model.robot().chain())?;
     let prog = program(&a.targets)?;
     // A warm-up cycle when asked for (--duration), or for a growing table with no moment given; one
     // state per target otherwise (its own columns, else --time / --temperature / --payload).
     let growing = !matches!(profile, TimeProfile::Static);
     let run = if a.duration.is_some() || (growing && loaded.state.time_min.is_none()) {
         let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
-        let steps = cycle.times().map_err(Failure::input)?.len();
-        let bar = progress_bar(steps as u64, "compensating");
-        let started = std::time::Instant::now();
-        let run =
-            thermokin_compensate::compensate_model_cycle(&model, cycle, &prog, &loaded.state, &settings, |done, _| {
-                if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
-                    bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-                }
-                bar.set_position(done as u64);
-            });
-        bar.finish_and_clear();
-        run.map_err(Failure::input)?
+        with_cycle_bar(cycle, |progress| {
+            thermokin_compensate::compensate_model_cycle(&model, cycle, &prog, &loaded.state, &settings, progress)
+        })?
+        .map_err(Failure::input)?
     } else {
         thermokin_compensate::compensate_model(&model, &prog, &loaded.state, &settings).map_err(Failure::input)?
     };
@@ -397,6 +362,35 @@ fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failu
     write_outputs(a, loaded, &run, with_time)?;
     print_summary(&run.summary, a.json);
     Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
+}
+
+/// A run's settings: the semantics, `--accumulate`, the IK's defaults, and `--seed` (degrees; all zero by
+/// default) for the first solve.
+fn run_settings(
+    a: &CompensateArgs,
+    semantics: thermokin_deform::TableSemantics,
+    chain: &Chain,
+) -> Result<RunSettings, Failure> {
+    let start = match &a.seed {
+        Some(s) => joints(chain, "seed", s)?,
+        None => vec![0.0; chain.dof()],
+    };
+    Ok(RunSettings { semantics, accumulation: a.accumulate.into(), ik: Params::default(), start })
+}
+
+/// `run` given a progress callback over `cycle`'s steps: a bar on stderr once the run has lasted a second.
+fn with_cycle_bar<T>(cycle: Cycle, run: impl FnOnce(&mut dyn FnMut(usize, usize)) -> T) -> Result<T, Failure> {
+    let steps = cycle.times().map_err(Failure::input)?.len();
+    let bar = progress_bar(steps as u64, "compensating");
+    let started = std::time::Instant::now();
+    let out = run(&mut |done, _| {
+        if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        }
+        bar.set_position(done as u64);
+    });
+    bar.finish_and_clear();
+    Ok(out)
 }
 
 /// `compensate --stream`: the static run in chunks, --out written as it goes (atomically: a temporary file

@@ -56,13 +56,6 @@ impl Read for Targets {
     }
 }
 
-/// Peak resident memory of this process, MiB (Linux `VmHWM`); `None` elsewhere.
-fn peak_rss_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let kb: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
-}
-
 fn main() {
     // `cargo bench` passes `--bench`; anything else (e.g. `cargo test --benches`) runs a tiny size only.
     let full = std::env::args().any(|a| a == "--bench");
@@ -86,7 +79,7 @@ fn main() {
         let summary =
             compensate_static_stream(&chain, &table, &mut reader, &mut std::io::sink(), &settings, |_| {}).unwrap();
         let seconds = t0.elapsed().as_secs_f64();
-        let rss = peak_rss_mib();
+        let rss = thermokin_testdata::peak_rss_mib();
         println!(
             "program_stream {n} targets: {seconds:.3} s, {:.2} µs per target, {} failed, peak RSS {} MiB",
             seconds / n as f64 * 1e6,

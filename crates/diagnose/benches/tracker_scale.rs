@@ -10,13 +10,6 @@ use std::time::Instant;
 
 use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
 
-/// Peak resident memory of this process, MiB (Linux `VmHWM`); `None` elsewhere.
-fn peak_rss_mib() -> Option<f64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let kb: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb / 1024.0)
-}
-
 fn main() {
     // `cargo bench` passes `--bench`; anything else (`cargo test --benches`) runs a tiny size only.
     let full = std::env::args().any(|a| a == "--bench");
@@ -49,7 +42,7 @@ fn main() {
         let t0 = Instant::now();
         let report = diagnose(&robot, &data, None, &Config::default()).unwrap();
         let seconds = t0.elapsed().as_secs_f64();
-        let rss = peak_rss_mib();
+        let rss = thermokin_testdata::peak_rss_mib();
         let chosen: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
         println!(
             "diagnose_scale {poses} poses: {seconds:.1} s nested, peak RSS {} MiB; chose {chosen:?}",

@@ -1,4 +1,6 @@
-//! Test support: where the workspace and its fixtures are, and Table 9's IRB 140 built in code.
+//! Test support: where the workspace and its fixtures are, Table 9's IRB 140 built in code, and what the
+//! simulated trackers of several crates' tests share (seeded Gaussian noise, poses inside the limits, a
+//! bench's peak memory).
 //!
 //! Every file a test reads is inside the repository (`fixtures/`, `configs/`): the authors' published
 //! files, the real tracker data and the URDFs were copied in with their provenance (`fixtures/README.md`),
@@ -76,4 +78,34 @@ pub fn error_mm_deg(values: [f64; 6]) -> thermokin_chain::ErrorParams {
         nalgebra::Vector3::new(dx, dy, dz),
         nalgebra::Vector3::new(ox.to_radians(), oy.to_radians(), oz.to_radians()),
     )
+}
+
+/// A standard normal sample (Box–Muller), from a seeded generator.
+pub fn gauss(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
+    use rand::Rng;
+    let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// Joint values drawn uniformly 10 % inside each joint's limits (real calibration poses avoid them); every
+/// joint must have limits.
+pub fn random_q(chain: &thermokin_chain::Chain, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<f64> {
+    use rand::Rng;
+    chain
+        .joints()
+        .iter()
+        .map(|j| {
+            let l = j.limits.expect("a simulated tracker draws poses inside the joint limits");
+            let m = 0.1 * (l.upper - l.lower);
+            rng.random_range(l.lower + m..l.upper - m)
+        })
+        .collect()
+}
+
+/// Peak resident memory of this process, MiB (Linux `VmHWM`); `None` elsewhere: what a bench reports
+/// beside its time.
+pub fn peak_rss_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
 }

@@ -378,23 +378,21 @@ fn urdf_robots_everywhere_and_import_export() {
     assert_eq!(o.status.code(), Some(2));
 }
 
+/// `simulate` of a static set (`--minutes 0`) of `poses` poses with `effect` hidden, into `file` in the
+/// test's directory, with `extra` flags; the path written.
+fn simulate_static(file: &str, effect: &str, poses: &str, extra: &[&str]) -> PathBuf {
+    let m = tmp(file);
+    let mut args = vec!["simulate", "--robot", ROBOT, "--effect", effect, "--poses", poses, "--minutes", "0"];
+    args.extend_from_slice(extra);
+    args.extend(["-o", m.to_str().unwrap()]);
+    let o = thermokin(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    m
+}
+
 #[test]
 fn simulate_then_diagnose() {
-    let m = tmp("sim.csv");
-    let o = thermokin(&[
-        "simulate",
-        "--robot",
-        ROBOT,
-        "--effect",
-        "joint_offset:2=0.05",
-        "--poses",
-        "120",
-        "--minutes",
-        "0",
-        "-o",
-        m.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let m = simulate_static("sim.csv", "joint_offset:2=0.05", "120", &[]);
     let report = tmp("report.json");
     let plots = tmp("dplots");
     let calibrated = tmp("calibrated.toml");
@@ -517,25 +515,8 @@ const J: &str = "10,20,30,40,50,60";
 
 #[test]
 fn diagnose_with_an_explicit_holdout() {
-    let (train, test) = (tmp("train.csv"), tmp("test.csv"));
-    for (path, seed) in [(&train, "1"), (&test, "2")] {
-        let o = thermokin(&[
-            "simulate",
-            "--robot",
-            ROBOT,
-            "--effect",
-            "tool_frame=0.3,0.2,-0.4",
-            "--poses",
-            "60",
-            "--minutes",
-            "0",
-            "--seed",
-            seed,
-            "-o",
-            path.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", stderr(&o));
-    }
+    let train = simulate_static("train.csv", "tool_frame=0.3,0.2,-0.4", "60", &["--seed", "1"]);
+    let test = simulate_static("test.csv", "tool_frame=0.3,0.2,-0.4", "60", &["--seed", "2"]);
     let o = thermokin(&[
         "diagnose",
         "--robot",
@@ -557,23 +538,7 @@ fn diagnose_with_an_explicit_holdout() {
 fn diagnose_fits_orientations_of_a_6d_probe() {
     // A probe turned on the tool (rotation only): a position-only diagnosis cannot see it; with the
     // orientation columns `simulate --orientation-noise` writes, it is named and fitted.
-    let m = tmp("six_d.csv");
-    let o = thermokin(&[
-        "simulate",
-        "--robot",
-        ROBOT,
-        "--effect",
-        "tool_frame=0,0,0,0.3,-0.2,0.4",
-        "--poses",
-        "60",
-        "--minutes",
-        "0",
-        "--orientation-noise",
-        "0.002",
-        "-o",
-        m.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let m = simulate_static("six_d.csv", "tool_frame=0,0,0,0.3,-0.2,0.4", "60", &["--orientation-noise", "0.002"]);
     let text = std::fs::read_to_string(&m).unwrap();
     assert!(text.lines().next().unwrap().contains(",rx,ry,rz"), "{text}");
     let o = thermokin(&[
@@ -996,21 +961,7 @@ fn compensate_replays_the_authors_increments_on_request() {
 
 #[test]
 fn diagnose_quiet_prints_no_progress() {
-    let m = tmp("sim-quiet.csv");
-    let o = thermokin(&[
-        "simulate",
-        "--robot",
-        ROBOT,
-        "--effect",
-        "joint_offset:2=0.05",
-        "--poses",
-        "60",
-        "--minutes",
-        "0",
-        "-o",
-        m.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let m = simulate_static("sim-quiet.csv", "joint_offset:2=0.05", "60", &[]);
     let o = thermokin(&["diagnose", "--quiet", "--robot", ROBOT, "--measurements", m.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(stderr(&o).is_empty(), "{}", stderr(&o));

@@ -13,7 +13,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_diagnose::{Dataset, Measurement};
-use thermokin_testdata::{error_mm_deg, workspace};
+use thermokin_testdata::{error_mm_deg, gauss, random_q, workspace};
 
 const ROBOT: &str = "configs/irb140.toml";
 /// Tracker noise per axis, mm.
@@ -27,24 +27,6 @@ fn dir(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("thermokin-loop-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-fn gauss(rng: &mut ChaCha8Rng) -> f64 {
-    let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
-/// Joint values 10 % inside the limits.
-fn random_q(chain: &Chain, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    chain
-        .joints()
-        .iter()
-        .map(|j| {
-            let l = j.limits.unwrap();
-            let m = 0.1 * (l.upper - l.lower);
-            rng.random_range(l.lower + m..l.upper - m)
-        })
-        .collect()
 }
 
 /// Sensor readings at minute `t`, °C: joint 2's motor fast (τ = 30 min, +8 K), joint 3's late (+4 K from

@@ -3,37 +3,21 @@
 //! put on its targets, checked by a forward model written here by hand.
 
 use nalgebra::{Point3, Vector3};
-use thermokin_chain::{Chain, ErrorParams, LinkMass, OperatingState, Robot, Target};
+use thermokin_chain::{Chain, ErrorParams, LinkMass, OperatingState, Target};
 use thermokin_compensate::{
     Cycle, RunSettings, compensate_model, compensate_model_cycle, compensate_static, compensate_transient,
 };
 use thermokin_deform::{
-    AfterStabilization, DeviationTable, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TableSemantics,
-    TimeProfile,
+    AfterStabilization, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TableSemantics, TimeProfile,
 };
-use thermokin_ik::{Params, Status};
-use thermokin_io::{read_deviation_table, read_robot, read_targets};
-use thermokin_testdata::{error_mm_deg, workspace};
+use thermokin_ik::Status;
+use thermokin_testdata::error_mm_deg;
 
-fn robot() -> Robot {
-    read_robot(&workspace("configs/irb140.toml")).unwrap()
-}
+use crate::case_studies::{program, robot, table};
 
-fn program() -> Vec<Target> {
-    read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap()
-}
-
-fn table() -> DeviationTable {
-    read_deviation_table(&workspace("fixtures/paper/deformations-case-study.toml")).unwrap()
-}
-
+/// The case-study settings under the canonical reading (a robot file's drift is canonical).
 fn settings() -> RunSettings {
-    RunSettings {
-        semantics: TableSemantics::Canonical,
-        accumulation: Default::default(),
-        ik: Params::default(),
-        start: [0.0, 20.0, 20.0, 0.0, -45.0, 0.0].map(f64::to_radians).to_vec(),
-    }
+    crate::case_studies::settings(TableSemantics::Canonical)
 }
 
 /// Largest joint difference between two runs' rows, radians.

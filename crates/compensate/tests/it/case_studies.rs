@@ -11,19 +11,19 @@ use thermokin_ik::{Params, Status};
 use thermokin_io::{Robot, read_deviation_table, read_paper_results, read_robot, read_targets};
 use thermokin_testdata::workspace;
 
-fn robot() -> Robot {
+pub(crate) fn robot() -> Robot {
     read_robot(&workspace("configs/irb140.toml")).unwrap()
 }
 
-fn program() -> Vec<Target> {
+pub(crate) fn program() -> Vec<Target> {
     read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap()
 }
 
-fn table() -> DeviationTable {
+pub(crate) fn table() -> DeviationTable {
     read_deviation_table(&workspace("fixtures/paper/deformations-case-study.toml")).unwrap()
 }
 
-fn settings(semantics: TableSemantics) -> RunSettings {
+pub(crate) fn settings(semantics: TableSemantics) -> RunSettings {
     RunSettings {
         semantics,
         accumulation: Default::default(),

@@ -10,24 +10,7 @@ use thermokin_diagnose::{Dataset, Measurement};
 /// Noise per axis, mm.
 pub const NOISE_MM: f64 = 0.005;
 
-/// A standard normal sample (Box–Muller).
-pub fn gauss(rng: &mut ChaCha8Rng) -> f64 {
-    let (u1, u2): (f64, f64) = (rng.random_range(f64::MIN_POSITIVE..1.0), rng.random_range(0.0..1.0));
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
-
-/// Joint values drawn uniformly 10 % inside each joint's limits (real calibration poses avoid them).
-pub fn random_q(chain: &Chain, rng: &mut ChaCha8Rng) -> Vec<f64> {
-    chain
-        .joints()
-        .iter()
-        .map(|j| {
-            let l = j.limits.unwrap();
-            let m = 0.1 * (l.upper - l.lower);
-            rng.random_range(l.lower + m..l.upper - m)
-        })
-        .collect()
-}
+pub use thermokin_testdata::{gauss, random_q};
 
 /// `n` poses 10 % inside the limits: the commanded joints are recorded, the robot stands at
 /// `actual(commanded)`, its TCP is measured with [`NOISE_MM`] of Gaussian noise per axis (Box–Muller).
