@@ -155,6 +155,8 @@ struct Link {
     axis_vec: Vector3<f64>,
     kind: JointKind,
     zero: f64,
+    /// `(sin zero, cos zero)`: the joint's motion from given sines of `q` by angle addition.
+    zero_sin_cos: (f64, f64),
 }
 
 /// A serial chain in the same-orientation extended convention: base row, joints, tool row.
@@ -215,13 +217,16 @@ impl Chain {
             {
                 return Err(ChainError::BadLimits { joint: index + 1, lower: l.lower, upper: l.upper });
             }
+            // As `set_joint_error` computes them, so that a row rewritten in place equals a rebuilt one.
+            let (rotation, partial) = row_rotations(&joint.error.rotation);
             links.push(Link {
-                fixed: Frame::new(joint.error.rotation_matrix(), joint.offset + joint.error.translation),
-                partial: partial_rotations(&joint.error.rotation),
+                fixed: Frame::new(rotation, joint.offset + joint.error.translation),
+                partial,
                 axis: AxisKind::classify(&joint.axis),
                 axis_vec: joint.axis.into_inner(),
                 kind: joint.kind,
                 zero: joint.zero,
+                zero_sin_cos: sin_cos(joint.zero),
             });
         }
         Ok(Self {
@@ -312,8 +317,9 @@ impl Chain {
         let joint = &mut self.joints[index];
         joint.error = error;
         let link = &mut self.links[index];
-        link.fixed = Frame::new(error.rotation_matrix(), joint.offset + error.translation);
-        link.partial = partial_rotations(&error.rotation);
+        let (rotation, partial) = row_rotations(&error.rotation);
+        link.fixed = Frame::new(rotation, joint.offset + error.translation);
+        link.partial = partial;
         Ok(())
     }
 
@@ -363,40 +369,79 @@ impl Chain {
         self.joints.iter().zip(q).all(|(j, &v)| j.limits.is_none_or(|l| l.contains(v)))
     }
 
-    /// Applies joint `i`'s motion to the frame in front of it (after its fixed row).
+    /// Applies joint `i`'s motion to the frame in front of it (after its fixed row); `given` is
+    /// `(sin q, cos q)` when the caller has it (then `q + zero` by angle addition, no sine evaluated).
     #[inline(always)]
-    fn apply_joint(link: &Link, frame: &mut Frame, q: f64) {
-        let v = q + link.zero;
+    fn apply_joint(link: &Link, frame: &mut Frame, q: f64, given: Option<(f64, f64)>) {
         match link.kind {
             JointKind::Revolute => {
-                let (s, c) = v.sin_cos();
+                let (s, c) = match given {
+                    Some((sq, cq)) => {
+                        let (sz, cz) = link.zero_sin_cos;
+                        (sq * cz + cq * sz, cq * cz - sq * sz)
+                    }
+                    None => (q + link.zero).sin_cos(),
+                };
                 frame.rotate_local(&link.axis, s, c);
             }
-            JointKind::Prismatic => frame.translate_local(&(link.axis_vec * v)),
+            JointKind::Prismatic => frame.translate_local(&(link.axis_vec * (q + link.zero))),
         }
     }
 
     /// Forward kinematics, unchecked length: `base_from_tcp`.
     #[inline]
-    fn tool_frame_unchecked(&self, q: &[f64]) -> Frame {
+    fn tool_frame_unchecked(&self, q: &[f64], given: Option<&[(f64, f64)]>) -> Frame {
         let mut base_from_link = self.base_frame;
-        for (link, &qi) in self.links.iter().zip(q) {
+        for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
             base_from_link = base_from_link.mul(&link.fixed);
-            Self::apply_joint(link, &mut base_from_link, qi);
+            Self::apply_joint(link, &mut base_from_link, qi, given.map(|g| g[i]));
         }
         base_from_link.mul(&self.tool_frame)
+    }
+
+    /// Checks a caller's sines of the joint values: one `(sin q_i, cos q_i)` per joint, each the sine
+    /// and cosine of the same angle to rounding (`s² + c² = 1` within 1e-12).
+    fn check_sin_cos(&self, q_sin_cos: &[(f64, f64)]) -> Result<(), ChainError> {
+        if q_sin_cos.len() != self.dof() {
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got: q_sin_cos.len() });
+        }
+        match q_sin_cos.iter().position(|(s, c)| {
+            let off = (s * s + c * c - 1.0).abs();
+            off.is_nan() || off > 1e-12
+        }) {
+            Some(i) => {
+                let (s, c) = q_sin_cos[i];
+                Err(ChainError::BadSinCos { joint: i + 1, norm: s * s + c * c })
+            }
+            None => Ok(()),
+        }
     }
 
     /// The TCP pose in the base frame (`base_from_tcp`), mm. `q` in radians (mm for prismatic joints).
     pub fn tool_pose(&self, q: &[f64]) -> Result<Isometry3<f64>, ChainError> {
         self.check_q(q)?;
-        Ok(self.tool_frame_unchecked(q).to_isometry())
+        Ok(self.tool_frame_unchecked(q, None).to_isometry())
     }
 
     /// The TCP position and rotation matrix, without building a quaternion (the IK inner loop).
     pub fn tool_position_rotation(&self, q: &[f64]) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
         self.check_q(q)?;
-        let f = self.tool_frame_unchecked(q);
+        let f = self.tool_frame_unchecked(q, None);
+        Ok((f.trans, f.rot))
+    }
+
+    /// [`Chain::tool_position_rotation`] with the caller's `(sin q_i, cos q_i)` of each joint value
+    /// (read for revolute joints; a prismatic joint uses `q_i`): the identification's fast path, which
+    /// evaluates the same measured joints at every iteration and computes their sines once. The joint's
+    /// zero offset is added by angle addition; the result equals the plain path to rounding.
+    pub fn tool_position_rotation_sin_cos(
+        &self,
+        q: &[f64],
+        q_sin_cos: &[(f64, f64)],
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
+        self.check_q(q)?;
+        self.check_sin_cos(q_sin_cos)?;
+        let f = self.tool_frame_unchecked(q, Some(q_sin_cos));
         Ok((f.trans, f.rot))
     }
 
@@ -408,7 +453,7 @@ impl Chain {
         let mut base_from_link = self.base_frame;
         for (link, &qi) in self.links.iter().zip(q) {
             base_from_link = base_from_link.mul(&link.fixed);
-            Self::apply_joint(link, &mut base_from_link, qi);
+            Self::apply_joint(link, &mut base_from_link, qi, None);
             out.push(base_from_link.to_isometry());
         }
         out.push(base_from_link.mul(&self.tool_frame).to_isometry());
@@ -445,7 +490,7 @@ impl Chain {
             let z = base_from_link.rot * link.axis_vec;
             let o = base_from_link.trans;
             *col = [o.x, o.y, o.z, z.x, z.y, z.z];
-            Self::apply_joint(link, &mut base_from_link, qi);
+            Self::apply_joint(link, &mut base_from_link, qi, None);
         }
         let tcp = base_from_link.mul(&self.tool_frame);
         let p = tcp.trans;
@@ -464,11 +509,47 @@ impl Chain {
     }
 }
 
+/// `(sin x, cos x)`, by their Taylor polynomials for the small angles of error parameters and drifts
+/// (|x| ≤ 1e-2 rad: the first omitted terms, `x⁹/9!` and `x¹⁰/10!`, are below 3e-22 of the result,
+/// far under its rounding of 1.1e-16), by the library otherwise — the per-measurement rows of a drift
+/// pay no library sine.
+pub fn sin_cos(x: f64) -> (f64, f64) {
+    if x.abs() <= 1e-2 {
+        let x2 = x * x;
+        let s = x * (1.0 - x2 / 6.0 * (1.0 - x2 / 20.0 * (1.0 - x2 / 42.0)));
+        let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
+        (s, c)
+    } else {
+        x.sin_cos()
+    }
+}
+
 /// `[Rx(a), Rx(a) · Ry(b)]` for error angles `(a, b, c)`.
 fn partial_rotations(angles: &Vector3<f64>) -> [Matrix3<f64>; 2] {
-    let rx = Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::x_axis(), angles.x));
-    let ry = Matrix3::from(nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), angles.y));
-    [rx, rx * ry]
+    row_rotations(angles).1
+}
+
+/// A row's angular correction `Rx(a) · Ry(b) · Rz(c)` (eq. 19, as [`crate::xyz_rotation`]) with its
+/// partial products `[Rx(a), Rx(a) · Ry(b)]` (the axes of its Jacobian columns), from one sine and
+/// cosine per angle: the per-measurement path of a drifting row ([`Chain::set_joint_error`]).
+fn row_rotations(angles: &Vector3<f64>) -> (Matrix3<f64>, [Matrix3<f64>; 2]) {
+    let (sa, ca) = sin_cos(angles.x);
+    let (sb, cb) = sin_cos(angles.y);
+    let (sc, cc) = sin_cos(angles.z);
+    let full = Matrix3::new(
+        cb * cc,
+        -cb * sc,
+        sb,
+        ca * sc + sa * sb * cc,
+        ca * cc - sa * sb * sc,
+        -sa * cb,
+        sa * sc - ca * sb * cc,
+        sa * cc + ca * sb * sc,
+        ca * cb,
+    );
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, ca, -sa, 0.0, sa, ca);
+    let rx_ry = Matrix3::new(cb, 0.0, sb, sa * sb, ca, -sa * cb, -ca * sb, sa, ca * cb);
+    (full, [rx, rx_ry])
 }
 
 fn check_row(which: &'static str, row: &FixedRow) -> Result<(), ChainError> {
@@ -540,17 +621,54 @@ impl Chain {
     }
 
     /// [`Chain::pose_and_parameter_jacobian`] into a caller's matrix (`6 × parameter_layout().len()`,
-    /// every entry overwritten): no allocation, one pass along the chain — the identification's
-    /// per-measurement path. A translation parameter's column is its direction `u`; a rotation's is
-    /// `[u × (p − o); u]` with `o` the row's origin and `p` the TCP; a zero offset's is the joint's own
-    /// column of the geometric Jacobian. The TCP is known only at the end of the pass, so a rotation
-    /// column is first written as `[o × u; u]` (that is `−u × o`) and `u × p` added once `p` is known.
+    /// every entry overwritten): no allocation, one pass along the chain.
     pub fn pose_and_parameter_jacobian_into(
         &self,
         q: &[f64],
         jac: &mut Matrix6xX<f64>,
     ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
         self.check_q(q)?;
+        self.parameter_jacobian_unchecked(q, None, jac, &ParameterRows::all(self.dof()))
+    }
+
+    /// [`Chain::pose_and_parameter_jacobian_into`] for the rows `rows` names only, the other columns of
+    /// `jac` left as they were: the identification's per-measurement path, where a model identifies a
+    /// few rows and pays for those. A translation parameter's column is its direction `u`; a rotation's
+    /// is `[u × (p − o); u]` with `o` the row's origin and `p` the TCP; a zero offset's is the joint's
+    /// own column of the geometric Jacobian. The TCP is known only at the end of the pass, so a rotation
+    /// column is first written as `[o × u; u]` (that is `−u × o`) and `u × p` added once `p` is known.
+    pub fn pose_and_parameter_jacobian_rows(
+        &self,
+        q: &[f64],
+        jac: &mut Matrix6xX<f64>,
+        rows: &ParameterRows,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
+        self.check_q(q)?;
+        self.parameter_jacobian_unchecked(q, None, jac, rows)
+    }
+
+    /// [`Chain::pose_and_parameter_jacobian_rows`] with the caller's `(sin q_i, cos q_i)`, as in
+    /// [`Chain::tool_position_rotation_sin_cos`].
+    pub fn pose_and_parameter_jacobian_rows_sin_cos(
+        &self,
+        q: &[f64],
+        q_sin_cos: &[(f64, f64)],
+        jac: &mut Matrix6xX<f64>,
+        rows: &ParameterRows,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
+        self.check_q(q)?;
+        self.check_sin_cos(q_sin_cos)?;
+        self.parameter_jacobian_unchecked(q, Some(q_sin_cos), jac, rows)
+    }
+
+    /// The pass behind the parameter Jacobians, `q` checked.
+    fn parameter_jacobian_unchecked(
+        &self,
+        q: &[f64],
+        given: Option<&[(f64, f64)]>,
+        jac: &mut Matrix6xX<f64>,
+        rows: &ParameterRows,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ChainError> {
         let layout = self.parameter_layout();
         if jac.ncols() != layout.len() {
             return Err(ChainError::DescriptionLength {
@@ -558,6 +676,10 @@ impl Chain {
                 expected: layout.len(),
                 got: jac.ncols(),
             });
+        }
+        if rows.joints.len() != self.dof() || rows.zeros.len() != self.dof() {
+            let got = rows.joints.len().min(rows.zeros.len());
+            return Err(ChainError::WrongJointCount { expected: self.dof(), got });
         }
         /// Column `col`: a direction (`None`: a translation) or a turn about `u` through `origin`, its
         /// `u × p` part still to add.
@@ -569,7 +691,8 @@ impl Chain {
             jac.fixed_view_mut::<3, 1>(0, col).copy_from(&linear);
             jac.fixed_view_mut::<3, 1>(3, col).copy_from(&angular);
         }
-        /// The six columns of a row whose parent frame is `parent` and whose translation ends at `origin`.
+        /// The six columns of a row whose parent frame is `parent` and whose translation ends at `origin`:
+        /// rotation axes `R_P e_x`, `R_P Rx(a) e_y`, `R_P Rx(a) Ry(b) e_z`.
         fn row(
             jac: &mut Matrix6xX<f64>,
             first: usize,
@@ -581,32 +704,81 @@ impl Chain {
                 put(jac, first + k, parent.rot.column(k).into_owned(), None);
             }
             put(jac, first + 3, parent.rot.column(0).into_owned(), Some(origin));
-            put(jac, first + 4, (parent.rot * partial[0]).column(1).into_owned(), Some(origin));
-            put(jac, first + 5, (parent.rot * partial[1]).column(2).into_owned(), Some(origin));
+            put(jac, first + 4, parent.rot * partial[0].column(1), Some(origin));
+            put(jac, first + 5, parent.rot * partial[1].column(2), Some(origin));
         }
         let world = Frame::new(Matrix3::identity(), Vector3::zeros());
-        let base_origin = self.base.translation + self.base.error.translation;
-        row(jac, layout.base(), &world, base_origin, &self.row_partials[0]);
+        if rows.base {
+            let base_origin = self.base.translation + self.base.error.translation;
+            row(jac, layout.base(), &world, base_origin, &self.row_partials[0]);
+        }
         let mut frame = self.base_frame;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
-            let origin = frame.rot * link.fixed.trans + frame.trans;
-            row(jac, layout.joint(i), &frame, origin, &link.partial);
+            if rows.joints[i] {
+                let origin = frame.rot * link.fixed.trans + frame.trans;
+                row(jac, layout.joint(i), &frame, origin, &link.partial);
+            }
             frame = frame.mul(&link.fixed);
-            let z = frame.rot * link.axis_vec;
-            let revolute = link.kind == JointKind::Revolute;
-            put(jac, layout.zero(i), z, revolute.then_some(frame.trans));
-            Self::apply_joint(link, &mut frame, qi);
+            if rows.zeros[i] {
+                let z = frame.rot * link.axis_vec;
+                let revolute = link.kind == JointKind::Revolute;
+                put(jac, layout.zero(i), z, revolute.then_some(frame.trans));
+            }
+            Self::apply_joint(link, &mut frame, qi, given.map(|g| g[i]));
         }
-        let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
-        row(jac, layout.tool(), &frame, tool_origin, &self.row_partials[1]);
+        if rows.tool {
+            let tool_origin = frame.rot * (self.tool.translation + self.tool.error.translation) + frame.trans;
+            row(jac, layout.tool(), &frame, tool_origin, &self.row_partials[1]);
+        }
         let tcp = frame.mul(&self.tool_frame);
         let p = tcp.trans;
-        for col in 0..jac.ncols() {
+        let mut finish = |col: usize| {
             let u: Vector3<f64> = jac.fixed_view::<3, 1>(3, col).into_owned();
             let add = u.cross(&p);
             let mut linear = jac.fixed_view_mut::<3, 1>(0, col);
             linear += add;
+        };
+        if rows.base {
+            (0..6).for_each(|k| finish(layout.base() + k));
+        }
+        for i in 0..self.dof() {
+            if rows.joints[i] {
+                (0..6).for_each(|k| finish(layout.joint(i) + k));
+            }
+            if rows.zeros[i] {
+                finish(layout.zero(i));
+            }
+        }
+        if rows.tool {
+            (0..6).for_each(|k| finish(layout.tool() + k));
         }
         Ok((tcp.trans, tcp.rot))
+    }
+}
+
+/// Which rows of [`Chain::parameter_jacobian`] a caller needs
+/// ([`Chain::pose_and_parameter_jacobian_rows`]): the base row, each joint's error row, the tool row,
+/// each joint's zero offset.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ParameterRows {
+    /// The base row's six columns.
+    pub base: bool,
+    /// Joint `i`'s six error columns.
+    pub joints: Vec<bool>,
+    /// The tool row's six columns.
+    pub tool: bool,
+    /// Joint `i`'s zero-offset column.
+    pub zeros: Vec<bool>,
+}
+
+impl ParameterRows {
+    /// Every row of a chain with `dof` joints.
+    pub fn all(dof: usize) -> Self {
+        Self { base: true, joints: vec![true; dof], tool: true, zeros: vec![true; dof] }
+    }
+
+    /// No row of a chain with `dof` joints: the pose only.
+    pub fn none(dof: usize) -> Self {
+        Self { base: false, joints: vec![false; dof], tool: false, zeros: vec![false; dof] }
     }
 }

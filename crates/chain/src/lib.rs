@@ -13,7 +13,9 @@ mod measurements;
 mod robot;
 mod so3;
 
-pub use chain::{Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, PoseAndJacobian};
+pub use chain::{
+    Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,
+};
 pub use dh::{DhConvention, DhRow, DhTable};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use factors::JointFactor;
@@ -37,6 +39,14 @@ pub enum ChainError {
     NonFiniteJoint {
         /// 1-based joint number.
         joint: usize,
+    },
+    /// A caller's sine and cosine of a joint value that are not those of one angle.
+    #[error("joint {joint}: the given sine and cosine are not those of one angle (s² + c² = {norm})")]
+    BadSinCos {
+        /// 1-based joint number.
+        joint: usize,
+        /// `s² + c²`.
+        norm: f64,
     },
     /// A parameter of a joint row that is NaN or infinite.
     #[error("joint {joint}: {field} is not finite")]

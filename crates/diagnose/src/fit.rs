@@ -10,7 +10,7 @@ use serde::Serialize;
 
 use thermokin_chain::{Robot, rotation_log};
 
-use crate::model::{Model, Pre};
+use crate::model::{Model, Pre, TAU_RANGE_MIN};
 use crate::{Dataset, DiagnoseError};
 
 /// A parameter the data cannot identify, fixed at its starting value.
@@ -103,6 +103,7 @@ pub(crate) fn residuals(
             m,
             &pre.rise[i],
             &pre.torques[i],
+            Some(&pre.sin_cos[i]),
             with_jacobian.then_some(&mut block),
             &mut cache,
         )?;
@@ -267,49 +268,89 @@ const CONVERGED: f64 = 1e-9;
 const REUSE_JACOBIAN: f64 = 1e-4;
 
 /// The state of one Levenberg–Marquardt pass: the column-scaled normal matrix of the current Jacobian
-/// (unit columns, so that mm, radians and minutes weigh alike), its scales and the damping.
+/// (unit columns, so that mm, radians and minutes weigh alike), its scales and the damping. The scaled
+/// Jacobian `A = J·D` is never formed: `AᵀA = D·JᵀJ·D` and `Aᵀr = D·Jᵀr` from the Jacobian itself (one
+/// pass over its `m × p` entries per product, no copy of them).
 struct Lm {
-    a: Mat<f64>,
+    /// The free columns of the Jacobian.
+    cols: Vec<usize>,
     ata: Mat<f64>,
+    /// `JᵀJ` of every column, reused for the scales.
+    gram: Mat<f64>,
     scale: Vec<f64>,
+    /// `∂θ/∂u` of each free column at the Jacobian's parameters: 1, or `−τ²` for a time constant moved
+    /// as its rate `u = 1/τ`.
+    chain: Vec<f64>,
     lambda: f64,
     /// The Jacobian is not the current parameters' (a chord step reused it).
     stale: bool,
     /// The Jacobian was refreshed after a failed chord step: the iteration is retried with it.
     refreshed: bool,
+    /// The damping was raised after a failed step since the last accepted one.
+    raised: bool,
 }
 
 impl Lm {
-    fn new(p: usize, m: usize) -> Self {
+    fn new(cols: &[usize]) -> Self {
+        let p = cols.len();
         Self {
-            a: Mat::zeros(m, p),
+            cols: cols.to_vec(),
             ata: Mat::zeros(p, p),
+            gram: Mat::zeros(0, 0),
             scale: vec![1.0; p],
+            chain: vec![1.0; p],
             lambda: 1e-3,
             stale: false,
             refreshed: false,
+            raised: false,
         }
     }
 
-    /// Takes `jac`'s columns `cols`, scaled to unit norm, and forms their normal matrix.
-    fn refresh(&mut self, jac: &Mat<f64>, cols: &[usize]) {
-        for (k, &c) in cols.iter().enumerate() {
-            let column = jac.col(c);
-            let n = column.norm_l2().max(1e-300);
-            self.scale[k] = n;
-            self.a.col_mut(k).copy_from(column * (1.0 / n));
+    /// Takes `jac`'s free columns (at `theta`), in the coordinates moved ([`Rates`]) and scaled to unit
+    /// norm, and forms their normal matrix.
+    fn refresh(&mut self, jac: &Mat<f64>, theta: &[f64], rates: &Rates) {
+        let n = jac.ncols();
+        if self.gram.nrows() != n {
+            self.gram = Mat::zeros(n, n);
         }
-        matmul(self.ata.as_mut(), Accum::Replace, self.a.as_ref().transpose(), self.a.as_ref(), 1.0, Par::Seq);
+        matmul(self.gram.as_mut(), Accum::Replace, jac.as_ref().transpose(), jac.as_ref(), 1.0, Par::Seq);
+        for (k, &c) in self.cols.iter().enumerate() {
+            self.chain[k] = rates.dtheta_du(c, theta[c]);
+            // A column that moves nothing here (a time constant held at its bound) keeps scale 1: its
+            // row of the normal matrix is zero and the damping alone keeps it where it is.
+            let norm = self.gram[(c, c)].max(0.0).sqrt() * self.chain[k].abs();
+            self.scale[k] = if norm > 0.0 && norm.is_finite() { norm } else { 1.0 };
+        }
+        let weight = |k: usize| self.chain[k] / self.scale[k];
+        for (k, &c) in self.cols.iter().enumerate() {
+            for (l, &d) in self.cols.iter().enumerate() {
+                self.ata[(k, l)] = self.gram[(c, d)] * weight(k) * weight(l);
+            }
+        }
         self.refreshed = self.stale;
         self.stale = false;
     }
 
-    /// `Aᵀ r` on the scaled columns.
-    fn gradient(&self, r: &[f64]) -> Mat<f64> {
-        let mut g = Mat::<f64>::zeros(self.a.ncols(), 1);
+    /// `AᵀA` from the scaled columns themselves (one copy of them): the matrix the uncertainties invert.
+    /// Near-singular normal matrices (nearly dependent parameters, condition numbers of 1e15) are
+    /// factorised more reliably from unit columns than from `D·JᵀJ·D`, whose entries carry the rounding
+    /// of columns of very different sizes.
+    fn scaled_normal_matrix(&self, jac: &Mat<f64>) -> Mat<f64> {
+        let mut a = Mat::<f64>::zeros(jac.nrows(), self.cols.len());
+        for (k, &c) in self.cols.iter().enumerate() {
+            a.col_mut(k).copy_from(jac.col(c) * (self.chain[k] / self.scale[k]));
+        }
+        let mut ata = Mat::<f64>::zeros(self.cols.len(), self.cols.len());
+        matmul(ata.as_mut(), Accum::Replace, a.as_ref().transpose(), a.as_ref(), 1.0, Par::Seq);
+        ata
+    }
+
+    /// `Aᵀ r` on the scaled columns of `jac` (the Jacobian of the last refresh).
+    fn gradient(&self, jac: &Mat<f64>, r: &[f64]) -> Mat<f64> {
+        let mut full = Mat::<f64>::zeros(jac.ncols(), 1);
         let rv = faer::ColRef::from_slice(r);
-        matmul(g.as_mut(), Accum::Replace, self.a.as_ref().transpose(), rv.as_mat(), 1.0, Par::Seq);
-        g
+        matmul(full.as_mut(), Accum::Replace, jac.as_ref().transpose(), rv.as_mat(), 1.0, Par::Seq);
+        Mat::from_fn(self.cols.len(), 1, |k, _| full[(self.cols[k], 0)] * self.chain[k] / self.scale[k])
     }
 
     /// The damped step `(AᵀA + λ·diag) δ = Aᵀr` and the cost gain the linearised model predicts for it,
@@ -336,6 +377,34 @@ impl Lm {
     /// step (the damping then stays where it was).
     fn retry(&mut self) -> bool {
         std::mem::take(&mut self.refreshed)
+    }
+}
+
+/// The time constants of a model (an exponential drift's τ), which the fit moves as rates `u = 1/τ`:
+/// the drift's departure from the linear one is about proportional to `1/τ`, so that in τ the cost is a
+/// long curved valley towards τ → ∞ (a drift the data see as linear) that Gauss–Newton creeps along
+/// step by step, while in `1/τ` it is nearly quadratic and the linear limit is the point `u = 1/τ_max`.
+/// τ stays in [`TAU_RANGE_MIN`]; the reported τ and its standard deviation are in minutes (the
+/// deviation by the delta method, `σ_τ = τ² σ_u`).
+struct Rates {
+    columns: Vec<usize>,
+}
+
+impl Rates {
+    /// `∂θ_c/∂u_c` at `θ_c`.
+    fn dtheta_du(&self, c: usize, theta: f64) -> f64 {
+        if self.columns.contains(&c) { -theta * theta } else { 1.0 }
+    }
+
+    /// `θ_c` after the step `du` in column `c`'s moved coordinate.
+    fn moved(&self, c: usize, theta: f64, du: f64) -> f64 {
+        if self.columns.contains(&c) {
+            let (lo, hi) = TAU_RANGE_MIN;
+            let rate = (1.0 / theta + du).clamp(1.0 / hi, 1.0 / lo);
+            (1.0 / rate).clamp(lo, hi)
+        } else {
+            theta + du
+        }
     }
 }
 
@@ -368,6 +437,7 @@ pub(crate) fn fit_from(
     start: &Start,
 ) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
+    let rates = Rates { columns: model.time_constants() };
     let mut theta = start.theta.clone();
     let (mut r, mut jac) = fit_residuals(robot, model, &theta, data, rows, pre, true)?;
     let ssr = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>();
@@ -376,6 +446,7 @@ pub(crate) fn fit_from(
     let mut fixed = Vec::new();
     let mut cols: Vec<usize> = Vec::new();
     let mut scale: Vec<f64> = Vec::new();
+    let mut signs: Vec<f64> = Vec::new();
     let mut last_a = Mat::<f64>::zeros(0, 0);
     // Two passes: a parameter that acts only through another (an exponential drift's τ through its
     // amplitude, zero at the start) becomes identifiable once the first pass has moved the other.
@@ -391,10 +462,10 @@ pub(crate) fn fit_from(
         if p == 0 {
             break;
         }
-        let mut lm = Lm::new(p, rows.len() * pre.stride());
-        lm.refresh(&jac, &cols);
+        let mut lm = Lm::new(&cols);
+        lm.refresh(&jac, &theta, &rates);
         for _ in 0..100 {
-            let g = lm.gradient(&r);
+            let g = lm.gradient(&jac, &r);
             let mut step_taken = false;
             let mut converged = false;
             while lm.lambda < 1e12 {
@@ -411,7 +482,7 @@ pub(crate) fn fit_from(
                 }
                 let mut trial = theta.clone();
                 for (k, &c) in cols.iter().enumerate() {
-                    trial[c] += step[k] / lm.scale[k];
+                    trial[c] = rates.moved(c, theta[c], step[k] / lm.scale[k]);
                 }
                 // Residuals first; the Jacobian only for an accepted step.
                 let cost_before = cost;
@@ -423,11 +494,12 @@ pub(crate) fn fit_from(
                     r = rt;
                     cost = ct;
                     // The damping follows how well the linearised model predicted the gain (ρ, the
-                    // trust-region rule): less damping when it did (ρ > 3/4), more when the step gained
-                    // under a quarter of the prediction (a direction the data barely determine, where
-                    // the undamped step leaves the region the linearisation holds in).
+                    // trust-region rule): less damping when it did (ρ > 3/4) — unless this damping was
+                    // just reached from a failed step, when the smaller one is known to fail (a curved
+                    // valley of nearly dependent parameters, where alternating would waste every
+                    // other evaluation) — more when the step gained under a quarter of the prediction.
                     let rho = gain * cost_before / predicted.max(1e-300);
-                    if rho > 0.75 {
+                    if rho > 0.75 && !std::mem::take(&mut lm.raised) {
                         lm.lambda = (lm.lambda * 0.1).max(1e-12);
                     } else if rho < 0.25 {
                         lm.lambda *= 10.0;
@@ -440,7 +512,7 @@ pub(crate) fn fit_from(
                     // A small step keeps its Jacobian for the next (chord) step ([`REUSE_JACOBIAN`]).
                     if gain >= REUSE_JACOBIAN {
                         jac = fit_residuals(robot, model, &theta, data, rows, pre, true)?.1;
-                        lm.refresh(&jac, &cols);
+                        lm.refresh(&jac, &theta, &rates);
                     } else {
                         lm.stale = true;
                     }
@@ -449,17 +521,20 @@ pub(crate) fn fit_from(
                 }
                 if lm.stale {
                     jac = fit_residuals(robot, model, &theta, data, rows, pre, true)?.1;
-                    lm.refresh(&jac, &cols);
+                    lm.refresh(&jac, &theta, &rates);
                     break;
                 }
                 lm.lambda *= 10.0;
+                lm.raised = true;
             }
             if converged || (!step_taken && !lm.retry()) {
                 break;
             }
         }
-        scale = lm.scale.clone();
-        last_a = lm.ata;
+        // Back to θ's coordinates: a column's scale per unit of θ, and the sign `∂θ/∂u` gives a correlation.
+        scale = lm.scale.iter().zip(&lm.chain).map(|(s, d)| s / d.abs()).collect();
+        signs = lm.chain.iter().map(|d| d.signum()).collect();
+        last_a = lm.scaled_normal_matrix(&jac);
     }
     let p = cols.len();
     // Uncertainty: σ̂² (AᵀA)⁻¹ on the scaled columns, unscaled.
@@ -477,7 +552,7 @@ pub(crate) fn fit_from(
         }
         for i in 0..p {
             for j in i + 1..p {
-                let rho = inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
+                let rho = signs[i] * signs[j] * inv[(i, j)] / (inv[(i, i)] * inv[(j, j)]).sqrt();
                 if rho.abs() > NEARLY_DEPENDENT {
                     correlated.push(CorrelatedPair {
                         a: names[cols[i]].clone(),
@@ -529,12 +604,13 @@ pub(crate) fn initial_registration(
         rise: vec![vec![0.0; robot.chain().dof()]; n],
         lever_mm: None,
         weights: None,
+        sin_cos: Vec::new(),
     };
     let mut a = Vec::new();
     let mut b = Vec::new();
     for &i in rows {
         let m = &data.measurements[i];
-        if let Ok((p, _)) = model.predict(robot, &[], m, &pre.rise[i], &pre.torques[i], None, &mut None) {
+        if let Ok((p, _)) = model.predict(robot, &[], m, &pre.rise[i], &pre.torques[i], None, None, &mut None) {
             a.push(p);
             b.push(m.position_mm);
         }

@@ -3,7 +3,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix6xX, Vector3};
 use serde::Serialize;
-use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, Robot};
+use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, ParameterRows, Robot};
 use thermokin_deform::{AfterStabilization, DriftLaw, DriftRow, JointCorrection, RobotModel, Row, TimeProfile};
 
 use crate::{Dataset, DiagnoseError, Measurement};
@@ -323,6 +323,13 @@ pub(crate) struct ChainCache {
     /// Jacobian.
     q: Vec<f64>,
     pj: Matrix6xX<f64>,
+    /// The chain rows this model's Jacobian reads ([`Model::parameter_rows`]).
+    rows: ParameterRows,
+    /// Per measurement: each drift's (effect index, factor, ∂factor/∂τ) and each drifting row's deviation.
+    drift_scale: Vec<(usize, f64, f64)>,
+    drift_rows: Vec<(usize, ErrorParams)>,
+    /// `(sin, cos)` of the joint values the chain sees.
+    sin_cos: Vec<(f64, f64)>,
 }
 
 /// Reference time of the linear drift: the parameters are the deviation at 180 minutes (section 4).
@@ -330,6 +337,9 @@ pub const LINEAR_DRIFT_REFERENCE_MIN: f64 = 180.0;
 /// Largest time constant considered, minutes: beyond it the exponential is indistinguishable from the
 /// linear drift over any warm-up a user measures.
 const MAX_TAU_MIN: f64 = 1e4;
+/// The time constants an exponential drift is evaluated and fitted in, minutes: from a thousandth of a
+/// minute (a step) to [`MAX_TAU_MIN`].
+pub(crate) const TAU_RANGE_MIN: (f64, f64) = (1e-3, MAX_TAU_MIN);
 /// Initial time constant of an exponential drift, minutes.
 const INITIAL_TAU_MIN: f64 = 60.0;
 
@@ -400,22 +410,35 @@ impl Model {
         theta
     }
 
+    /// The columns that are time constants (an exponential drift's τ, minutes), with the range a fit
+    /// keeps them in: the identification moves their rate `1/τ` rather than τ ([`crate::fit`]).
+    pub(crate) fn time_constants(&self) -> Vec<usize> {
+        self.effects
+            .iter()
+            .zip(&self.offsets)
+            .filter(|(e, _)| matches!(e, Effect::ThermalDrift(_, DriftShape::Exponential)))
+            .map(|(_, &o)| o + 6)
+            .collect()
+    }
+
     /// Names of all parameters.
     pub fn parameter_names(&self) -> Vec<String> {
         self.effects.iter().flat_map(Effect::parameter_names).collect()
     }
 
     /// The drift factor `s = f(t) / f(180)` of a shape at one measurement (`f` the law of the deform
-    /// profile, [`DriftShape::profile`]) and `ds/dτ` for the exponential.
+    /// profile, [`DriftShape::profile`]) and `ds/dτ` for the exponential — zero where τ is held at a
+    /// bound of [`TAU_RANGE_MIN`], as `s` is.
     fn drift_factor(shape: DriftShape, m: &Measurement, temp_rise: f64, tau: f64) -> (f64, f64) {
-        let tau = tau.clamp(1e-3, MAX_TAU_MIN);
+        let held = !(TAU_RANGE_MIN.0 < tau && tau < TAU_RANGE_MIN.1);
+        let tau = tau.clamp(TAU_RANGE_MIN.0, TAU_RANGE_MIN.1);
         let Some(profile) = shape.profile(tau) else { return (temp_rise, 0.0) };
         let f = |t: f64| profile.time_factor(t).unwrap_or(0.0);
         let (ft, fr) = (f(m.time_min), f(LINEAR_DRIFT_REFERENCE_MIN));
         let ds = match shape {
             DriftShape::Exponential => {
                 let df = |t: f64| profile.time_factor_dtau(t).unwrap_or(0.0);
-                (df(m.time_min) * fr - ft * df(LINEAR_DRIFT_REFERENCE_MIN)) / (fr * fr)
+                if held { 0.0 } else { (df(m.time_min) * fr - ft * df(LINEAR_DRIFT_REFERENCE_MIN)) / (fr * fr) }
             }
             _ => 0.0,
         };
@@ -463,7 +486,7 @@ impl Model {
                     }
                 }
                 Effect::ThermalDrift(j, shape) => {
-                    let tau = theta.get(o + 6).copied().unwrap_or(0.0).clamp(1e-3, MAX_TAU_MIN);
+                    let tau = theta.get(o + 6).copied().unwrap_or(0.0).clamp(TAU_RANGE_MIN.0, TAU_RANGE_MIN.1);
                     let at_reference = six_at(theta, o);
                     let law = match shape.profile(tau) {
                         Some(profile) => DriftLaw::Time(profile),
@@ -543,6 +566,24 @@ impl Model {
         Ok(chain.with_base(row)?)
     }
 
+    /// The rows of the chain's parameter Jacobian this model's columns are read from in [`Model::predict`]:
+    /// the base row for a registration or base frame, the tool row for the tool, a joint's error row for
+    /// its link deviation or drift, its zero column for the joint-level effects.
+    fn parameter_rows(&self, dof: usize) -> ParameterRows {
+        let mut rows = ParameterRows::none(dof);
+        for e in &self.effects {
+            match *e {
+                Effect::Registration | Effect::BaseFrame => rows.base = true,
+                Effect::ToolPoint | Effect::ToolRotation | Effect::ToolFrame => rows.tool = true,
+                Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => rows.joints[j.index()] = true,
+                Effect::JointOffset(j) | Effect::JointCompliance(j) | Effect::JointScale(j) | Effect::Periodic(j) => {
+                    rows.zeros[j.index()] = true
+                }
+            }
+        }
+        rows
+    }
+
     /// Predicted TCP position and rotation of one measurement and, if asked, the 6 × len Jacobian of the
     /// pose as twists in the measurement frame (rows 0–2 the position, 3–5 the rotation: a small turn
     /// `δφ` of the predicted rotation, `R ↦ exp(δφ)·R`).
@@ -558,6 +599,7 @@ impl Model {
         m: &Measurement,
         temp_rise: &[f64],
         torques: &[f64],
+        q_sin_cos: Option<&[(f64, f64)]>,
         jacobian: Option<&mut Matrix6xX<f64>>,
         cache: &mut Option<ChainCache>,
     ) -> Result<(Vector3<f64>, Matrix3<f64>), DiagnoseError> {
@@ -568,15 +610,27 @@ impl Model {
             None => {
                 let (chain, joint_err) = self.static_chain(robot, theta)?;
                 let pj = Matrix6xX::zeros(chain.parameter_layout().len());
-                cache.insert(ChainCache { chain, joint_err, q: Vec::with_capacity(m.q.len()), pj })
+                let rows = self.parameter_rows(chain.dof());
+                cache.insert(ChainCache {
+                    chain,
+                    joint_err,
+                    q: Vec::with_capacity(m.q.len()),
+                    pj,
+                    rows,
+                    drift_scale: Vec::new(),
+                    drift_rows: Vec::new(),
+                    sin_cos: Vec::with_capacity(m.q.len()),
+                })
             }
         };
         // Per measurement: the joint values the joint-level effects move, and the drift rows.
         let mut q = std::mem::take(&mut cached.q);
         q.clear();
         q.extend_from_slice(&m.q);
-        let mut drift_scale: Vec<(usize, f64, f64)> = Vec::new(); // (effect index, s, ds/dτ)
-        let mut drift_rows: Vec<(usize, ErrorParams)> = Vec::new();
+        let mut drift_scale = std::mem::take(&mut cached.drift_scale);
+        let mut drift_rows = std::mem::take(&mut cached.drift_rows);
+        drift_scale.clear();
+        drift_rows.clear();
         for (k, (e, &o)) in self.effects.iter().zip(&self.offsets).enumerate() {
             match *e {
                 Effect::JointCompliance(j) => {
@@ -604,13 +658,36 @@ impl Model {
             let row = cached.joint_err[j].add(&d);
             cached.chain.set_joint_error(j, row)?;
         }
+        cached.drift_rows = drift_rows;
+        // The measured joints' sines, moved by angle addition where a joint-level effect moved the joint
+        // (by a small angle: [`thermokin_chain::sin_cos`] takes it without a library sine).
+        let sc = q_sin_cos.map(|given| {
+            cached.sin_cos.clear();
+            cached.sin_cos.extend(given.iter().zip(&q).zip(&m.q).map(|((&(s, c), &moved), &measured)| {
+                let d = moved - measured;
+                if d == 0.0 {
+                    (s, c)
+                } else {
+                    let (sd, cd) = thermokin_chain::sin_cos(d);
+                    (s * cd + c * sd, c * cd - s * sd)
+                }
+            }));
+            &cached.sin_cos[..]
+        });
         let registered = &cached.chain;
         let Some(jac) = jacobian else {
-            let pose = registered.tool_position_rotation(&q);
+            let pose = match sc {
+                Some(sc) => registered.tool_position_rotation_sin_cos(&q, sc),
+                None => registered.tool_position_rotation(&q),
+            };
             cached.q = q;
+            cached.drift_scale = drift_scale;
             return Ok(pose?);
         };
-        let pose = registered.pose_and_parameter_jacobian_into(&q, &mut cached.pj);
+        let pose = match sc {
+            Some(sc) => registered.pose_and_parameter_jacobian_rows_sin_cos(&q, sc, &mut cached.pj, &cached.rows),
+            None => registered.pose_and_parameter_jacobian_rows(&q, &mut cached.pj, &cached.rows),
+        };
         cached.q = q;
         let pose = pose?;
         let pj = &cached.pj;
@@ -658,6 +735,7 @@ impl Model {
                 }
             }
         }
+        cached.drift_scale = drift_scale;
         Ok(pose)
     }
 }
@@ -699,6 +777,9 @@ pub(crate) struct Pre {
     /// about 1 and residuals stay in millimetres); `None` when the set states none. Held-out errors are
     /// never weighted.
     pub(crate) weights: Option<Vec<Vector3<f64>>>,
+    /// Per measurement, `(sin q_i, cos q_i)` of its joint values: computed once, every evaluation of
+    /// every fit reads them ([`Chain::tool_position_rotation_sin_cos`]).
+    pub(crate) sin_cos: Vec<Vec<(f64, f64)>>,
 }
 
 impl Pre {
@@ -740,5 +821,6 @@ pub(crate) fn prepare_against(robot: &Robot, data: &Dataset, reference: &Dataset
         let mean = stds.iter().map(|v| v.sum()).sum::<f64>() / (3 * stds.len()) as f64;
         stds.iter().map(|v| v.map(|s| mean / s)).collect()
     });
-    Pre { torques, rise, lever_mm, weights }
+    let sin_cos = data.measurements.iter().map(|m| m.q.iter().map(|q| q.sin_cos()).collect()).collect();
+    Pre { torques, rise, lever_mm, weights, sin_cos }
 }

@@ -92,7 +92,7 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
     }
     let pre = prepare(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let (p, rot) = model.predict(robot, &theta, m, &pre.rise[i], &pre.torques[i], None, &mut None)?;
+        let (p, rot) = model.predict(robot, &theta, m, &pre.rise[i], &pre.torques[i], None, None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
         if let Some(sigma) = config.orientation_noise_rad {

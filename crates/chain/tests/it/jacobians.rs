@@ -131,3 +131,71 @@ fn the_fast_paths_equal_the_slow_ones() {
         assert_eq!(fast, before);
     }
 }
+
+#[test]
+fn small_angle_sines_are_the_library_ones_to_rounding() {
+    // The Taylor branch (|x| ≤ 1e-2) against the library's sin and cos: within one rounding of the
+    // result (2.3e-16 of cos ≈ 1; 2.3e-16 relative for sin).
+    let mut x = -1e-2;
+    while x <= 1e-2 {
+        let (s, c) = thermokin_chain::sin_cos(x);
+        assert!((s - x.sin()).abs() <= 2.3e-16 * x.abs().max(1e-300), "sin {x}: {s} vs {}", x.sin());
+        assert!((c - x.cos()).abs() <= 2.3e-16, "cos {x}: {c} vs {}", x.cos());
+        x += 1.37e-5;
+    }
+    // Beyond the branch, the library itself.
+    assert_eq!(thermokin_chain::sin_cos(0.5), 0.5f64.sin_cos());
+}
+
+#[test]
+fn the_identification_paths_equal_the_plain_ones() {
+    // Given sines of the joint values (angle addition with the zero offsets) and a subset of the
+    // parameter Jacobian's rows: equal to the plain FK and the full Jacobian to rounding (1e-12 of the
+    // column scale), the columns not asked for left untouched.
+    use thermokin_chain::ParameterRows;
+    let mut r = rng(43);
+    for chain in [irb140_like(&mut r, true), general_chain(&mut r)] {
+        let dof = chain.dof();
+        let layout = chain.parameter_layout();
+        for trial in 0..10 {
+            let q = random_q(&mut r, dof);
+            let sc: Vec<(f64, f64)> = q.iter().map(|v| v.sin_cos()).collect();
+            let (p, rot) = chain.tool_position_rotation(&q).unwrap();
+            let (pf, rotf) = chain.tool_position_rotation_sin_cos(&q, &sc).unwrap();
+            assert!((p - pf).norm() < 1e-9 && (rot - rotf).abs().max() < 1e-12);
+            let full = chain.parameter_jacobian(&q).unwrap();
+            let mut rows = ParameterRows::none(dof);
+            rows.base = trial % 2 == 0;
+            rows.tool = trial % 3 == 0;
+            rows.joints[trial % dof] = true;
+            rows.zeros[(trial + 1) % dof] = true;
+            let sentinel = 12345.0;
+            let mut some = Matrix6xX::from_element(layout.len(), sentinel);
+            let (ps, _) = chain.pose_and_parameter_jacobian_rows_sin_cos(&q, &sc, &mut some, &rows).unwrap();
+            assert!((ps - p).norm() < 1e-9);
+            let asked = |c: usize| {
+                (rows.base && c < 6)
+                    || (rows.tool && (layout.tool()..layout.tool() + 6).contains(&c))
+                    || (0..dof).any(|i| {
+                        (rows.joints[i] && (layout.joint(i)..layout.joint(i) + 6).contains(&c))
+                            || (rows.zeros[i] && c == layout.zero(i))
+                    })
+            };
+            let scale = full.abs().max().max(1.0);
+            for c in 0..layout.len() {
+                if asked(c) {
+                    let err = (some.column(c) - full.column(c)).abs().max();
+                    assert!(err < 1e-12 * scale, "column {c}: {err:e}");
+                } else {
+                    assert!(some.column(c).iter().all(|&v| v == sentinel), "column {c} was written");
+                }
+            }
+        }
+        // Sines that are not those of one angle are refused.
+        let q = random_q(&mut r, dof);
+        let mut sc: Vec<(f64, f64)> = q.iter().map(|v| v.sin_cos()).collect();
+        sc[0] = (0.5, 0.5);
+        assert!(chain.tool_position_rotation_sin_cos(&q, &sc).is_err());
+        assert!(chain.tool_position_rotation_sin_cos(&q, &sc[1..]).is_err());
+    }
+}
