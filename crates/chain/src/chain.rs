@@ -369,6 +369,17 @@ impl Chain {
         self.joints.iter().zip(q).all(|(j, &v)| j.limits.is_none_or(|l| l.contains(v)))
     }
 
+    /// The (0-based) joints whose values in `q` lie outside their limits.
+    pub fn outside_limits(&self, q: &[f64]) -> Vec<usize> {
+        self.joints
+            .iter()
+            .zip(q)
+            .enumerate()
+            .filter(|(_, (j, v))| j.limits.is_some_and(|l| !l.contains(**v)))
+            .map(|(i, _)| i)
+            .collect()
+    }
+
     /// Applies joint `i`'s motion to the frame in front of it (after its fixed row); `given` is
     /// `(sin q, cos q)` when the caller has it (then `q + zero` by angle addition, no sine evaluated).
     #[inline(always)]

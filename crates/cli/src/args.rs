@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use thermokin_deform::{AfterStabilization, TimeProfile};
+use thermokin_deform::TimeProfile;
 
 const AFTER_HELP: &str = "\
 Units: millimetres and degrees everywhere on the command line and in files.
@@ -134,7 +134,7 @@ pub struct RobotArgs {
     /// row; LOG.csv is `time_min,<sensor>,<sensor>,…` in minutes and °C, one row per reading, linearly
     /// interpolated), or a profile TOML file.
     #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
-    pub profile: Option<TimeProfile>,
+    pub profile: Option<thermokin_deform::ProfileSpec>,
     /// Operating time, minutes since the cold start of a warm-up: for a robot file whose rows drift with
     /// time (a calibrated robot, `[[drift]]`), and for fk/ik with --profile. A targets file's `time_min`
     /// column overrides it per target.
@@ -496,56 +496,9 @@ pub struct ReproduceArgs {
     pub check: Option<PathBuf>,
 }
 
-/// Parses `static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`, `temperature:LOG.csv`
-/// (every row scaled by the mean logged temperature rise; the table then holds values per kelvin), or a
-/// TOML file holding a profile (`kind = "exponential"`, `tau_min = 45.0`).
-pub fn parse_profile(s: &str) -> Result<TimeProfile, String> {
-    if s.ends_with(".toml") {
-        let path = std::path::Path::new(s);
-        let text = thermokin_io::read_text(path).map_err(|e| e.to_string())?;
-        return toml::from_str(&text).map_err(|e| format!("{s}: {}", e.message()));
-    }
-    let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
-    if kind == "temperature" {
-        let log = thermokin_io::read_temperature_log(std::path::Path::new(rest)).map_err(|e| e.to_string())?;
-        return Ok(TimeProfile::Temperature { log, sensors: Vec::new(), reference_c: None });
-    }
-    let num = |v: &str| -> Result<f64, String> {
-        if v.trim().is_empty() {
-            return Err(format!(
-                "`{kind}` needs a value after a colon, e.g. {kind}:180 (see --help for every profile)"
-            ));
-        }
-        let x: f64 = v.trim().parse().map_err(|_| format!("`{v}` is not a number"))?;
-        if x.is_finite() { Ok(x) } else { Err(format!("`{v}` is not finite")) }
-    };
-    let positive = |v: &str, what: &str| -> Result<f64, String> {
-        let x = num(v)?;
-        if x > 0.0 { Ok(x) } else { Err(format!("{what} must be positive, got {x}")) }
-    };
-    let p = match kind {
-        "static" if rest.is_empty() => TimeProfile::Static,
-        "linear" => TimeProfile::Linear {
-            stabilization_min: positive(rest, "the stabilization time")?,
-            after: AfterStabilization::Plateau,
-        },
-        "linear-grow" => TimeProfile::Linear {
-            stabilization_min: positive(rest, "the stabilization time")?,
-            after: AfterStabilization::KeepGrowing,
-        },
-        "exp" => TimeProfile::Exponential { tau_min: positive(rest, "the time constant")? },
-        "cubic" => {
-            let c: Vec<f64> = rest.split(',').map(num).collect::<Result<_, _>>()?;
-            let [c1, c2, c3] = c[..] else { return Err("cubic takes three coefficients: cubic:C1,C2,C3".into()) };
-            TimeProfile::Cubic { coefficients: [c1, c2, c3] }
-        }
-        _ => {
-            return Err(format!(
-                "unknown profile `{s}`: use static, linear:T, linear-grow:T, exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv or a .toml file"
-            ));
-        }
-    };
-    Ok(p)
+/// Parses `--profile` ([`TimeProfile::parse_spec`]): an inline law, or the file to read later.
+pub fn parse_profile(s: &str) -> Result<thermokin_deform::ProfileSpec, String> {
+    TimeProfile::parse_spec(s).map_err(|e| e.to_string())
 }
 
 /// Parses `--orientation`.

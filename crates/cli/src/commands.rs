@@ -1,15 +1,13 @@
 //! The subcommands: load inputs (degrees → radians here, at the edge), run the library, print and write.
 
-use std::time::Duration;
-
 use anyhow::{Context, anyhow};
 use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
     AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, StreamSettings, Summary, SummaryOut,
-    compensate_static, compensate_static_stream, compensate_transient, confdata, kuka_status, kuka_turn, programs,
-    write_joint_csv, write_long_csv, write_results_csv, write_results_json,
+    arm_configuration, compensate_static, compensate_static_stream, compensate_transient, programs, write_joint_csv,
+    write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
 use thermokin_ik::{Goal, Params, Workspace, solve, solve_branches};
@@ -69,18 +67,17 @@ fn print_pose(pose: &Isometry3<f64>) {
     }
 }
 
-/// Joints outside the robot's limits, named, in degrees (mm for prismatic joints).
+/// Joints outside the robot's limits ([`Chain::outside_limits`]), named, in degrees (mm for prismatic joints).
 fn outside_limits(chain: &Chain, q: &[f64]) -> Vec<String> {
     let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
     let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
     let (lo, hi, v) =
         (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
+    let joints = chain.joints();
     chain
-        .joints()
-        .iter()
-        .enumerate()
-        .filter(|(i, j)| j.limits.is_some_and(|l| !l.contains(q[*i])))
-        .map(|(i, j)| format!("{} = {:.6} outside [{:.6}, {:.6}]", j.name, v[i], lo[i], hi[i]))
+        .outside_limits(q)
+        .into_iter()
+        .map(|i| format!("{} = {:.6} outside [{:.6}, {:.6}]", joints[i].name, v[i], lo[i], hi[i]))
         .collect()
 }
 
@@ -159,9 +156,8 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
 }
 
-/// A solution on the chain in force turned into the joint values to command on a calibrated robot (its
-/// joint corrections inverted), its errors measured again through the whole model: `Converged` stays only
-/// if that independent measurement is within the tolerances.
+/// [`thermokin_compensate::command_solution`] for a calibrated robot (one with joint corrections); a
+/// plain robot's solution is already the joints to command.
 fn commanded(
     model: &thermokin_deform::RobotModel,
     state: &thermokin_chain::OperatingState,
@@ -172,25 +168,7 @@ fn commanded(
     if model.joint_corrections().iter().all(|c| c.is_none()) {
         return Ok(());
     }
-    let Ok(q) = model.commanded_for(&s.q, state) else {
-        s.status = thermokin_ik::Status::Unverified;
-        return Ok(());
-    };
-    let reached = model.tool_pose(&q, state).map_err(Failure::input)?;
-    let (dp, dr) = match target {
-        Goal::Pose(p) => (
-            (p.translation.vector - reached.translation.vector).norm(),
-            thermokin_compensate::orientation_error(p, &reached).norm(),
-        ),
-        Goal::Position(p) => ((p - reached.translation.vector).norm(), 0.0),
-    };
-    // The inversion leaves < 1e-12 rad: 1e-9 mm of slack over the IK's tolerance at any reach.
-    if s.converged() && (dp > params.position_tolerance_mm + 1e-9 || dr > params.orientation_tolerance_rad + 1e-12) {
-        s.status = thermokin_ik::Status::Unverified;
-    }
-    s.q = q;
-    s.position_error_mm = dp;
-    s.orientation_error_rad = dr;
+    thermokin_compensate::command_solution(model, state, target, params, s).map_err(Failure::input)?;
     Ok(())
 }
 
@@ -218,18 +196,17 @@ fn ik_branches(
         .iter()
         .map(|(_, s)| {
             let deg = joints_to_external(chain, &s.q);
-            let conf = confdata(chain, &s.q);
+            let conf = arm_configuration(chain, &s.q);
+            let side = |behind: bool| if behind { "behind" } else { "in front" };
             json!({
-                // ABB's cfx bits, in words: where the wrist centre is against axis 1 and the lower arm,
-                // and the sign of axis 5.
-                "wrist_centre_vs_axis1": if conf[3] & 4 != 0 { "behind" } else { "in front" },
-                "wrist_centre_vs_lower_arm": if conf[3] & 2 != 0 { "behind" } else { "in front" },
-                "axis5": if conf[3] & 1 != 0 { "negative" } else { "positive" },
+                "wrist_centre_vs_axis1": side(conf.wrist_centre_behind_axis1),
+                "wrist_centre_vs_lower_arm": side(conf.wrist_centre_behind_lower_arm),
+                "axis5": if conf.axis5_negative { "negative" } else { "positive" },
                 "status": format!("{:?}", s.status),
                 "joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(),
-                "abb_confdata": conf,
-                "kuka_status": kuka_status(chain, &s.q),
-                "kuka_turn": kuka_turn(&s.q),
+                "abb_confdata": conf.abb_confdata,
+                "kuka_status": conf.kuka_status,
+                "kuka_turn": conf.kuka_turn,
                 "position_error_mm": s.position_error_mm,
             })
         })
@@ -285,7 +262,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     if a.robot.time.is_some() {
         return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
     }
-    let transient = a.robot.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static);
+    let transient = loaded.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static);
     if a.accumulate == AccumulateArg::Increments && !transient {
         return Err(Failure::input(anyhow!(
             "--accumulate increments needs a transient run: give --profile (e.g. linear-grow:180)"
@@ -297,7 +274,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
         return compensate_streamed(&a, &loaded, &table, settings);
     }
     let prog = program(&a.targets)?;
-    let (run, transient) = match &a.robot.profile {
+    let (run, transient) = match &loaded.profile {
         None | Some(TimeProfile::Static) => {
             (compensate_static(chain, &table, &prog, &settings).map_err(Failure::input)?, false)
         }
@@ -320,7 +297,7 @@ fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
 /// `--profile`), every target at every step of a warm-up.
 fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failure> {
     let mut model = loaded.model.clone();
-    let profile = a.robot.profile.clone().unwrap_or(TimeProfile::Static);
+    let profile = loaded.profile.clone().unwrap_or(TimeProfile::Static);
     if let Some(table) = &loaded.table {
         if loaded.semantics != thermokin_deform::TableSemantics::Canonical {
             return Err(Failure::input(anyhow!(
@@ -382,14 +359,8 @@ fn run_settings(
 fn with_cycle_bar<T>(cycle: Cycle, run: impl FnOnce(&mut dyn FnMut(usize, usize)) -> T) -> Result<T, Failure> {
     let steps = cycle.times().map_err(Failure::input)?.len();
     let bar = progress_bar(steps as u64, "compensating");
-    let started = std::time::Instant::now();
-    let out = run(&mut |done, _| {
-        if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
-            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-        }
-        bar.set_position(done as u64);
-    });
-    bar.finish_and_clear();
+    let out = run(&mut |done, _| bar.set_position(done as u64));
+    bar.finish();
     Ok(out)
 }
 
@@ -401,7 +372,7 @@ fn compensate_streamed(
     table: &thermokin_deform::DeviationTable,
     settings: RunSettings,
 ) -> Result<u8, Failure> {
-    if a.robot.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static) {
+    if loaded.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static) {
         return Err(Failure::input(anyhow!("--stream runs the static case: drop --profile")));
     }
     if a.format != ResultsFormat::Joints {
@@ -415,20 +386,17 @@ fn compensate_streamed(
         .map_err(Failure::input)?;
     let mut targets = TargetReader::new(&a.targets, std::io::BufReader::new(file)).map_err(Failure::input)?;
     let stream = StreamSettings::new(settings);
-    let started = std::time::Instant::now();
-    let bar = indicatif::ProgressBar::hidden();
-    bar.set_style(
+    let spinner = indicatif::ProgressBar::hidden();
+    spinner.set_style(
         indicatif::ProgressStyle::with_template("{spinner} compensating: {human_pos} targets, {per_sec}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
     );
+    let bar = crate::input::DelayedBar::new(spinner);
     let mut failure: Option<thermokin_compensate::CompensateError> = None;
     let mut summary = None;
     let written = write_atomic_with(&a.out, |w| {
         let run = compensate_static_stream(loaded.robot.chain(), table, &mut targets, w, &stream, |done| {
-            if started.elapsed() > Duration::from_secs(1) && bar.is_hidden() {
-                bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-            }
-            bar.set_position(done as u64);
+            bar.set_position(done as u64)
         });
         match run {
             Ok(s) => {
@@ -442,7 +410,7 @@ fn compensate_streamed(
             }
         }
     });
-    bar.finish_and_clear();
+    bar.finish();
     if let Some(e) = failure {
         return Err(Failure::input(e));
     }

@@ -5,10 +5,10 @@ use std::path::Path;
 
 use anyhow::anyhow;
 use plotters::prelude::*;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_diagnose::{
-    Config, DriftShape, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
+    Config, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
 };
 use thermokin_io::{
     JointUnits, MeasurementFormat, read_measurements_joined, read_measurements_with, write_atomic, write_atomic_with,
@@ -19,15 +19,47 @@ use crate::args::{DiagnoseArgs, FoldsByArg, FrameArg, JointUnitsArg, SimulateArg
 use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
+/// A library setting's error in the words of the command line: the flag that set it.
+fn setting_error(e: thermokin_diagnose::DiagnoseError) -> Failure {
+    match e {
+        thermokin_diagnose::DiagnoseError::BadSetting { setting, rule, .. } => {
+            let flag = match setting {
+                "folds" => "--folds",
+                "noise_mm" => "--noise",
+                "orientation_lever_mm" => "--orientation-lever",
+                "orientation_noise_rad" => "--orientation-noise",
+                "poses" => "--poses",
+                "minutes" => "--minutes",
+                other => other,
+            };
+            Failure::input(anyhow!("{flag} {rule}"))
+        }
+        other => Failure::input(anyhow!(other)),
+    }
+}
+
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
             "diagnose takes a static robot: drop --profile/--time/--temperature (thermal drift is a candidate effect; the data's time_min and temp_* columns drive it)"
         )));
     }
-    if a.folds < 2 {
-        return Err(Failure::input(anyhow!("--folds must be at least 2")));
-    }
+    let config = Config {
+        folds_by: match a.folds_by {
+            FoldsByArg::Neighbourhood => FoldGrouping::Neighbourhood,
+            FoldsByArg::Time => FoldGrouping::Time,
+            FoldsByArg::Region => FoldGrouping::WorkspaceRegion,
+            FoldsByArg::Configuration => FoldGrouping::JointConfiguration,
+        },
+        noise_mm: a.noise,
+        orientation_lever_mm: a.orientation_lever,
+        orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),
+        folds: a.folds,
+        frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },
+        tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
+        ..Config::default()
+    };
+    config.validate().map_err(setting_error)?;
     let loaded = load(&a.robot)?;
     if !loaded.model.is_plain() {
         return Err(Failure::input(anyhow!(
@@ -50,30 +82,6 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(Failure::input)?),
         None => None,
-    };
-    if a.noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
-        return Err(Failure::input(anyhow!("--noise must be a positive standard deviation in mm")));
-    }
-    if !(a.orientation_lever.is_finite() && a.orientation_lever >= 0.0) {
-        return Err(Failure::input(anyhow!("--orientation-lever must be ≥ 0 mm")));
-    }
-    if a.orientation_noise.is_some_and(|n| !(n.is_finite() && n > 0.0)) {
-        return Err(Failure::input(anyhow!("--orientation-noise must be a positive standard deviation in degrees")));
-    }
-    let config = Config {
-        folds_by: match a.folds_by {
-            FoldsByArg::Neighbourhood => FoldGrouping::Neighbourhood,
-            FoldsByArg::Time => FoldGrouping::Time,
-            FoldsByArg::Region => FoldGrouping::WorkspaceRegion,
-            FoldsByArg::Configuration => FoldGrouping::JointConfiguration,
-        },
-        noise_mm: a.noise,
-        orientation_lever_mm: a.orientation_lever,
-        orientation_noise_deg: a.orientation_noise,
-        folds: a.folds,
-        frame: if a.frame == FrameArg::Tracker { FrameMode::Tracker } else { FrameMode::Base },
-        tool: if a.tool == ToolArg::Unknown { ToolMode::Unknown } else { ToolMode::Known },
-        ..Config::default()
     };
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     // The robot as the fit sees it: with the payload (gravity only; the export keeps the file's masses).
@@ -121,7 +129,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         .map_err(Failure::input);
     bar.finish_and_clear();
     let report = report?;
-    print_report(&report);
+    print!("{}", report.text());
     if let (Some(p), Some(why)) = (&a.export, &report.honest_end)
         && !a.force_export
     {
@@ -173,166 +181,6 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         plot_additive(&dir.join("heldout-per-effect.svg"), &report).map_err(Failure::internal)?;
     }
     Ok(exit::OK)
-}
-
-fn print_report(r: &Report) {
-    if let Some(why) = &r.honest_end {
-        println!("NOT BETTER THAN NOMINAL: {why}\n");
-    }
-    for w in &r.warnings {
-        println!("warning: {w}");
-    }
-    if let Some(lever) = r.orientation_lever_mm {
-        println!(
-            "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²) (--orientation-lever)"
-        );
-    }
-    let line = |what: &str, s: &thermokin_diagnose::Stats| {
-        println!(
-            "  {what:<44} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
-            s.heldout_mean_mm, s.heldout_median_mm, s.heldout_p95_mm, s.heldout_rms_mm, s.heldout_max_mm
-        )
-    };
-    let header = || println!("  {:<44} {:>9} {:>9} {:>9} {:>9} {:>9}", "model", "mean", "median", "p95", "RMS", "max");
-    if let Some(n) = &r.nested {
-        println!(
-            "held-out error of the whole diagnosis, nested {}-fold (each outer test fold unseen by the selection), mm:",
-            n.outer_folds
-        );
-        header();
-        line("nominal", &n.nominal);
-        line("the effects each outer selection chose", &n.selected);
-        for f in &n.folds {
-            let chosen = if f.effects.is_empty() { "none".to_string() } else { f.effects.join(", ") };
-            let flag = if f.selected.heldout_rms_mm > f.nominal.heldout_rms_mm { "  WORSE THAN NOMINAL" } else { "" };
-            println!(
-                "    outer fold {} ({} poses): nominal {:.4} → {:.4} mm RMS{flag}; chose {chosen}",
-                f.fold, f.poses, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm
-            );
-        }
-        if let Some(d) = n.dominated_by {
-            println!("    outer fold {d} holds more than half of the squared error: the RMS above is mostly that fold");
-        }
-    }
-    if let Some(h) = &r.holdout {
-        println!("\nexplicit hold-out set (fitted on all measurements; never used to choose), mm:");
-        if !h.refitted.is_empty() {
-            println!("  (its own frame and probe: {} refitted on it, the effects kept)", h.refitted.join(", "));
-        }
-        header();
-        line("nominal", &h.nominal);
-        line("the effects chosen below", &h.selected);
-    }
-    println!("\nselection: {} — scores that chose the effects (optimistic):", r.validation);
-    println!("  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max");
-    for row in &r.additive {
-        println!(
-            "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
-            row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
-        );
-    }
-    if !r.leave_one_out.is_empty() {
-        println!("\nleave one out (mm):");
-        for row in &r.leave_one_out {
-            println!(
-                "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
-                row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
-            );
-        }
-    }
-    println!("\neffects, main cause first (the one whose removal raises the held-out error most):");
-    if r.effects.is_empty() {
-        println!(
-            "  none: no candidate lowers the held-out mean squared error by more than one standard error of the paired difference"
-        );
-    }
-    for e in &r.effects {
-        println!(
-            "  {:<30} held-out RMS {:.4} → {:.4} mm (without it: {:.4}){}",
-            e.label,
-            e.heldout_rms_before_mm,
-            e.heldout_rms_after_mm,
-            e.heldout_rms_without_mm,
-            if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
-                + &if e.contained_in.is_empty() {
-                    String::new()
-                } else {
-                    format!("; contained in: {}", e.contained_in.join(", "))
-                }
-                + &if e.contains.is_empty() { String::new() } else { format!("; contains: {}", e.contains.join(", ")) }
-        );
-        for (name, v) in &e.parameters {
-            match (&v.fixed, v.std) {
-                (Some(why), _) => println!("      {name:<44} {:>12.6}   fixed, not fitted: {why}", v.value),
-                (None, Some(sd)) => println!("      {name:<44} {:>12.6} ± {sd:.6}", v.value),
-                (None, None) => {
-                    println!("      {name:<44} {:>12.6}   (no uncertainty: singular normal matrix)", v.value)
-                }
-            }
-        }
-    }
-    if let Some(reg) = &r.frames.registration {
-        let [x, y, z] = reg.position_mm;
-        let [a, b, c] = reg.xyz_euler_deg;
-        println!(
-            "\nfitted registration (measurement frame ← base): {x:.4}, {y:.4}, {z:.4} mm; {a:.5}, {b:.5}, {c:.5}° (X-Y-Z Euler)"
-        );
-    }
-    if let Some([x, y, z]) = r.frames.tool_point_mm {
-        println!("fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm");
-    }
-    if let Some([x, y, z]) = r.frames.tool_rotation_deg {
-        println!("fitted probe rotation (tool row's X-Y-Z error angles): {x:.5}, {y:.5}, {z:.5}°");
-    }
-    if !r.identifiability.correlated.is_empty() {
-        println!(
-            "\nnearly unidentifiable combinations (estimates correlated above 0.99: their combination is determined, not each):"
-        );
-        for c in &r.identifiability.correlated {
-            println!("  {} ~ {} (correlation {:+.4})", c.a, c.b, c.correlation);
-        }
-    }
-    println!("\nverdict: {}", r.verdict);
-    println!("\nwhere the nominal model's residuals lie (RMS, mm; → after the effects found):");
-    let (b, a) = (&r.residuals_before, &r.residuals_after);
-    for (j, (qb, qa)) in b.by_joint.iter().zip(&a.by_joint).enumerate() {
-        println!(
-            "  joint {} angle quartiles   {}   →   {}",
-            j + 1,
-            qb.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" "),
-            qa.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" ")
-        );
-    }
-    let four = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
-    println!(
-        "  workspace (near-low near-high far-low far-high)   {}   →   {}",
-        four(&b.by_workspace_region),
-        four(&a.by_workspace_region)
-    );
-    println!(
-        "  joint space (elbow × wrist)                       {}   →   {}",
-        four(&b.by_joint_space_region),
-        four(&a.by_joint_space_region)
-    );
-    if !b.by_time.is_empty() {
-        let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
-        println!("  time quartiles                                    {}   →   {}", list(&b.by_time), list(&a.by_time));
-    }
-    if !r.identifiability.not_identifiable.is_empty() {
-        println!("\nnot identifiable from these data (not selectable; --help of diagnose says the rules):");
-        for x in &r.identifiability.not_identifiable {
-            println!("  {:<30} {} — {}", x.effect, x.reason, x.remedy);
-        }
-    }
-    if let Some(o) = &r.identifiability.observability {
-        println!(
-            "\nidentifiability: {} parameters from {} residuals; condition number {:.3e}; O1 {:.3e} O2 {:.3e} O3 {:.3e} O4 {:.3e} O5 {:.3e}",
-            o.parameters, o.rows, o.condition_number, o.o1, o.o2, o.o3, o.o4, o.o5
-        );
-    }
-    for f in &r.identifiability.fixed {
-        println!("  fixed {}: {}", f.parameter, f.reason);
-    }
 }
 
 fn plot_residuals(path: &Path, r: &Report) -> anyhow::Result<()> {
@@ -411,47 +259,13 @@ fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Resu
         None => (head, None),
     };
     let effect = Effect::named(robot, name, joint).map_err(|e| anyhow!("--effect {spec}: {e}"))?;
-    let report_units: Vec<f64> = match values {
-        // A tool-frame error given as a point only (three values): no rotation.
-        Some(mut v) if effect == Effect::ToolFrame && v.len() == 3 => {
-            v.extend([0.0; 3]);
-            v
-        }
-        Some(v) => {
-            anyhow::ensure!(
-                v.len() == effect.len(),
-                "--effect {spec}: {} values for {} parameters",
-                v.len(),
-                effect.len()
-            );
-            v
-        }
-        None => (0..effect.len())
-            .map(|k| match (effect, k) {
-                (Effect::JointOffset(_), _) => {
-                    rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
-                }
-                (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
-                (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
-                (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
-                (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
-                (_, 0..=2) => rng.random_range(-0.4..0.4),
-                _ => rng.random_range(-0.02..0.02),
-            })
-            .collect(),
-    };
-    let values = report_units.iter().enumerate().map(|(k, &v)| effect.from_report_units(k, v)).collect();
-    Ok(HiddenEffect { effect, values })
+    match values {
+        Some(v) => HiddenEffect::from_report_units(effect, v).map_err(|e| anyhow!("--effect {spec}: {e}")),
+        None => Ok(HiddenEffect::typical(effect, rng)),
+    }
 }
 
 pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
-    let ok = a.noise.is_finite() && a.noise >= 0.0 && a.minutes.is_finite() && a.minutes >= 0.0 && a.poses > 0;
-    if !ok {
-        return Err(Failure::input(anyhow!("--noise and --minutes must be ≥ 0 and --poses positive")));
-    }
-    if a.orientation_noise.is_some_and(|n| !(n.is_finite() && n >= 0.0)) {
-        return Err(Failure::input(anyhow!("--orientation-noise must be ≥ 0 degrees")));
-    }
     let loaded = load(&a.robot)?;
     if !loaded.model.is_plain() {
         return Err(Failure::input(anyhow!(
@@ -477,7 +291,7 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),
         ..SimulationConfig::default()
     };
-    let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(Failure::input)?;
+    let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(setting_error)?;
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
     write_atomic_with(&a.out, |w| write_measurements(w, &data, &kinds)).map_err(Failure::internal)?;
     for h in &hidden {

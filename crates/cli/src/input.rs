@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Translation3, Vector3};
 use thermokin_chain::{Chain, FixedRow, OperatingState};
 use thermokin_compensate::Target;
-use thermokin_deform::{CoppeliaSimEdits, DeviationTable, RobotModel, TableSemantics};
+use thermokin_deform::{CoppeliaSimEdits, DeviationTable, RobotModel, TableSemantics, TimeProfile};
 use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
 use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_model_with, read_targets};
 
@@ -24,6 +24,8 @@ pub struct Loaded {
     pub table: Option<DeviationTable>,
     pub semantics: TableSemantics,
     pub state: OperatingState,
+    /// `--profile`, its file (if it names one) read.
+    pub profile: Option<TimeProfile>,
 }
 
 /// Reads the robot, applies `--tool-pose` / `--base-pose`, reads the deviation table and the state.
@@ -56,7 +58,8 @@ pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
             args.robot.display()
         )));
     }
-    if let Some(p) = &args.profile {
+    let profile = args.profile.as_ref().map(thermokin_io::read_profile_spec).transpose().map_err(Failure::input)?;
+    if let Some(p) = &profile {
         p.validate(robot.chain().dof()).map_err(Failure::input)?;
     }
     let mut state = OperatingState { time_min: args.time, ..OperatingState::default() };
@@ -74,7 +77,7 @@ pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
         state.payload = Some(parse_payload(spec).map_err(Failure::input)?);
     }
     let semantics = semantics(args.semantics, robot.chain().dof());
-    Ok(Loaded { robot, model, table, semantics, state })
+    Ok(Loaded { robot, model, table, semantics, state, profile })
 }
 
 /// Parses `--temperature temp_j2=35.1,temp_j3=30.2` (°C; the `temp_` prefix added when left out).
@@ -84,12 +87,7 @@ pub fn temperatures(text: &str) -> anyhow::Result<Vec<(String, f64)>> {
         let (name, value) = item
             .split_once('=')
             .ok_or_else(|| anyhow!("--temperature `{item}`: expected NAME=°C, e.g. temp_j2=35.1"))?;
-        let name = name.trim();
-        let name = if name.len() > 5 && name[..5].eq_ignore_ascii_case("temp_") {
-            format!("temp_{}", &name[5..])
-        } else {
-            format!("temp_{name}")
-        };
+        let name = thermokin_io::sensor_name(name.trim());
         let value: f64 = value
             .trim()
             .parse()
@@ -133,7 +131,7 @@ pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
 /// The chain fk/ik work on: nominal, or deformed by the table at `--time` under `--profile`.
 pub fn working_chain(args: &RobotArgs, loaded: &Loaded) -> Result<Chain, Failure> {
     let Some(table) = &loaded.table else { return Ok(loaded.robot.chain().clone()) };
-    let table = match (&args.profile, args.time) {
+    let table = match (&loaded.profile, args.time) {
         (Some(p), Some(t)) => p.table_at(table, t).map_err(Failure::input)?,
         (Some(_), None) => return Err(Failure::input(anyhow!("--profile needs --time (minutes)"))),
         // --time for the robot file's own drift: the table is in force in full.
@@ -214,8 +212,8 @@ pub fn program(path: &Path) -> Result<Vec<Target>, Failure> {
     read_targets(path).map_err(Failure::input)
 }
 
-/// A progress bar that shows itself only when a run lasts more than a second.
-pub fn progress_bar(len: u64, label: &str) -> ProgressBar {
+/// A progress bar of `len` steps that shows itself only when a run lasts more than a second.
+pub fn progress_bar(len: u64, label: &str) -> DelayedBar {
     let bar = ProgressBar::hidden();
     bar.set_length(len);
     bar.set_style(
@@ -223,5 +221,32 @@ pub fn progress_bar(len: u64, label: &str) -> ProgressBar {
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
     bar.set_message(label.to_string());
-    bar
+    DelayedBar::new(bar)
+}
+
+/// A progress display on stderr that appears once its run has lasted a second: a short run prints
+/// nothing (the one rule for every command's progress).
+pub struct DelayedBar {
+    bar: ProgressBar,
+    started: std::time::Instant,
+}
+
+impl DelayedBar {
+    /// `bar` (hidden until the first second has passed).
+    pub fn new(bar: ProgressBar) -> Self {
+        Self { bar, started: std::time::Instant::now() }
+    }
+
+    /// `done` steps so far.
+    pub fn set_position(&self, done: u64) {
+        if self.started.elapsed() > std::time::Duration::from_secs(1) && self.bar.is_hidden() {
+            self.bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        }
+        self.bar.set_position(done);
+    }
+
+    /// Removes the bar from the terminal.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
 }

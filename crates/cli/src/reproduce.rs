@@ -27,14 +27,8 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
         authors: a.authors.clone(),
     };
     let bar = progress_bar(201, "transient case");
-    let r = reproduce(&inputs, |done, _| {
-        if started.elapsed().as_secs_f64() > 1.0 && bar.is_hidden() {
-            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-        }
-        bar.set_position(done as u64);
-    })
-    .map_err(paper)?;
-    bar.finish_and_clear();
+    let r = reproduce(&inputs, |done, _| bar.set_position(done as u64)).map_err(paper)?;
+    bar.finish();
 
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;

@@ -18,9 +18,10 @@ mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
-pub use model_run::{compensate_model, compensate_model_cycle, state_or};
+pub use model_run::{command_solution, compensate_model, compensate_model_cycle, state_or};
 pub use program::{
-    AbbTargets, Controller, Program, ProgramError, ProgramSettings, confdata, kuka_status, kuka_turn, programs,
+    AbbTargets, ArmConfiguration, Controller, Program, ProgramError, ProgramSettings, arm_configuration, confdata,
+    kuka_status, kuka_turn, programs,
 };
 pub use run::{
     Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

@@ -7,9 +7,10 @@
 //! measured again through the whole model ([`RobotModel::tool_pose`] of the commanded values), and a
 //! target is `Converged` only if that independent measurement is within the IK's tolerances.
 
+use nalgebra::Isometry3;
 use thermokin_chain::{OperatingState, Target};
 use thermokin_deform::RobotModel;
-use thermokin_ik::{Goal, Seeds, Solution, Status, solve_batch};
+use thermokin_ik::{Goal, Params, Seeds, Solution, Status, solve_batch};
 
 use crate::CompensateError;
 use crate::run::{Cycle, RunOutput, RunSettings, TargetResult, orientation_error};
@@ -131,9 +132,45 @@ fn solve_in_states(
     Ok(rows)
 }
 
-/// One target's record: the commanded joints, and the pose the whole model reaches with them, measured
-/// independently of the IK. A solve that converged on the chain but whose commanded joints cannot be
-/// inverted, or whose re-measured pose misses the tolerances, is `Unverified`.
+/// A solution on the chain in force made the joint values to command on `model` (its joint corrections
+/// inverted, [`RobotModel::commanded_for`]), with the reached pose measured again through the whole
+/// model, independently of the IK: `solution.q` becomes the commanded joints and its errors the
+/// re-measured ones; a solve that converged on the chain but whose joints cannot be inverted, or whose
+/// re-measured pose misses the tolerances (`params`, with [`REMEASURE_SLACK_MM`] of slack), is
+/// `Unverified`. Returns the reached pose.
+pub fn command_solution(
+    model: &RobotModel,
+    state: &OperatingState,
+    goal: &Goal,
+    params: &Params,
+    solution: &mut Solution,
+) -> Result<Isometry3<f64>, thermokin_deform::DeformError> {
+    let (joints, mut status) = match model.commanded_for(&solution.q, state) {
+        Ok(q) => (q, solution.status),
+        Err(_) => (solution.q.clone(), Status::Unverified),
+    };
+    let reached = model.tool_pose(&joints, state)?;
+    let (dp, dr) = match goal {
+        Goal::Pose(p) => {
+            ((p.translation.vector - reached.translation.vector).norm(), orientation_error(p, &reached).norm())
+        }
+        Goal::Position(p) => ((p - reached.translation.vector).norm(), 0.0),
+    };
+    let slack_rad = REMEASURE_SLACK_MM / params.length_scale_mm;
+    if status == Status::Converged
+        && (dp > params.position_tolerance_mm + REMEASURE_SLACK_MM || dr > params.orientation_tolerance_rad + slack_rad)
+    {
+        status = Status::Unverified;
+    }
+    solution.q = joints;
+    solution.status = status;
+    solution.position_error_mm = dp;
+    solution.orientation_error_rad = dr;
+    Ok(reached)
+}
+
+/// One target's record: the commanded joints ([`command_solution`]), the pose the whole model reaches
+/// with them, and the uncompensated pose.
 fn record(
     model: &RobotModel,
     target: &Target,
@@ -142,33 +179,22 @@ fn record(
     nominal_q: &[f64],
     settings: &RunSettings,
 ) -> Result<TargetResult, thermokin_deform::DeformError> {
-    let (joints, mut status) = match model.commanded_for(&solution.q, state) {
-        Ok(q) => (q, solution.status),
-        Err(_) => (solution.q.clone(), Status::Unverified),
-    };
-    let reached = model.tool_pose(&joints, state)?;
+    let mut commanded = solution.clone();
+    let reached = command_solution(model, state, &Goal::Pose(target.pose), &settings.ik, &mut commanded)?;
     let uncompensated = model.tool_pose(nominal_q, state)?;
     let dp = target.pose.translation.vector - reached.translation.vector;
     let dr = orientation_error(&target.pose, &reached);
-    let tol = &settings.ik;
-    let slack_rad = REMEASURE_SLACK_MM / tol.length_scale_mm;
-    if status == Status::Converged
-        && (dp.norm() > tol.position_tolerance_mm + REMEASURE_SLACK_MM
-            || dr.norm() > tol.orientation_tolerance_rad + slack_rad)
-    {
-        status = Status::Unverified;
-    }
     Ok(TargetResult {
         time_min: state.time_min.unwrap_or(0.0),
         label: target.label.clone(),
         programmed: target.pose,
         reached,
-        joints,
+        joints: commanded.q,
         chain_joints: solution.q.clone(),
         position_deviation_mm: [dp.x, dp.y, dp.z],
         orientation_deviation_rad: [dr.x, dr.y, dr.z],
         uncompensated_error_mm: (target.pose.translation.vector - uncompensated.translation.vector).norm(),
-        status,
+        status: commanded.status,
         iterations: solution.iterations,
     })
 }

@@ -251,6 +251,37 @@ pub fn confdata(chain: &Chain, q: &[f64]) -> [i64; 4] {
     [quadrant(q[0]), quadrant(q[3]), quadrant(q[5]), cfx]
 }
 
+/// A six-joint arm's configuration at joint values `q` (radians), as controllers name it: ABB's
+/// `confdata` ([`confdata`]) with its cfx bits in words, KUKA's Status and Turn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub struct ArmConfiguration {
+    /// The wrist centre behind axis 1 (cfx bit 2).
+    pub wrist_centre_behind_axis1: bool,
+    /// The wrist centre behind the lower arm (cfx bit 1).
+    pub wrist_centre_behind_lower_arm: bool,
+    /// Axis 5 negative (cfx bit 0).
+    pub axis5_negative: bool,
+    /// ABB `confdata` [cf1, cf4, cf6, cfx].
+    pub abb_confdata: [i64; 4],
+    /// KUKA Status ([`kuka_status`]).
+    pub kuka_status: u8,
+    /// KUKA Turn ([`kuka_turn`]).
+    pub kuka_turn: u8,
+}
+
+/// The [`ArmConfiguration`] of joint values `q` on `chain`.
+pub fn arm_configuration(chain: &Chain, q: &[f64]) -> ArmConfiguration {
+    let conf = confdata(chain, q);
+    ArmConfiguration {
+        wrist_centre_behind_axis1: conf[3] & 4 != 0,
+        wrist_centre_behind_lower_arm: conf[3] & 2 != 0,
+        axis5_negative: conf[3] & 1 != 0,
+        abb_confdata: conf,
+        kuka_status: kuka_status(chain, q),
+        kuka_turn: kuka_turn(q),
+    }
+}
+
 /// KUKA's Status of joint values `q` (radians) on a six-joint arm, read with the same geometry as
 /// [`confdata`]'s cfx: bit 0 the wrist centre behind axis 1 (KUKA's overhead area), bit 1 the wrist
 /// centre behind the lower arm (KUKA's A3 beyond the stretched-arm angle), bit 2 axis 5 at or below 0.

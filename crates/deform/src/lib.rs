@@ -11,7 +11,7 @@ mod profile;
 
 pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
 pub use model::{DriftLaw, DriftRow, JointCorrection, RobotModel};
-pub use profile::{AfterStabilization, RowFactors, TemperatureLog, TimeProfile};
+pub use profile::{AfterStabilization, ProfileSpec, RowFactors, TemperatureLog, TimeProfile};
 pub use thermokin_chain::{ErrorParams, ParameterLayout};
 
 use thermokin_chain::{Chain, ChainError};

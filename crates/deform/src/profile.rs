@@ -103,7 +103,64 @@ pub struct RowFactors {
     pub tool: f64,
 }
 
+/// A profile as a command line names it ([`TimeProfile::parse_spec`]): a law with its parameters, or a
+/// file to read (a TOML profile, a temperature log) — read at the I/O boundary
+/// (`thermokin_io::read_profile_spec`), never while parsing.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ProfileSpec {
+    /// A law given inline.
+    Law(TimeProfile),
+    /// A TOML file holding a profile.
+    TomlFile(std::path::PathBuf),
+    /// A temperature log: every row scaled by the mean logged temperature rise.
+    TemperatureLog(std::path::PathBuf),
+}
+
 impl TimeProfile {
+    /// Parses `static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`, `temperature:LOG.csv`
+    /// or `FILE.toml`; an inline law is checked by [`TimeProfile::validate`] (its rules, one place).
+    pub fn parse_spec(s: &str) -> Result<ProfileSpec, DeformError> {
+        let bad = |message: String| DeformError::BadProfile { field: "spec", message };
+        if s.ends_with(".toml") {
+            return Ok(ProfileSpec::TomlFile(s.into()));
+        }
+        let (kind, rest) = s.split_once(':').unwrap_or((s, ""));
+        if kind == "temperature" {
+            return Ok(ProfileSpec::TemperatureLog(rest.into()));
+        }
+        let num = |v: &str| -> Result<f64, DeformError> {
+            if v.trim().is_empty() {
+                return Err(bad(format!(
+                    "`{kind}` needs a value after a colon, e.g. {kind}:180 (see --help for every profile)"
+                )));
+            }
+            v.trim().parse().map_err(|_| bad(format!("`{v}` is not a number")))
+        };
+        let law = match kind {
+            "static" if rest.is_empty() => TimeProfile::Static,
+            "linear" => TimeProfile::Linear { stabilization_min: num(rest)?, after: AfterStabilization::Plateau },
+            "linear-grow" => {
+                TimeProfile::Linear { stabilization_min: num(rest)?, after: AfterStabilization::KeepGrowing }
+            }
+            "exp" => TimeProfile::Exponential { tau_min: num(rest)? },
+            "cubic" => {
+                let c: Vec<f64> = rest.split(',').map(num).collect::<Result<_, _>>()?;
+                let [c1, c2, c3] = c[..] else {
+                    return Err(bad("cubic takes three coefficients: cubic:C1,C2,C3".into()));
+                };
+                TimeProfile::Cubic { coefficients: [c1, c2, c3] }
+            }
+            _ => {
+                return Err(bad(format!(
+                    "unknown profile `{s}`: use static, linear:T, linear-grow:T, exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv or a .toml file"
+                )));
+            }
+        };
+        // The law's own rules; a temperature profile (the only one that needs the joint count) is a file.
+        law.validate(0)?;
+        Ok(ProfileSpec::Law(law))
+    }
+
     /// The paper's default: linear to 180 minutes, then a plateau.
     pub fn paper_linear() -> Self {
         TimeProfile::Linear { stabilization_min: 180.0, after: AfterStabilization::Plateau }

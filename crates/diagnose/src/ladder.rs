@@ -65,9 +65,9 @@ pub struct Config {
     /// ratio of a 6-D tracker probe's orientation and position accuracy. Every held-out error of a
     /// diagnosis with orientations combines both: `√(|Δp|² + (lever · |δφ|)²)`.
     pub orientation_lever_mm: f64,
-    /// The orientation noise per axis of a 6-D probe (standard deviation, degrees), when known: with
+    /// The orientation noise per axis of a 6-D probe (standard deviation, radians), when known: with
     /// orientations fitted, the verdict's noise floor is `√(3σ² + 3(lever · σ_rot)²)`.
-    pub orientation_noise_deg: Option<f64>,
+    pub orientation_noise_rad: Option<f64>,
     /// What the data must show before an effect may be selected ([`Eligibility`]).
     pub eligibility: Eligibility,
     /// Bounds on fitted values beyond which a candidate is refused as implausible ([`Plausibility`]).
@@ -112,6 +112,43 @@ pub enum Validation {
     SelectionOnly,
 }
 
+impl Config {
+    /// Checks every setting against its domain, one rule each: at least 2 folds (and 2 outer folds), a
+    /// stated noise a positive standard deviation, a non-negative orientation lever, a gate, parsimony
+    /// fraction and effect count that can select something.
+    pub fn validate(&self) -> Result<(), DiagnoseError> {
+        let bad = |setting, value: f64, rule| Err(DiagnoseError::BadSetting { setting, value, rule });
+        if self.folds < 2 {
+            return bad("folds", self.folds as f64, "must be at least 2");
+        }
+        if let Validation::Nested { outer } = self.validation
+            && outer < 2
+        {
+            return bad("validation.outer", outer as f64, "must be at least 2");
+        }
+        if let Some(n) = self.noise_mm
+            && !(n.is_finite() && n > 0.0)
+        {
+            return bad("noise_mm", n, "must be a positive standard deviation");
+        }
+        if !(self.orientation_lever_mm.is_finite() && self.orientation_lever_mm >= 0.0) {
+            return bad("orientation_lever_mm", self.orientation_lever_mm, "must be ≥ 0");
+        }
+        if let Some(n) = self.orientation_noise_rad
+            && !(n.is_finite() && n > 0.0)
+        {
+            return bad("orientation_noise_rad", n, "must be a positive standard deviation");
+        }
+        if !(self.gate_standard_errors.is_finite() && self.gate_standard_errors >= 0.0) {
+            return bad("gate_standard_errors", self.gate_standard_errors, "must be ≥ 0");
+        }
+        if !(self.parsimony.is_finite() && (0.0..=1.0).contains(&self.parsimony)) {
+            return bad("parsimony", self.parsimony, "must be a fraction in [0, 1]");
+        }
+        Ok(())
+    }
+}
+
 impl Default for Config {
     fn default() -> Self {
         Self {
@@ -126,7 +163,7 @@ impl Default for Config {
             noise_mm: None,
             folds_by: FoldGrouping::Neighbourhood,
             orientation_lever_mm: 100.0,
-            orientation_noise_deg: None,
+            orientation_noise_rad: None,
             eligibility: Eligibility::default(),
             plausibility: Plausibility::default(),
             screen: Screen::default(),
@@ -184,6 +221,7 @@ pub fn diagnose_with_progress(
     config: &Config,
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Report, DiagnoseError> {
+    config.validate()?;
     let outer = match config.validation {
         Validation::Nested { outer } => nested_folds(data, config, outer).len(),
         Validation::SelectionOnly => 0,
@@ -268,6 +306,7 @@ pub fn evaluate(
     effects: &[Effect],
     config: &Config,
 ) -> Result<Stats, DiagnoseError> {
+    config.validate()?;
     let ctx = Ctx::new(robot, data, config);
     let mut all = always_estimated(config, data);
     for e in effects {
@@ -396,12 +435,13 @@ fn verdict_sentence(config: &Config, report: &Report) -> String {
             "cross-validated",
         ),
     };
-    let floor = match (config.noise_mm, report.orientation_lever_mm, config.orientation_noise_deg) {
+    let floor = match (config.noise_mm, report.orientation_lever_mm, config.orientation_noise_rad) {
         (None, ..) => None,
         (Some(sigma), None, _) => Some((sigma * 3f64.sqrt(), format!("σ = {sigma} mm per axis"))),
         (Some(sigma), Some(lever), Some(rot)) => Some((
-            (3.0 * sigma * sigma + 3.0 * (lever * units::radians(rot)).powi(2)).sqrt(),
-            format!("σ = {sigma} mm and {rot}° per axis, lever {lever} mm"),
+            (3.0 * sigma * sigma + 3.0 * (lever * rot).powi(2)).sqrt(),
+            // Degrees as the user gave them: the round trip through radians rounded off at 1e-9°.
+            format!("σ = {sigma} mm and {}° per axis, lever {lever} mm", (units::degrees(rot) * 1e9).round() / 1e9),
         )),
         (Some(_), Some(_), None) => {
             return format!(

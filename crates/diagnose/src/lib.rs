@@ -12,6 +12,7 @@ mod eligibility;
 mod fit;
 mod ladder;
 mod model;
+mod render;
 mod report;
 mod screen;
 mod select;
@@ -26,6 +27,7 @@ pub use ladder::{
 pub use model::{
     DriftShape, EFFECT_NAMES, Effect, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, Model, gravity_torques, sensor_joint,
 };
+pub use render::ReportText;
 pub use report::{
     Breakdown, EffectReport, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue, Report, Stats, TableRow,
 };
@@ -88,6 +90,17 @@ pub enum DiagnoseError {
         expected: usize,
         /// Values given.
         got: usize,
+    },
+    /// A setting outside its domain ([`Config::validate`], [`SimulationConfig::validate`]): `setting` is the
+    /// field's name, `rule` what it must be.
+    #[error("{setting} {rule} (got {value})")]
+    BadSetting {
+        /// The field of the settings.
+        setting: &'static str,
+        /// The value given.
+        value: f64,
+        /// What the value must be.
+        rule: &'static str,
     },
     /// Too few measurements for the validation asked for.
     #[error("{count} measurements are too few for {folds}-fold cross-validation (at least {needed})")]

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 use thermokin_chain::ErrorParams;
-use thermokin_deform::{DeviationTable, TemperatureLog};
+use thermokin_deform::{DeviationTable, TemperatureLog, TimeProfile};
 
 use crate::csvtext::{column, expect_fields, number, records};
 use crate::{IoError, line_of, read_text, units};
@@ -113,6 +113,28 @@ fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
         joints,
         tool: f.tool.as_ref().map(|v| check("tool".into(), v)).transpose()?.unwrap_or_default(),
     })
+}
+
+/// The profile a [`thermokin_deform::ProfileSpec`] names, its file read: a TOML profile (`kind =
+/// "exponential"`, `tau_min = 45.0`, checked by `TimeProfile::validate`), a temperature log, or the law
+/// given inline.
+pub fn read_profile_spec(spec: &thermokin_deform::ProfileSpec) -> Result<TimeProfile, IoError> {
+    use thermokin_deform::ProfileSpec;
+    match spec {
+        ProfileSpec::Law(law) => Ok(law.clone()),
+        ProfileSpec::TemperatureLog(path) => {
+            Ok(TimeProfile::Temperature { log: read_temperature_log(path)?, sensors: Vec::new(), reference_c: None })
+        }
+        ProfileSpec::TomlFile(path) => {
+            let text = read_text(path)?;
+            let profile: TimeProfile = toml::from_str(&text).map_err(|e| {
+                let line = e.span().map(|s| line_of(&text, s.start));
+                IoError::input(path, line, "profile", e.message())
+            })?;
+            profile.validate(0).map_err(|e| IoError::input(path, None, "profile", e.to_string()))?;
+            Ok(profile)
+        }
+    }
 }
 
 /// Reads a temperature log: a `time_min` column and one column per sensor (°C); a `temp_` prefix is

@@ -15,7 +15,8 @@ pub mod units;
 mod write;
 
 pub use deviation::{
-    parse_deviation_table, parse_temperature_log, read_deviation_table, read_deviation_table_for, read_temperature_log,
+    parse_deviation_table, parse_temperature_log, read_deviation_table, read_deviation_table_for, read_profile_spec,
+    read_temperature_log,
 };
 pub use measurements::{
     JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with, read_measurements,
@@ -26,7 +27,7 @@ pub use robot::{
     JointRatings, LinkMass, Robot, RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot,
     read_robot_model, read_robot_model_with, read_robot_with, robot_model_to_toml, robot_to_toml,
 };
-pub use targets::{DEFAULT_ORIENTATION_DEG, Target, TargetReader, parse_targets, read_targets};
+pub use targets::{DEFAULT_ORIENTATION_DEG, Target, TargetReader, parse_targets, read_targets, sensor_name};
 pub use thermokin_chain::JointKind;
 pub use units::Orientation;
 pub use write::{write_atomic, write_atomic_with};

@@ -156,8 +156,8 @@ impl Layout {
             .cells
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.len() > 5 && c[..5].eq_ignore_ascii_case("temp_"))
-            .map(|(i, c)| (i, format!("temp_{}", &c[5..])))
+            .filter(|(_, c)| sensor_suffix(c).is_some())
+            .map(|(i, c)| (i, sensor_name(c)))
             .collect();
         let state_col = |i: &usize| time == Some(*i) || temps.iter().any(|(c, _)| c == i);
         let label =
@@ -206,4 +206,15 @@ impl Layout {
         }
         Ok(Target { label, pose, line: Some(r.line), state })
     }
+}
+
+/// The part of `name` after a `temp_` prefix (any case), if it has one and something follows.
+fn sensor_suffix(name: &str) -> Option<&str> {
+    (name.len() > 5 && name.is_char_boundary(5) && name[..5].eq_ignore_ascii_case("temp_")).then(|| &name[5..])
+}
+
+/// A temperature sensor's name as files and robot models carry it: `temp_<name>`, the prefix written in
+/// lower case and added when left out (`J2` → `temp_J2`, `TEMP_j2` → `temp_j2`).
+pub fn sensor_name(name: &str) -> String {
+    format!("temp_{}", sensor_suffix(name).unwrap_or(name))
 }

@@ -1,0 +1,211 @@
+//! The diagnosis report as text: what `thermokin diagnose` prints, produced here so that every front end
+//! (the CLI, the Python binding) shows the same words and figures ([`Report::text`]). The JSON form is
+//! the report's `serde` serialisation.
+
+use std::fmt;
+
+use crate::report::{Report, Stats};
+
+/// The text rendering of a report ([`Report::text`]): held-out errors (nested, hold-out set, the
+/// selection's own), the effects with their parameters, frames, verdict, where the residuals lie, and
+/// identifiability.
+pub struct ReportText<'a>(&'a Report);
+
+impl Report {
+    /// The report as the text `thermokin diagnose` prints (`format!("{}", report.text())`).
+    pub fn text(&self) -> ReportText<'_> {
+        ReportText(self)
+    }
+}
+
+impl fmt::Display for ReportText<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        render(self.0, f)
+    }
+}
+
+fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    if let Some(why) = &r.honest_end {
+        writeln!(f, "NOT BETTER THAN NOMINAL: {why}\n")?;
+    }
+    for w in &r.warnings {
+        writeln!(f, "warning: {w}")?;
+    }
+    if let Some(lever) = r.orientation_lever_mm {
+        writeln!(
+            f,
+            "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²) (--orientation-lever)"
+        )?;
+    }
+    fn line(f: &mut fmt::Formatter<'_>, what: &str, s: &Stats) -> fmt::Result {
+        writeln!(
+            f,
+            "  {what:<44} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
+            s.heldout_mean_mm, s.heldout_median_mm, s.heldout_p95_mm, s.heldout_rms_mm, s.heldout_max_mm
+        )
+    }
+    fn header(f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "  {:<44} {:>9} {:>9} {:>9} {:>9} {:>9}", "model", "mean", "median", "p95", "RMS", "max")
+    }
+    if let Some(n) = &r.nested {
+        writeln!(
+            f,
+            "held-out error of the whole diagnosis, nested {}-fold (each outer test fold unseen by the selection), mm:",
+            n.outer_folds
+        )?;
+        header(f)?;
+        line(f, "nominal", &n.nominal)?;
+        line(f, "the effects each outer selection chose", &n.selected)?;
+        for fold in &n.folds {
+            let chosen = if fold.effects.is_empty() { "none".to_string() } else { fold.effects.join(", ") };
+            let flag =
+                if fold.selected.heldout_rms_mm > fold.nominal.heldout_rms_mm { "  WORSE THAN NOMINAL" } else { "" };
+            writeln!(
+                f,
+                "    outer fold {} ({} poses): nominal {:.4} → {:.4} mm RMS{flag}; chose {chosen}",
+                fold.fold, fold.poses, fold.nominal.heldout_rms_mm, fold.selected.heldout_rms_mm
+            )?;
+        }
+        if let Some(d) = n.dominated_by {
+            writeln!(
+                f,
+                "    outer fold {d} holds more than half of the squared error: the RMS above is mostly that fold"
+            )?;
+        }
+    }
+    if let Some(h) = &r.holdout {
+        writeln!(f, "\nexplicit hold-out set (fitted on all measurements; never used to choose), mm:")?;
+        if !h.refitted.is_empty() {
+            writeln!(f, "  (its own frame and probe: {} refitted on it, the effects kept)", h.refitted.join(", "))?;
+        }
+        header(f)?;
+        line(f, "nominal", &h.nominal)?;
+        line(f, "the effects chosen below", &h.selected)?;
+    }
+    writeln!(f, "\nselection: {} — scores that chose the effects (optimistic):", r.validation)?;
+    writeln!(f, "  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max")?;
+    for row in &r.additive {
+        writeln!(
+            f,
+            "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
+            row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+        )?;
+    }
+    if !r.leave_one_out.is_empty() {
+        writeln!(f, "\nleave one out (mm):")?;
+        for row in &r.leave_one_out {
+            writeln!(
+                f,
+                "  {:<44} {:>9.4} {:>9.4} {:>9.4}",
+                row.model, row.stats.heldout_mean_mm, row.stats.heldout_rms_mm, row.stats.heldout_max_mm
+            )?;
+        }
+    }
+    writeln!(f, "\neffects, main cause first (the one whose removal raises the held-out error most):")?;
+    if r.effects.is_empty() {
+        writeln!(
+            f,
+            "  none: no candidate lowers the held-out mean squared error by more than one standard error of the paired difference"
+        )?;
+    }
+    for e in &r.effects {
+        writeln!(
+            f,
+            "  {:<30} held-out RMS {:.4} → {:.4} mm (without it: {:.4}){}",
+            e.label,
+            e.heldout_rms_before_mm,
+            e.heldout_rms_after_mm,
+            e.heldout_rms_without_mm,
+            if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
+                + &if e.contained_in.is_empty() {
+                    String::new()
+                } else {
+                    format!("; contained in: {}", e.contained_in.join(", "))
+                }
+                + &if e.contains.is_empty() { String::new() } else { format!("; contains: {}", e.contains.join(", ")) }
+        )?;
+        for (name, v) in &e.parameters {
+            match (&v.fixed, v.std) {
+                (Some(why), _) => writeln!(f, "      {name:<44} {:>12.6}   fixed, not fitted: {why}", v.value)?,
+                (None, Some(sd)) => writeln!(f, "      {name:<44} {:>12.6} ± {sd:.6}", v.value)?,
+                (None, None) => {
+                    writeln!(f, "      {name:<44} {:>12.6}   (no uncertainty: singular normal matrix)", v.value)?
+                }
+            }
+        }
+    }
+    if let Some(reg) = &r.frames.registration {
+        let [x, y, z] = reg.position_mm;
+        let [a, b, c] = reg.xyz_euler_deg;
+        writeln!(
+            f,
+            "\nfitted registration (measurement frame ← base): {x:.4}, {y:.4}, {z:.4} mm; {a:.5}, {b:.5}, {c:.5}° (X-Y-Z Euler)"
+        )?;
+    }
+    if let Some([x, y, z]) = r.frames.tool_point_mm {
+        writeln!(f, "fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm")?;
+    }
+    if let Some([x, y, z]) = r.frames.tool_rotation_deg {
+        writeln!(f, "fitted probe rotation (tool row's X-Y-Z error angles): {x:.5}, {y:.5}, {z:.5}°")?;
+    }
+    if !r.identifiability.correlated.is_empty() {
+        writeln!(
+            f,
+            "\nnearly unidentifiable combinations (estimates correlated above 0.99: their combination is determined, not each):"
+        )?;
+        for c in &r.identifiability.correlated {
+            writeln!(f, "  {} ~ {} (correlation {:+.4})", c.a, c.b, c.correlation)?;
+        }
+    }
+    writeln!(f, "\nverdict: {}", r.verdict)?;
+    writeln!(f, "\nwhere the nominal model's residuals lie (RMS, mm; → after the effects found):")?;
+    let (b, a) = (&r.residuals_before, &r.residuals_after);
+    for (j, (qb, qa)) in b.by_joint.iter().zip(&a.by_joint).enumerate() {
+        writeln!(
+            f,
+            "  joint {} angle quartiles   {}   →   {}",
+            j + 1,
+            qb.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" "),
+            qa.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" ")
+        )?;
+    }
+    let four = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
+    writeln!(
+        f,
+        "  workspace (near-low near-high far-low far-high)   {}   →   {}",
+        four(&b.by_workspace_region),
+        four(&a.by_workspace_region)
+    )?;
+    writeln!(
+        f,
+        "  joint space (elbow × wrist)                       {}   →   {}",
+        four(&b.by_joint_space_region),
+        four(&a.by_joint_space_region)
+    )?;
+    if !b.by_time.is_empty() {
+        let list = |v: &[f64]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
+        writeln!(
+            f,
+            "  time quartiles                                    {}   →   {}",
+            list(&b.by_time),
+            list(&a.by_time)
+        )?;
+    }
+    if !r.identifiability.not_identifiable.is_empty() {
+        writeln!(f, "\nnot identifiable from these data (not selectable; --help of diagnose says the rules):")?;
+        for x in &r.identifiability.not_identifiable {
+            writeln!(f, "  {:<30} {} — {}", x.effect, x.reason, x.remedy)?;
+        }
+    }
+    if let Some(o) = &r.identifiability.observability {
+        writeln!(
+            f,
+            "\nidentifiability: {} parameters from {} residuals; condition number {:.3e}; O1 {:.3e} O2 {:.3e} O3 {:.3e} O4 {:.3e} O5 {:.3e}",
+            o.parameters, o.rows, o.condition_number, o.o1, o.o2, o.o3, o.o4, o.o5
+        )?;
+    }
+    for fixed in &r.identifiability.fixed {
+        writeln!(f, "  fixed {}: {}", fixed.parameter, fixed.reason)?;
+    }
+    Ok(())
+}
