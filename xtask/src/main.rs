@@ -19,7 +19,11 @@ Tasks:
   bench [--json]              Run the criterion benches and print a summary table (the last line is one
                               JSON object with --json).
   deps                        Check that dependencies point one way (the core never depends on I/O,
-                              the CLI or file formats).";
+                              the CLI or file formats).
+  tidy                        Check the unit boundary: no literal unit conversion (/ 1000.0, * 1000.0,
+                              PI / 180, to_radians, to_degrees) in the libraries outside
+                              crates/chain/src/units.rs (tests, benches, examples and doc comments
+                              excepted).";
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -30,6 +34,7 @@ fn main() -> Result<()> {
         Some("bless-golden") => bless(),
         Some("bench") => bench(args.iter().any(|a| a == "--json")),
         Some("deps") => deps(),
+        Some("tidy") => tidy(),
         Some("-h" | "--help") | None => {
             println!("{HELP}");
             Ok(())
@@ -375,6 +380,77 @@ fn deps() -> Result<()> {
     }
 }
 
+/// The one module allowed to convert units.
+const UNITS_MODULE: &str = "crates/chain/src/units.rs";
+
+/// Literal unit conversions: a length between metres and millimetres, an angle between degrees and
+/// radians, written out instead of called through [`UNITS_MODULE`].
+const STRAY_CONVERSIONS: &[&str] =
+    &["/ 1000.0", "* 1000.0", "1000.0 *", "/ 1e3", "* 1e3", "PI / 180", "180.0 / PI", "to_radians", "to_degrees"];
+
+/// The stray conversions in one source file's text: (1-based line, the line), doc comments, comments and
+/// `#[cfg(test)]` modules (everything after the attribute) excepted.
+fn stray_conversions(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let code = line.trim_start();
+        if code.starts_with("#[cfg(test)]") {
+            break;
+        }
+        if code.starts_with("//") {
+            continue;
+        }
+        let code = code.split(" //").next().unwrap_or(code);
+        if STRAY_CONVERSIONS.iter().any(|p| code.contains(p)) {
+            out.push((i + 1, line.trim().to_string()));
+        }
+    }
+    out
+}
+
+/// Every library source file: `crates/*/src/**/*.rs`, the test-support crate excepted.
+fn library_sources(root: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    let mut stack: Vec<PathBuf> = std::fs::read_dir(root.join("crates"))?
+        .filter_map(|e| e.ok().map(|e| e.path().join("src")))
+        .filter(|p| p.is_dir() && !p.starts_with(root.join("crates/testdata")))
+        .collect();
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir)? {
+            let path = entry?.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    Ok(files)
+}
+
+fn tidy() -> Result<()> {
+    let root = workspace_root();
+    let mut bad = Vec::new();
+    let files = library_sources(&root)?;
+    for path in &files {
+        let relative = path.strip_prefix(&root).unwrap_or(path);
+        if relative == Path::new(UNITS_MODULE) {
+            continue;
+        }
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        for (line, code) in stray_conversions(&text) {
+            bad.push(format!("{}:{line}: {code}", relative.display()));
+        }
+    }
+    if bad.is_empty() {
+        println!("tidy: every unit conversion goes through {UNITS_MODULE} ({} files checked)", files.len());
+        Ok(())
+    } else {
+        bail!("a unit converted outside {UNITS_MODULE} (call its functions instead):\n  {}", bad.join("\n  "))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used, clippy::panic)]
@@ -400,6 +476,69 @@ mod tests {
                 (name, allowed)
             })
             .collect()
+    }
+
+    #[test]
+    fn the_unit_boundary_holds_and_a_stray_conversion_is_caught() {
+        // The repository as it is passes ...
+        super::tidy().unwrap();
+        // ... and every pattern is caught in code, not in comments or tests.
+        for pattern in super::STRAY_CONVERSIONS {
+            let stray = format!("fn f(x: f64) -> f64 {{\n    x {pattern} 2.0\n}}\n");
+            assert_eq!(super::stray_conversions(&stray).len(), 1, "{pattern} not caught");
+        }
+        let excused = "/// 90f64.to_radians()\n// x / 1000.0\nlet a = 1; // b * 1000.0\n#[cfg(test)]\nmod t { fn f() { 1f64.to_degrees(); } }\n";
+        assert!(super::stray_conversions(excused).is_empty());
+        // A library file with one: the check names it.
+        let stray = "//! x\npub fn mm(m: f64) -> f64 {\n    m * 1000.0\n}\n";
+        assert_eq!(super::stray_conversions(stray), vec![(3, "m * 1000.0".to_string())]);
+    }
+
+    /// The rows of the ARCHITECTURE.md table between `<!-- {name}:begin -->` and `<!-- {name}:end -->`:
+    /// first cell (backticks dropped), and the backticked names of the second.
+    fn documented_table(name: &str) -> Vec<(String, BTreeSet<String>)> {
+        let text = std::fs::read_to_string(super::workspace_root().join("ARCHITECTURE.md")).unwrap();
+        let start = text.find(&format!("<!-- {name}:begin -->")).unwrap();
+        let end = text.find(&format!("<!-- {name}:end -->")).unwrap();
+        text[start..end]
+            .lines()
+            .filter(|l| l.starts_with("| `"))
+            .map(|l| {
+                let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+                let first = cells[1].split('`').nth(1).unwrap_or("").to_string();
+                let named = cells[2].split('`').skip(1).step_by(2).map(str::to_string).collect();
+                (first, named)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_documented_crate_map_is_the_workspace() {
+        let root = super::workspace_root();
+        let mut packages: Vec<String> = std::fs::read_dir(root.join("crates"))
+            .unwrap()
+            .map(|e| {
+                let manifest = std::fs::read_to_string(e.unwrap().path().join("Cargo.toml")).unwrap();
+                let line = manifest.lines().find(|l| l.starts_with("name")).unwrap();
+                line.split('"').nth(1).unwrap().to_string()
+            })
+            .collect();
+        packages.sort();
+        let mut documented: Vec<String> = documented_table("crates").into_iter().map(|(c, _)| c).collect();
+        documented.sort();
+        assert_eq!(documented, packages, "ARCHITECTURE.md's crate table and crates/ disagree: update the table");
+    }
+
+    #[test]
+    fn the_documented_format_users_are_the_checked_ones() {
+        let mut documented = documented_table("formats");
+        documented.sort();
+        let mut checked: Vec<(String, BTreeSet<String>)> = super::FORMAT_CRATES
+            .iter()
+            .map(|(f, users)| (f.to_string(), users.iter().map(|u| u.to_string()).collect()))
+            .collect();
+        checked.sort();
+        assert_eq!(documented, checked, "ARCHITECTURE.md's format table and `cargo xtask deps` disagree: update both");
     }
 
     #[test]

@@ -254,8 +254,10 @@ impl Chain {
             let theta = x_in.y.atan2(x_in.x);
             let d = rest.translation.vector.z;
             let rebuilt = rz(theta) * tz(d);
+            // A rotation residual counts as the displacement it causes a metre away (a lever, not a unit).
+            const LEVER_MM: f64 = 1000.0;
             let residual = (rebuilt.inverse() * rest).translation.vector.norm()
-                + (rebuilt.rotation.inverse() * rest.rotation).angle() * 1e3;
+                + LEVER_MM * (rebuilt.rotation.inverse() * rest.rotation).angle();
             if residual > LINE_TOL {
                 return Err(ChainError::NoModifiedDh {
                     joint: i + 1,

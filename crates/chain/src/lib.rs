@@ -12,6 +12,7 @@ mod frame;
 mod measurements;
 mod robot;
 mod so3;
+pub mod units;
 
 pub use chain::{
     Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,

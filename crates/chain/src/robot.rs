@@ -7,10 +7,9 @@ use nalgebra::{Isometry3, Point3, Unit, Vector3};
 
 use crate::{Chain, ChainError};
 
-/// Standard gravity, m/s²: a link mass in kg and a lever in mm give N·mm, divided by 1000 for N·m.
+/// Standard gravity, m/s²: a link mass in kg and a lever in mm give N·mm ([`crate::units::newton_metres`]
+/// for N·m).
 const STANDARD_GRAVITY: f64 = 9.806_65;
-/// Millimetres per metre: the lever of a gravity torque is in mm, the torque in N·m.
-const MM_PER_M: f64 = 1000.0;
 
 /// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
 /// one link: what gravity compliance needs. Description data carried beside the chain.
@@ -193,7 +192,7 @@ pub fn gravity_torques(
             let origin = frames[j].translation.vector;
             let moment_nmm: Vector3<f64> =
                 coms.iter().skip(j).flatten().map(|(m, c)| (c - origin).cross(&(weight * *m))).sum();
-            axis.dot(&moment_nmm) / MM_PER_M
+            crate::units::newton_metres(axis.dot(&moment_nmm))
         })
         .collect())
 }

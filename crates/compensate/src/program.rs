@@ -325,7 +325,7 @@ fn ur(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pro
                 .joints()
                 .iter()
                 .zip(&r.joints)
-                .map(|(j, &v)| if j.kind == JointKind::Prismatic { v / 1000.0 } else { v })
+                .map(|(j, &v)| if j.kind == JointKind::Prismatic { thermokin_chain::units::metres(v) } else { v })
                 .collect();
             out.push_str(&format!(
                 "  movej([{}], a=1.4, v={}, r={})  # {}\n",

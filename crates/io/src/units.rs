@@ -45,7 +45,7 @@ impl Orientation {
         Ok(match self {
             Orientation::XyzEuler => xyz_rotation_deg([values[0], values[1], values[2]]),
             Orientation::Rpy => {
-                let [roll, pitch, yaw] = [values[0], values[1], values[2]].map(f64::to_radians);
+                let [roll, pitch, yaw] = [values[0], values[1], values[2]].map(radians);
                 UnitQuaternion::from_euler_angles(roll, pitch, yaw)
             }
             Orientation::Quaternion => {
@@ -99,13 +99,13 @@ fn tidy_deg(v: f64) -> f64 {
 /// ([`thermokin_chain::xyz_angles_for_output`]).
 pub fn xyz_euler_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let r = rotation.to_rotation_matrix().into_inner();
-    let d = thermokin_chain::xyz_angles_for_output(&r).map(f64::to_degrees);
+    let d = thermokin_chain::xyz_angles_for_output(&r).map(degrees);
     [tidy_deg(d.x), tidy_deg(d.y), tidy_deg(d.z)]
 }
 
 /// The rotation of X-Y-Z Euler angles in degrees (`R = Rx·Ry·Rz`): the inverse of [`xyz_euler_deg`].
 pub fn xyz_rotation_deg(angles: [f64; 3]) -> UnitQuaternion<f64> {
-    let r = xyz_rotation(&Vector3::from(angles).map(f64::to_radians));
+    let r = xyz_rotation(&Vector3::from(angles).map(radians));
     UnitQuaternion::from_matrix(&r)
 }
 
@@ -121,7 +121,7 @@ pub fn ros_rpy_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
     let roll = if cos_p < GIMBAL_COS { 0.0 } else { r[(2, 1)].atan2(r[(2, 2)]) };
     let (sr, cr) = roll.sin_cos();
     let yaw = (-(r[(0, 1)] * cr - r[(0, 2)] * sr)).atan2(r[(1, 1)] * cr - r[(1, 2)] * sr);
-    [tidy_deg(roll.to_degrees()), tidy_deg(pitch.to_degrees()), tidy_deg(yaw.to_degrees())]
+    [tidy_deg(degrees(roll)), tidy_deg(degrees(pitch)), tidy_deg(degrees(yaw))]
 }
 
 pub use thermokin_chain::quaternion_wxyz;
@@ -129,12 +129,12 @@ pub use thermokin_chain::quaternion_wxyz;
 /// One joint value from a file or flag (degrees for a revolute joint, mm for a prismatic one) in the
 /// library's radians or mm.
 pub fn joint_value_in(kind: JointKind, value: f64) -> f64 {
-    if kind == JointKind::Revolute { value.to_radians() } else { value }
+    if kind == JointKind::Revolute { radians(value) } else { value }
 }
 
 /// One joint value of the library (radians, mm) for a file or a terminal (degrees, mm).
 pub fn joint_value_out(kind: JointKind, value: f64) -> f64 {
-    if kind == JointKind::Revolute { value.to_degrees() } else { value }
+    if kind == JointKind::Revolute { degrees(value) } else { value }
 }
 
 /// Joint values from a file or flag (degrees for revolute joints, mm for prismatic ones) to the library's
@@ -149,19 +149,12 @@ pub fn joints_to_external(chain: &Chain, q: &[f64]) -> Vec<f64> {
     chain.joints().iter().zip(q).map(|(j, &v)| joint_value_out(j.kind, v)).collect()
 }
 
-/// An angle of the library (radians) in degrees, for a file or a terminal.
-pub fn degrees(radians: f64) -> f64 {
-    radians.to_degrees()
-}
-
-/// An angle from a file or a flag (degrees) in the library's radians.
-pub fn radians(degrees: f64) -> f64 {
-    degrees.to_radians()
-}
+/// The base conversions ([`thermokin_chain::units`]), here beside the edge's joint and orientation ones.
+pub use thermokin_chain::units::{MM_PER_M, degrees, metres, millimetres, radians};
 
 /// Three angles of the library (radians) in degrees.
 pub fn degrees3(radians: [f64; 3]) -> [f64; 3] {
-    radians.map(f64::to_degrees)
+    radians.map(degrees)
 }
 
 /// Six error parameters as files and the paper's tables give them (`Dx,Dy,Dz,Dox,Doy,Doz`: mm, mm, mm,
@@ -169,14 +162,14 @@ pub fn degrees3(radians: [f64; 3]) -> [f64; 3] {
 pub fn error_params_in(values: [f64; 6]) -> ErrorParams {
     ErrorParams::new(
         Vector3::new(values[0], values[1], values[2]),
-        Vector3::new(values[3], values[4], values[5]).map(f64::to_radians),
+        Vector3::new(values[3], values[4], values[5]).map(radians),
     )
 }
 
 /// Six error parameters of the library in the files' millimetres and degrees (the inverse of
 /// [`error_params_in`]).
 pub fn error_params_out(e: &ErrorParams) -> [f64; 6] {
-    let r = e.rotation.map(f64::to_degrees);
+    let r = e.rotation.map(degrees);
     [e.translation.x, e.translation.y, e.translation.z, r.x, r.y, r.z]
 }
 

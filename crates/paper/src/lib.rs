@@ -37,6 +37,10 @@ pub enum PaperError {
     /// A compensation run could not be set up.
     #[error(transparent)]
     Compensate(#[from] thermokin_compensate::CompensateError),
+    /// The report could not be formatted (writing to a `String` does not fail; a formatting trait
+    /// implementation can).
+    #[error("the report could not be formatted")]
+    Format(#[from] std::fmt::Error),
     /// A transcribed fixture is malformed.
     #[error("{path}:{line}: {message}", path = path.display())]
     Fixture {

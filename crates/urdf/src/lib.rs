@@ -74,14 +74,14 @@ pub struct ImportedRobot {
     pub tip_link: String,
 }
 
-const M_TO_MM: f64 = 1000.0;
+use thermokin_chain::units::{MM_PER_M, metres, millimetres};
 
 fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
     let [x, y, z] = p.xyz.0;
     let [r, pi, yw] = p.rpy.0;
     // URDF rpy: R = Rz(yaw) · Ry(pitch) · Rx(roll), nalgebra's from_euler_angles.
     Isometry3::from_parts(
-        Translation3::new(x * M_TO_MM, y * M_TO_MM, z * M_TO_MM),
+        Translation3::new(millimetres(x), millimetres(y), millimetres(z)),
         UnitQuaternion::from_euler_angles(r, pi, yw),
     )
 }
@@ -261,12 +261,12 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
             let limits = if j.joint_type == urdf_rs::JointType::Continuous {
                 None
             } else if lim.lower.is_finite() && lim.upper.is_finite() && lim.lower < lim.upper {
-                let scale = if kind == JointKind::Prismatic { M_TO_MM } else { 1.0 };
+                let scale = if kind == JointKind::Prismatic { MM_PER_M } else { 1.0 };
                 Some(JointLimits { lower: lim.lower * scale, upper: lim.upper * scale })
             } else {
                 None
             };
-            let unit = if kind == JointKind::Prismatic { M_TO_MM } else { 1.0 };
+            let unit = if kind == JointKind::Prismatic { MM_PER_M } else { 1.0 };
             let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
             ratings.push(JointRatings {
                 velocity: positive(lim.velocity).map(|v| v * unit),
@@ -387,7 +387,7 @@ fn rpy(q: &UnitQuaternion<f64>) -> (f64, f64, f64) {
 }
 
 fn origin_xml(pose: &Isometry3<f64>) -> String {
-    let t = pose.translation.vector / M_TO_MM;
+    let t = pose.translation.vector.map(metres);
     let (r, p, y) = rpy(&pose.rotation);
     format!("<origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>", num(t.x), num(t.y), num(t.z), num(r), num(p), num(y))
 }
@@ -462,8 +462,8 @@ pub fn export_robot_noting(robot: &Robot, beyond_urdf: &[String]) -> String {
         };
         match robot.masses()[i] {
             Some(m) if m.mass_kg > 0.0 => {
-                let com = m.com_mm / M_TO_MM;
-                let r = INERTIA_SPHERE_RADIUS_MM / M_TO_MM;
+                let com = m.com_mm.map(metres);
+                let r = metres(INERTIA_SPHERE_RADIUS_MM);
                 let inertia = 0.4 * m.mass_kg * r * r;
                 s.push_str(&format!(
                     "  <link name=\"{child}\">\n    <inertial>\n      <origin xyz=\"{} {} {}\" rpy=\"0 0 0\"/>\n      <mass value=\"{}\"/>\n      <inertia ixx=\"{i}\" ixy=\"0\" ixz=\"0\" iyy=\"{i}\" iyz=\"0\" izz=\"{i}\"/>\n    </inertial>\n  </link>\n",
@@ -482,7 +482,7 @@ pub fn export_robot_noting(robot: &Robot, beyond_urdf: &[String]) -> String {
         let a = f.axis.into_inner();
         s.push_str(&format!("    <axis xyz=\"{} {} {}\"/>\n", num(a.x), num(a.y), num(a.z)));
         let prismatic = f.kind == JointKind::Prismatic;
-        let scale = if prismatic { 1.0 / M_TO_MM } else { 1.0 };
+        let scale = if prismatic { metres(1.0) } else { 1.0 };
         let rating = robot.ratings()[i];
         let velocity =
             rating.velocity.unwrap_or(if prismatic { DEFAULT_VELOCITY_MM_S } else { DEFAULT_VELOCITY_RAD_S });
