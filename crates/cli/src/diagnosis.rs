@@ -38,6 +38,77 @@ fn setting_error(e: thermokin_diagnose::DiagnoseError) -> Failure {
     }
 }
 
+/// The diagnosis with progress on stderr, one step per stage — the selection, each outer fold of the
+/// nested validation, the hold-out set: a bar on a terminal, a line per stage with an estimate of the
+/// time left otherwise (a log file, CI), nothing with --quiet. Stages cost about the same, so the
+/// estimate is the mean time per stage so far times the stages left.
+fn run_with_progress(
+    a: &DiagnoseArgs,
+    robot: &Robot,
+    data: &thermokin_diagnose::Dataset,
+    holdout: Option<&thermokin_diagnose::Dataset>,
+    config: &Config,
+) -> Result<Report, Failure> {
+    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let bar = if a.quiet || !terminal {
+        indicatif::ProgressBar::hidden()
+    } else {
+        let bar = indicatif::ProgressBar::new(0).with_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} diagnosing: {msg} [{bar:20}] {pos}/{len} ({elapsed}, ETA {eta})",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        bar.enable_steady_tick(std::time::Duration::from_millis(250));
+        bar.set_message("selection on all measurements");
+        bar
+    };
+    let started = std::time::Instant::now();
+    let report = thermokin_diagnose::diagnose_with_progress(robot, data, holdout, config, &mut |p| {
+        bar.set_length(p.total as u64);
+        bar.set_position(p.done as u64);
+        bar.set_message(format!("done: {}", p.stage));
+        if !a.quiet && !terminal {
+            let elapsed = started.elapsed().as_secs_f64();
+            let left = elapsed / p.done.max(1) as f64 * (p.total - p.done) as f64;
+            eprintln!("diagnose: {}/{} {} — {elapsed:.1} s elapsed, about {left:.0} s left", p.done, p.total, p.stage);
+        }
+    })
+    .map_err(Failure::input);
+    bar.finish_and_clear();
+    report
+}
+
+/// `--export`: the model scored ([`Report::export_model`]) written as robot TOML, or as URDF with what
+/// URDF cannot hold named in its header and here.
+fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Result<(), Failure> {
+    let payload = a.robot.payload.as_deref().map(crate::input::parse_payload).transpose().map_err(Failure::input)?;
+    let source = a.measurements.display().to_string();
+    let model = report.export_model(robot, payload, &source).map_err(Failure::internal)?;
+    let beyond = model.beyond_urdf();
+    let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+    let text = if urdf {
+        thermokin_urdf::export_robot_noting(model.robot(), &beyond)
+    } else {
+        thermokin_io::robot_model_to_toml(&model)
+    };
+    write_atomic(path, text.as_bytes()).map_err(Failure::internal)?;
+    let carried: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
+    println!(
+        "\nidentified robot → {}: {}",
+        path.display(),
+        if carried.is_empty() { "the frames only".to_string() } else { carried.join(", ") }
+    );
+    if urdf && !beyond.is_empty() {
+        println!("  URDF cannot hold (named in the file's header; write .toml for the complete record):");
+        for line in &beyond {
+            println!("    {line}");
+        }
+    }
+    Ok(())
+}
+
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
@@ -92,43 +163,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
             .map_err(Failure::input)?,
         None => robot.clone(),
     };
-    // Progress on stderr, one step per stage — the selection, each outer fold of the nested validation,
-    // the hold-out set: a bar on a terminal, a line per stage with an estimate of the time left
-    // otherwise (a log file, CI), nothing with --quiet. Stages cost about the same, so the estimate is
-    // the mean time per stage so far times the stages left.
-    let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());
-    let bar = if a.quiet || !terminal {
-        indicatif::ProgressBar::hidden()
-    } else {
-        let bar = indicatif::ProgressBar::new(0).with_style(
-            indicatif::ProgressStyle::with_template(
-                "{spinner} diagnosing: {msg} [{bar:20}] {pos}/{len} ({elapsed}, ETA {eta})",
-            )
-            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-        );
-        bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
-        bar.enable_steady_tick(std::time::Duration::from_millis(250));
-        bar.set_message("selection on all measurements");
-        bar
-    };
-    let started = std::time::Instant::now();
-    let report =
-        thermokin_diagnose::diagnose_with_progress(&fitted_robot, &data, holdout.as_ref(), &config, &mut |p| {
-            bar.set_length(p.total as u64);
-            bar.set_position(p.done as u64);
-            bar.set_message(format!("done: {}", p.stage));
-            if !a.quiet && !terminal {
-                let elapsed = started.elapsed().as_secs_f64();
-                let left = elapsed / p.done.max(1) as f64 * (p.total - p.done) as f64;
-                eprintln!(
-                    "diagnose: {}/{} {} — {elapsed:.1} s elapsed, about {left:.0} s left",
-                    p.done, p.total, p.stage
-                );
-            }
-        })
-        .map_err(Failure::input);
-    bar.finish_and_clear();
-    let report = report?;
+    let report = run_with_progress(&a, &fitted_robot, &data, holdout.as_ref(), &config)?;
     print!("{}", report.text());
     if let (Some(p), Some(why)) = (&a.export, &report.honest_end)
         && !a.force_export
@@ -136,40 +171,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         return Err(Failure::input(anyhow!("not writing {}: {why} (--force-export writes it anyway)", p.display())));
     }
     if let Some(p) = &a.export {
-        // The model scored, on the file's robot (its own masses; the payload the data were measured with
-        // kept as the robot's default payload, which a later --payload replaces).
-        let payload =
-            a.robot.payload.as_deref().map(crate::input::parse_payload).transpose().map_err(Failure::input)?;
-        let named = robot
-            .with_chain(report.identified.robot().chain().clone())
-            .map_err(Failure::internal)?
-            .renamed(format!("{} (calibrated on {})", robot.name(), a.measurements.display()));
-        let model = report
-            .identified
-            .clone()
-            .with_robot(named)
-            .and_then(|m| m.with_payload(payload))
-            .map_err(Failure::internal)?;
-        let beyond = model.beyond_urdf();
-        let urdf = p.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-        let text = if urdf {
-            thermokin_urdf::export_robot_noting(model.robot(), &beyond)
-        } else {
-            thermokin_io::robot_model_to_toml(&model)
-        };
-        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
-        let carried: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
-        println!(
-            "\nidentified robot → {}: {}",
-            p.display(),
-            if carried.is_empty() { "the frames only".to_string() } else { carried.join(", ") }
-        );
-        if urdf && !beyond.is_empty() {
-            println!("  URDF cannot hold (named in the file's header; write .toml for the complete record):");
-            for line in &beyond {
-                println!("    {line}");
-            }
-        }
+        export(&a, p, &robot, &report)?;
     }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;

@@ -426,6 +426,8 @@ pub(crate) struct Start {
     pub(crate) movable: Vec<bool>,
 }
 
+// Long on purpose (~140 lines): the two identifiability passes, the damping loop and the covariance share
+// the Jacobian, the residuals and the scales in flight; split, each part would take all of them back.
 /// [`fit`] from `start`, moving only its movable parameters (a transfer: the effects fitted on one
 /// file, only the frame and tool refitted on another).
 pub(crate) fn fit_from(

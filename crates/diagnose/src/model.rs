@@ -584,6 +584,9 @@ impl Model {
         rows
     }
 
+    // Long on purpose (~145 lines): the identification's per-measurement hot path — every effect's
+    // joint-value correction, drift row and Jacobian column in one pass over the effects, with the
+    // cache's buffers borrowed once; split, it would pay the borrows and the effect dispatch per part.
     /// Predicted TCP position and rotation of one measurement and, if asked, the 6 × len Jacobian of the
     /// pose as twists in the measurement frame (rows 0–2 the position, 3–5 the rotation: a small turn
     /// `δφ` of the predicted rotation, `R ↦ exp(δφ)·R`).

@@ -37,16 +37,28 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²) (--orientation-lever)"
         )?;
     }
-    fn line(f: &mut fmt::Formatter<'_>, what: &str, s: &Stats) -> fmt::Result {
-        writeln!(
-            f,
-            "  {what:<44} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
-            s.heldout_mean_mm, s.heldout_median_mm, s.heldout_p95_mm, s.heldout_rms_mm, s.heldout_max_mm
-        )
-    }
-    fn header(f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "  {:<44} {:>9} {:>9} {:>9} {:>9} {:>9}", "model", "mean", "median", "p95", "RMS", "max")
-    }
+    heldout(r, f)?;
+    effects(r, f)?;
+    frames_and_verdict(r, f)?;
+    identifiability(r, f)
+}
+
+/// One row of held-out statistics.
+fn line(f: &mut fmt::Formatter<'_>, what: &str, s: &Stats) -> fmt::Result {
+    writeln!(
+        f,
+        "  {what:<44} {:>9.4} {:>9.4} {:>9.4} {:>9.4} {:>9.4}",
+        s.heldout_mean_mm, s.heldout_median_mm, s.heldout_p95_mm, s.heldout_rms_mm, s.heldout_max_mm
+    )
+}
+
+/// The header of the held-out statistics' columns.
+fn header(f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    writeln!(f, "  {:<44} {:>9} {:>9} {:>9} {:>9} {:>9}", "model", "mean", "median", "p95", "RMS", "max")
+}
+
+/// The held-out errors: nested, the hold-out set, the selection's own tables.
+fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if let Some(n) = &r.nested {
         writeln!(
             f,
@@ -101,6 +113,11 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             )?;
         }
     }
+    Ok(())
+}
+
+/// The effects, main cause first, with their parameters.
+fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     writeln!(f, "\neffects, main cause first (the one whose removal raises the held-out error most):")?;
     if r.effects.is_empty() {
         writeln!(
@@ -134,6 +151,11 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             }
         }
     }
+    Ok(())
+}
+
+/// The fitted frames, nearly unidentifiable pairs, the verdict and where the residuals lie.
+fn frames_and_verdict(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if let Some(reg) = &r.frames.registration {
         let [x, y, z] = reg.position_mm;
         let [a, b, c] = reg.xyz_euler_deg;
@@ -191,6 +213,11 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             list(&a.by_time)
         )?;
     }
+    Ok(())
+}
+
+/// What the data cannot identify, observability, fixed parameters.
+fn identifiability(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if !r.identifiability.not_identifiable.is_empty() {
         writeln!(f, "\nnot identifiable from these data (not selectable; --help of diagnose says the rules):")?;
         for x in &r.identifiability.not_identifiable {

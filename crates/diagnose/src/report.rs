@@ -294,3 +294,21 @@ pub(crate) fn breakdown(
     let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();
     Ok(Breakdown { by_joint, by_workspace_region, by_joint_space_region, by_time, per_measurement_mm })
 }
+
+impl Report {
+    /// The identified robot as a robot file carries it ([`Report::identified`], the model scored), on
+    /// `file_robot` — the robot as its file describes it: its own link masses and name, here renamed
+    /// `"<name> (calibrated on <source>)"` — with `payload`, the load the measurements were taken with,
+    /// kept as the robot's default payload (a later operating state's payload replaces it).
+    pub fn export_model(
+        &self,
+        file_robot: &Robot,
+        payload: Option<thermokin_chain::LinkMass>,
+        source: &str,
+    ) -> Result<thermokin_deform::RobotModel, DiagnoseError> {
+        let named = file_robot
+            .with_chain(self.identified.robot().chain().clone())?
+            .renamed(format!("{} (calibrated on {source})", file_robot.name()));
+        Ok(self.identified.clone().with_robot(named)?.with_payload(payload)?)
+    }
+}

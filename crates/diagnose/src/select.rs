@@ -244,6 +244,9 @@ fn score(
     Ok(Ok(Candidate { effect: c, new_free, stats, errors, runaway }))
 }
 
+// Long on purpose (~130 lines): one forward step is screen → score → gate → parsimony → plausibility →
+// information criterion over the same scored candidates; its order is the selection's rule, read in one
+// place.
 /// Phase 3: forward steps. Each round scores every remaining candidate (in parallel); an exponential
 /// drift refines the linear one of its joint and is scored only where the linear drift already earns
 /// half the best gain (it costs a model per measurement and a nonlinear τ).
