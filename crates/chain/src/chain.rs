@@ -391,7 +391,7 @@ impl Chain {
                         let (sz, cz) = link.zero_sin_cos;
                         (sq * cz + cq * sz, cq * cz - sq * sz)
                     }
-                    None => (q + link.zero).sin_cos(),
+                    None => crate::trig::sin_cos_reduced(q + link.zero),
                 };
                 frame.rotate_local(&link.axis, s, c);
             }
@@ -522,8 +522,8 @@ impl Chain {
 
 /// `(sin x, cos x)`, by their Taylor polynomials for the small angles of error parameters and drifts
 /// (|x| ≤ 1e-2 rad: the first omitted terms, `x⁹/9!` and `x¹⁰/10!`, are below 3e-22 of the result,
-/// far under its rounding of 1.1e-16), by the library otherwise — the per-measurement rows of a drift
-/// pay no library sine.
+/// far under its rounding of 1.1e-16), by one argument reduction and fdlibm's kernels otherwise
+/// (`trig`, within 1 ulp of the library) — the per-measurement rows of a drift pay no library sine.
 pub fn sin_cos(x: f64) -> (f64, f64) {
     if x.abs() <= 1e-2 {
         let x2 = x * x;
@@ -531,7 +531,7 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
         let c = 1.0 - x2 / 2.0 * (1.0 - x2 / 12.0 * (1.0 - x2 / 30.0 * (1.0 - x2 / 56.0)));
         (s, c)
     } else {
-        x.sin_cos()
+        crate::trig::sin_cos_reduced(x)
     }
 }
 

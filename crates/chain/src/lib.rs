@@ -12,6 +12,7 @@ mod frame;
 mod measurements;
 mod robot;
 mod so3;
+mod trig;
 pub mod units;
 
 pub use chain::{
