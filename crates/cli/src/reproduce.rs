@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::{Context, anyhow};
 use thermokin_io::write_atomic;
-use thermokin_paper::{Inputs, brief, check, reproduce};
+use thermokin_paper::{Inputs, check, reproduce};
 
 use crate::args::ReproduceArgs;
 use crate::input::progress_bar;
@@ -43,7 +43,7 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
         let text = serde_json::to_string_pretty(&r.json).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
     }
-    println!("{}", brief(&r.json));
+    println!("{}", r.headline.text());
     println!("({:.2} s)", started.elapsed().as_secs_f64());
     let mut code = exit::OK;
     if let Some(golden) = &a.check {

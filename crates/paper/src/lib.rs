@@ -13,7 +13,7 @@ pub mod print;
 mod reproduce;
 pub mod scene;
 
-pub use reproduce::{Inputs, Reproduction, brief, check, reproduce};
+pub use reproduce::{Headline, Inputs, Reproduction, check, reproduce};
 
 pub use scene::{
     Hypothesis, Residuals, SCENE_RANK_CUTOFF, SinglePrecisionEvidence, TransientCandidate, Verdict,

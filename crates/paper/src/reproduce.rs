@@ -60,10 +60,43 @@ pub struct Inputs {
     pub authors: PathBuf,
 }
 
+/// The figures a reproduction's one-screen summary gives ([`Headline::text`]): typed, not read back from
+/// the JSON.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Headline {
+    /// The static case on the authors' scene (Tables 13, 15), mm and degrees.
+    pub static_case: SummaryOut,
+    /// The transient case (Tables 17, 18), mm and degrees.
+    pub transient: SummaryOut,
+    /// FK of Table 16's printed angles on our deformed model against Table 14's coordinates, RMS (3-D), mm.
+    pub table16_rms_mm: f64,
+}
+
+impl Headline {
+    /// The summary `thermokin reproduce-paper` prints.
+    pub fn text(&self) -> String {
+        let (s, t) = (&self.static_case, &self.transient);
+        format!(
+            "static case (50 targets): largest compensated error {:.3e} mm, {:.3e}°; uncompensated {:.3e} mm\n\
+             transient case (10,050 solves): largest compensated error {:.3e} mm, {:.3e}°; uncompensated {:.3e} mm\n\
+             published Table 16 angles on our deformed model vs Table 14: RMS {:.3e} mm",
+            s.max_position_error_mm,
+            s.max_orientation_error_deg,
+            s.max_uncompensated_error_mm,
+            t.max_position_error_mm,
+            t.max_orientation_error_deg,
+            t.max_uncompensated_error_mm,
+            self.table16_rms_mm,
+        )
+    }
+}
+
 /// What a reproduction measured.
 pub struct Reproduction {
     /// The measured numbers (the golden file's format).
     pub json: Value,
+    /// The one-screen summary's figures.
+    pub headline: Headline,
     /// The Markdown report.
     pub report: String,
     /// The static compensation on the scene.
@@ -165,6 +198,8 @@ fn summary_json(s: &SummaryOut) -> Value {
 struct Measured {
     json: Value,
     report: String,
+    /// Table 16's printed angles on our deformed model against Table 14.
+    table16: FkResidual,
 }
 
 /// Reruns both case studies and compares them with print, with the authors' files and with the
@@ -231,33 +266,12 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
         transient_run: &transient_run,
     };
     let m = measure(a, &runs, &printed, &table14, &table16)?;
-    Ok(Reproduction { json: m.json, report: m.report, static_run, transient_run, scene, deformed })
-}
-
-/// One line per headline number of a reproduction, for a terminal.
-pub fn brief(j: &Value) -> String {
-    let g = |path: &[&str]| -> String {
-        let mut v = j;
-        for k in path {
-            v = &v[*k];
-        }
-        match v.as_f64() {
-            Some(x) => format!("{x:.3e}"),
-            None => v.to_string(),
-        }
+    let headline = Headline {
+        static_case: SummaryOut::of(&static_run.summary),
+        transient: SummaryOut::of(&transient_run.summary),
+        table16_rms_mm: m.table16.rms_mm,
     };
-    format!(
-        "static case (50 targets): largest compensated error {} mm, {}°; uncompensated {} mm\n\
-         transient case (10,050 solves): largest compensated error {} mm, {}°; uncompensated {} mm\n\
-         published Table 16 angles on our deformed model vs Table 14: RMS {} mm",
-        g(&["static", "max_position_error_mm"]),
-        g(&["static", "max_orientation_error_deg"]),
-        g(&["static", "max_uncompensated_error_mm"]),
-        g(&["transient", "max_position_error_mm"]),
-        g(&["transient", "max_orientation_error_deg"]),
-        g(&["transient", "max_uncompensated_error_mm"]),
-        g(&["table16_on_our_model_vs_table14", "rms_mm"]),
-    )
+    Ok(Reproduction { json: m.json, report: m.report, headline, static_run, transient_run, scene, deformed })
 }
 
 /// The chains and the three runs a reproduction measures.
@@ -462,7 +476,7 @@ fn measure(
         "static_canonical": summary_json(c),
         "transient": summary_json(t),
         "table16_max_joint_diff_deg": joint_diff,
-        "table16_on_our_model_vs_table14": t16_residual,
+        "table16_on_our_model_vs_table14": &t16_residual,
         "table16_on_canonical_model_vs_table14": t16_residual_canonical,
     });
 
@@ -520,7 +534,7 @@ fn measure(
         w,
         "## Plots\n\n![deviation per minute](img/transient-deviation.svg)\n\n![Figure 15](img/figure15-structure.svg)\n"
     )?;
-    Ok(Measured { json: j, report: r })
+    Ok(Measured { json: j, report: r, table16: t16_residual })
 }
 
 /// The authors' scene replayed: the static gap explained, the candidates judged, the transient file's
