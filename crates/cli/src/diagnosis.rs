@@ -7,9 +7,8 @@ use anyhow::anyhow;
 use plotters::prelude::*;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use thermokin_diagnose::{
-    Config, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, Robot, SimulationConfig, ToolMode,
-};
+use thermokin_chain::Robot;
+use thermokin_diagnose::{Config, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
 use thermokin_io::{
     JointUnits, MeasurementFormat, read_measurements_joined, read_measurements_with, write_atomic, write_atomic_with,
     write_measurements,
@@ -45,8 +44,8 @@ fn setting_error(e: thermokin_diagnose::DiagnoseError) -> Failure {
 fn run_with_progress(
     a: &DiagnoseArgs,
     robot: &Robot,
-    data: &thermokin_diagnose::Dataset,
-    holdout: Option<&thermokin_diagnose::Dataset>,
+    data: &thermokin_chain::Dataset,
+    holdout: Option<&thermokin_chain::Dataset>,
     config: &Config,
 ) -> Result<Report, Failure> {
     let terminal = std::io::IsTerminal::is_terminal(&std::io::stderr());

@@ -7,11 +7,12 @@ use std::path::Path;
 use anyhow::anyhow;
 use indicatif::{ProgressBar, ProgressStyle};
 use nalgebra::{Isometry3, Translation3, Vector3};
+use thermokin_chain::Robot;
+use thermokin_chain::Target;
 use thermokin_chain::{Chain, FixedRow, OperatingState};
-use thermokin_compensate::Target;
 use thermokin_deform::{CoppeliaSimEdits, DeviationTable, RobotModel, TableSemantics, TimeProfile};
 use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
-use thermokin_io::{Orientation, Robot, RobotOptions, read_deviation_table_for, read_robot_model_with, read_targets};
+use thermokin_io::{Orientation, RobotOptions, read_deviation_table_for, read_robot_model_with, read_targets};
 
 use crate::Failure;
 use crate::args::{RobotArgs, Semantics, parse_list};

@@ -28,7 +28,6 @@ pub use run::{
     orientation_error,
 };
 pub use stream::{StreamSettings, compensate_static_stream};
-pub use thermokin_chain::Target;
 
 /// Errors of a compensation run (per-target failures are records, not errors).
 #[derive(Debug, thiserror::Error)]

@@ -271,7 +271,8 @@ fn nominal_program(
 ///
 /// ```
 /// use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-/// use thermokin_compensate::{Target, RunSettings, compensate_static};
+/// use thermokin_chain::Target;
+/// use thermokin_compensate::{RunSettings, compensate_static};
 /// use thermokin_deform::{DeviationTable, TableSemantics};
 ///
 /// let robot = thermokin_testdata::irb140_table9();

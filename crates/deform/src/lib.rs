@@ -12,9 +12,8 @@ mod profile;
 pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
 pub use model::{DriftLaw, DriftRow, JointCorrection, RobotModel};
 pub use profile::{AfterStabilization, ProfileSpec, RowFactors, TemperatureLog, TimeProfile};
-pub use thermokin_chain::{ErrorParams, ParameterLayout};
 
-use thermokin_chain::{Chain, ChainError};
+use thermokin_chain::{Chain, ChainError, ErrorParams};
 
 /// Errors of the deformation model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -179,7 +179,8 @@ impl Default for Config {
 /// and from `holdout` when given ([`Report::holdout`]) — which never influences the selection.
 ///
 /// ```
-/// use thermokin_diagnose::{Config, Effect, HiddenEffect, JointIndex, Robot, SimulationConfig, diagnose, simulate};
+/// use thermokin_chain::Robot;
+/// use thermokin_diagnose::{Config, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
 ///
 /// let robot = Robot::new("IRB 140", thermokin_testdata::irb140_table9());
 /// // A hidden zero offset of +0.05° on joint 2 (index 1), measured with 5 µm noise.

@@ -36,8 +36,7 @@ pub use select::Plausibility;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 
 use thermokin_chain::ChainError;
-/// Measurement data are plain values of the core, so that readers need not depend on this crate.
-pub use thermokin_chain::{Dataset, Measurement, Robot};
+use thermokin_chain::{Dataset, Measurement};
 
 /// Errors of identification and diagnosis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

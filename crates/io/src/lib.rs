@@ -24,11 +24,10 @@ pub use measurements::{
 };
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{
-    JointRatings, LinkMass, Robot, RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot,
-    read_robot_model, read_robot_model_with, read_robot_with, robot_model_to_toml, robot_to_toml,
+    RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot, read_robot_model, read_robot_model_with,
+    read_robot_with, robot_model_to_toml, robot_to_toml,
 };
-pub use targets::{DEFAULT_ORIENTATION_DEG, Target, TargetReader, parse_targets, read_targets, sensor_name};
-pub use thermokin_chain::JointKind;
+pub use targets::{DEFAULT_ORIENTATION_DEG, TargetReader, parse_targets, read_targets, sensor_name};
 pub use units::Orientation;
 pub use write::{write_atomic, write_atomic_with};
 

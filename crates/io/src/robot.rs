@@ -24,7 +24,7 @@ use toml::Spanned;
 
 use crate::{IoError, line_of, read_text, units};
 
-pub use thermokin_chain::{JointRatings, LinkMass, Robot};
+use thermokin_chain::{JointRatings, LinkMass, Robot};
 
 #[derive(Deserialize, Default, Clone, Copy, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]

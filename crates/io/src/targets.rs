@@ -14,7 +14,7 @@ use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Isometry3, Translation3, Vector3};
-pub use thermokin_chain::Target;
+use thermokin_chain::Target;
 
 use crate::csvtext::{Record, check_delimiter, column, expect_fields, number, record, records};
 use crate::{IoError, Orientation, read_text};

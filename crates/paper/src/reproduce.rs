@@ -10,8 +10,9 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde_json::{Value, json};
 use thermokin_chain::Chain;
+use thermokin_chain::Target;
 use thermokin_compensate::{
-    Accumulation, Cycle, RunOutput, RunSettings, SummaryOut, Target, compensate_static, compensate_transient,
+    Accumulation, Cycle, RunOutput, RunSettings, SummaryOut, compensate_static, compensate_transient,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;

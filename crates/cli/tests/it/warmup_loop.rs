@@ -12,7 +12,7 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
-use thermokin_diagnose::{Dataset, Measurement};
+use thermokin_chain::{Dataset, Measurement};
 use thermokin_testdata::{error_mm_deg, gauss, random_q, workspace};
 
 const ROBOT: &str = "configs/irb140.toml";

@@ -2,13 +2,15 @@
 //! case-study table (Tables 10–12), under both table semantics; per-target failure records; exports.
 
 use nalgebra::Isometry3;
+use thermokin_chain::Robot;
+use thermokin_chain::Target;
 use thermokin_compensate::{
-    AbbTargets, Controller, Cycle, ProgramSettings, RunSettings, Target, compensate_static, compensate_transient,
-    confdata, programs, write_results_csv,
+    AbbTargets, Controller, Cycle, ProgramSettings, RunSettings, compensate_static, compensate_transient, confdata,
+    programs, write_results_csv,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, DeviationTable, TableSemantics, TimeProfile};
 use thermokin_ik::{Params, Status};
-use thermokin_io::{Robot, read_deviation_table, read_paper_results, read_robot, read_targets};
+use thermokin_io::{read_deviation_table, read_paper_results, read_robot, read_targets};
 use thermokin_testdata::workspace;
 
 pub(crate) fn robot() -> Robot {

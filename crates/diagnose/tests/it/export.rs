@@ -4,7 +4,8 @@
 //! trip through the robot file `diagnose --export` writes.
 
 use thermokin_chain::{Chain, ErrorParams};
-use thermokin_diagnose::{Config, Dataset, Robot, diagnose};
+use thermokin_chain::{Dataset, Robot};
+use thermokin_diagnose::{Config, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
 use crate::tracker::{NOISE_MM, measure};

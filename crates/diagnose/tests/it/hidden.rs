@@ -1,9 +1,8 @@
 //! Data generated from one hidden effect at a time: the diagnosis, told nothing, must name the effect
 //! and the joint; the held-out RMS must shrink at least 5× and end within 1.5× of the noise.
 
-use thermokin_diagnose::{
-    Config, DriftShape, Effect, HiddenEffect, JointIndex, Robot, SimulationConfig, diagnose, simulate,
-};
+use thermokin_chain::Robot;
+use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
 use thermokin_testdata::workspace;
 
 fn base() -> Robot {

@@ -9,7 +9,8 @@ use nalgebra::{Point3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams, LinkMass, OperatingState};
-use thermokin_diagnose::{Config, Dataset, Measurement, Robot, Validation, diagnose};
+use thermokin_chain::{Dataset, Measurement, Robot};
+use thermokin_diagnose::{Config, Validation, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
 use crate::tracker::{NOISE_MM, gauss, random_q};

@@ -2,8 +2,9 @@
 //! and the paper's static case against the authors' coordinates.
 
 use nalgebra::Vector3;
+use thermokin_chain::{Dataset, Measurement, Robot};
 use thermokin_chain::{DhConvention, DhRow, DhTable};
-use thermokin_diagnose::{Config, Dataset, FrameMode, Measurement, Robot, ToolMode, diagnose};
+use thermokin_diagnose::{Config, FrameMode, ToolMode, diagnose};
 use thermokin_testdata::{authors, rokae_robot_b};
 
 /// Rows of numbers of a small comma-separated file with one header line.
@@ -138,7 +139,7 @@ fn paper_static_case_gap() {
     .unwrap();
     let semantics = thermokin_deform::TableSemantics::CoppeliaSim(thermokin_deform::CoppeliaSimEdits::at(vec![0.0; 6]));
     let chain = table.apply(robot.chain(), &semantics).unwrap();
-    let data = thermokin_io::read_measurements(&path, &[thermokin_io::JointKind::Revolute; 6]).unwrap();
+    let data = thermokin_io::read_measurements(&path, &[thermokin_chain::JointKind::Revolute; 6]).unwrap();
     assert_eq!(data.len(), 50);
     let report = diagnose(&robot.with_chain(chain).unwrap(), &data, None, &Config::default()).unwrap();
     for row in &report.additive {

@@ -3,7 +3,8 @@
 //! same order with the same held-out figures, on simulated sets of every kind and on the real ones.
 
 use thermokin_chain::{Chain, ErrorParams};
-use thermokin_diagnose::{Config, Dataset, FrameMode, Report, Robot, Screen, ToolMode, Validation, diagnose};
+use thermokin_chain::{Dataset, Robot};
+use thermokin_diagnose::{Config, FrameMode, Report, Screen, ToolMode, Validation, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
 use crate::tracker::measure;

@@ -3,7 +3,8 @@
 //! robot built on the chain, the probe's pose composed with nalgebra, not the diagnosis's model).
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use thermokin_diagnose::{Config, Robot, diagnose};
+use thermokin_chain::Robot;
+use thermokin_diagnose::{Config, diagnose};
 use thermokin_testdata::workspace;
 
 use crate::tracker::{NOISE_MM, ORIENTATION_NOISE_DEG, measure, measure_6d};
@@ -81,7 +82,7 @@ fn positions_alone_cannot_see_a_tool_rotation_and_say_so() {
     let robot = robot();
     // The same probe, positions only: its offset is seen, its rotation is not.
     let data = measure(robot.chain(), 200, 62, |q| q.to_vec());
-    let data = thermokin_diagnose::Dataset {
+    let data = thermokin_chain::Dataset {
         measurements: data
             .measurements
             .into_iter()

@@ -7,7 +7,8 @@ use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::ErrorParams;
-use thermokin_diagnose::{Config, Dataset, Measurement, diagnose};
+use thermokin_chain::{Dataset, Measurement};
+use thermokin_diagnose::{Config, diagnose};
 use thermokin_testdata::{error_mm_deg, workspace};
 
 use crate::tracker::{NOISE_MM, gauss, random_q};
@@ -18,7 +19,7 @@ fn temps(t: f64) -> [f64; 3] {
     [8.0 * (1.0 - (-t / 30.0).exp()), 4.0 * ((t - 60.0).max(0.0) / 180.0), 0.5 * t / 240.0]
 }
 
-fn measure(names: [&str; 3]) -> (thermokin_diagnose::Robot, Dataset) {
+fn measure(names: [&str; 3]) -> (thermokin_chain::Robot, Dataset) {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let chain = robot.chain().clone();
     // Joint 3's row per kelvin of its own rise.

@@ -5,7 +5,7 @@ use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Chain;
-use thermokin_diagnose::{Dataset, Measurement};
+use thermokin_chain::{Dataset, Measurement};
 
 /// Noise per axis, mm.
 pub const NOISE_MM: f64 = 0.005;

@@ -8,7 +8,7 @@ use thermokin_testdata::workspace;
 
 use crate::tracker::measure;
 
-fn ur10() -> thermokin_diagnose::Robot {
+fn ur10() -> thermokin_chain::Robot {
     let options = thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) };
     thermokin_io::read_robot_with(&thermokin_testdata::urdf("ur10.urdf"), &options).unwrap()
 }

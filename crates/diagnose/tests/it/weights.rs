@@ -6,12 +6,13 @@
 use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use thermokin_diagnose::{Config, Dataset, Measurement, Validation, diagnose};
+use thermokin_chain::{Dataset, Measurement};
+use thermokin_diagnose::{Config, Validation, diagnose};
 use thermokin_testdata::workspace;
 
 use crate::tracker::{gauss, random_q};
 
-fn data(stated: bool) -> (thermokin_diagnose::Robot, Dataset) {
+fn data(stated: bool) -> (thermokin_chain::Robot, Dataset) {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let chain = robot.chain().clone();
     let mut rng = ChaCha8Rng::seed_from_u64(111);

@@ -34,7 +34,7 @@ fn every_corpus_replays_without_a_panic() {
         (
             "measurements_csv",
             replay("measurements_csv", |t| {
-                drop(thermokin_io::parse_measurements(p("fuzz.csv"), t, &[thermokin_io::JointKind::Revolute; 6]))
+                drop(thermokin_io::parse_measurements(p("fuzz.csv"), t, &[thermokin_chain::JointKind::Revolute; 6]))
             }),
         ),
         ("temperature_log", replay("temperature_log", |t| drop(thermokin_io::parse_temperature_log(p("fuzz.csv"), t)))),

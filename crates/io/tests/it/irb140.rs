@@ -4,7 +4,8 @@
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_io::{Robot, read_paper_results, read_robot};
+use thermokin_chain::Robot;
+use thermokin_io::{read_paper_results, read_robot};
 use thermokin_testdata::{authors, workspace};
 
 fn robot(name: &str) -> Robot {

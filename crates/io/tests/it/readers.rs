@@ -88,7 +88,7 @@ fn robot_toml_round_trip_keeps_fk_names_limits_and_masses() {
 #[test]
 fn measurements_convert_per_joint_kind() {
     // A revolute joint in degrees and a prismatic one in millimetres: only the first becomes radians.
-    use thermokin_io::JointKind;
+    use thermokin_chain::JointKind;
     let kinds = [JointKind::Revolute, JointKind::Prismatic];
     let text = "time_min,q1,q2,x,y,z\n0,90,250,1,2,3\n5,-45,10.5,4,5,6\n";
     let data = thermokin_io::parse_measurements(std::path::Path::new("m.csv"), text, &kinds).unwrap();
@@ -106,7 +106,8 @@ fn measurements_convert_per_joint_kind() {
 
 #[test]
 fn tracker_exports_in_every_dialect_and_unit_read_alike() {
-    use thermokin_io::{JointKind, JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with};
+    use thermokin_chain::JointKind;
+    use thermokin_io::{JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with};
     let kinds = [JointKind::Revolute, JointKind::Prismatic];
     let path = std::path::Path::new("m.csv");
     let commas = "time_min,q1,q2,x,y,z,temp_j1\n0,90,250,1.5,2,3,20.25\n5,-45,10.5,4,-5.125,6,21\n";
@@ -150,7 +151,8 @@ fn temp_file(name: &str, text: &str) -> std::path::PathBuf {
 
 #[test]
 fn joints_and_poses_in_two_files_join_by_row_or_by_key() {
-    use thermokin_io::{JointKind, MeasurementFormat, read_measurements_joined};
+    use thermokin_chain::JointKind;
+    use thermokin_io::{MeasurementFormat, read_measurements_joined};
     let kinds = [JointKind::Revolute; 6];
     let f = MeasurementFormat::default();
     // Rokae robot B as delivered: joints and tracker poses in two files, same row order.
@@ -190,7 +192,8 @@ fn joints_and_poses_in_two_files_join_by_row_or_by_key() {
 
 #[test]
 fn orientation_columns_in_each_convention_read_alike() {
-    use thermokin_io::{JointKind, MeasurementFormat, Orientation, parse_measurements_with};
+    use thermokin_chain::JointKind;
+    use thermokin_io::{MeasurementFormat, Orientation, parse_measurements_with};
     let kinds = [JointKind::Revolute; 6];
     let path = std::path::Path::new("m.csv");
     // One rotation written three ways: X-Y-Z Euler, roll-pitch-yaw, a quaternion (w, x, y, z).
