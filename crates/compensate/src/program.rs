@@ -203,7 +203,10 @@ fn controller_joints(chain: &Chain, q: &[f64]) -> Vec<f64> {
     thermokin_io::units::joints_to_external(chain, q)
 }
 
-/// The wrist centre of a six-joint arm: joint 5's origin, where axes 4, 5 and 6 meet.
+/// The wrist centre of a six-joint arm: joint 5's origin, where axes 4, 5 and 6 meet. Not
+/// `thermokin_ik::ClosedForm::detect`: that one finds the nearest ideal geometry within 5° and 5 mm (and
+/// needs axes 2 ∥ 3) to seed a solve, where confdata's definition needs the wrist exact (1e-6 mm) and
+/// nothing of the arm.
 fn check_spherical_wrist(chain: &Chain) -> Result<(), ProgramError> {
     if chain.dof() != 6 || chain.joints().iter().any(|j| j.kind != JointKind::Revolute) {
         return Err(ProgramError::NotSphericalWrist);

@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use thermokin_chain::Chain;
 use thermokin_chain::Target;
 use thermokin_compensate::{
-    Accumulation, Cycle, RunOutput, RunSettings, SummaryOut, compensate_static, compensate_transient,
+    Accumulation, Axes, Cycle, RunOutput, RunSettings, SummaryOut, compensate_static, compensate_transient,
 };
 use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
@@ -21,13 +21,9 @@ use thermokin_io::{PaperResultRow, read_deviation_table, read_paper_results, rea
 use crate::PaperError;
 use crate::print::{PrintedMinMax, TABLE_13, TABLE_15, TABLE_17, TABLE_18, printed_value};
 
-struct MinMax {
-    min: [f64; 3],
-    max: [f64; 3],
-}
 struct Case {
-    position_mm: MinMax,
-    orientation_deg: MinMax,
+    position_mm: Axes,
+    orientation_deg: Axes,
 }
 /// The printed minima and maxima of Tables 13, 15, 17, 18 as numbers.
 struct Printed {
@@ -37,10 +33,8 @@ struct Printed {
 
 impl Printed {
     fn from_print() -> Self {
-        let mm = |t: &PrintedMinMax| MinMax {
-            min: t.min.map(|p| printed_value(p).0),
-            max: t.max.map(|p| printed_value(p).0),
-        };
+        let mm =
+            |t: &PrintedMinMax| Axes { min: t.min.map(|p| printed_value(p).0), max: t.max.map(|p| printed_value(p).0) };
         Printed {
             static_case: Case { position_mm: mm(&TABLE_15), orientation_deg: mm(&TABLE_13) },
             transient: Case { position_mm: mm(&TABLE_17), orientation_deg: mm(&TABLE_18) },
