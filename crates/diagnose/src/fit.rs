@@ -501,7 +501,8 @@ pub(crate) fn fit_from(
                     // valley of nearly dependent parameters, where alternating would waste every
                     // other evaluation) — more when the step gained under a quarter of the prediction.
                     let rho = gain * cost_before / predicted.max(1e-300);
-                    if rho > 0.75 && !std::mem::take(&mut lm.raised) {
+                    let raised = std::mem::take(&mut lm.raised);
+                    if rho > 0.75 && !raised {
                         lm.lambda = (lm.lambda * 0.1).max(1e-12);
                     } else if rho < 0.25 {
                         lm.lambda *= 10.0;
