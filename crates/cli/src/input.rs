@@ -59,10 +59,9 @@ pub fn load(args: &RobotArgs) -> Result<Loaded, Failure> {
             args.robot.display()
         )));
     }
-    let profile = args.profile.as_ref().map(thermokin_io::read_profile_spec).transpose().map_err(Failure::input)?;
-    if let Some(p) = &profile {
-        p.validate(robot.chain().dof()).map_err(Failure::input)?;
-    }
+    let dof = robot.chain().dof();
+    let profile =
+        args.profile.as_ref().map(|p| thermokin_io::read_profile_spec(p, dof)).transpose().map_err(Failure::input)?;
     let mut state = OperatingState { time_min: args.time, ..OperatingState::default() };
     if let Some(text) = &args.temperature {
         state.temperatures_c = temperatures(text).map_err(Failure::input)?;

@@ -116,25 +116,31 @@ fn parse_toml(path: &Path, text: &str) -> Result<DeviationTable, IoError> {
 }
 
 /// The profile a [`thermokin_deform::ProfileSpec`] names, its file read: a TOML profile (`kind =
-/// "exponential"`, `tau_min = 45.0`, checked by `TimeProfile::validate`), a temperature log, or the law
-/// given inline.
-pub fn read_profile_spec(spec: &thermokin_deform::ProfileSpec) -> Result<TimeProfile, IoError> {
+/// "exponential"`, `tau_min = 45.0`, checked by `TimeProfile::validate` for a robot of `dof` joints — a
+/// temperature profile names one sensor per joint), a temperature log, or the law given inline.
+pub fn read_profile_spec(spec: &thermokin_deform::ProfileSpec, dof: usize) -> Result<TimeProfile, IoError> {
     use thermokin_deform::ProfileSpec;
-    match spec {
-        ProfileSpec::Law(law) => Ok(law.clone()),
-        ProfileSpec::TemperatureLog(path) => {
-            Ok(TimeProfile::Temperature { log: read_temperature_log(path)?, sensors: Vec::new(), reference_c: None })
-        }
+    let (profile, path) = match spec {
+        ProfileSpec::Law(law) => (law.clone(), None),
+        ProfileSpec::TemperatureLog(path) => (
+            TimeProfile::Temperature { log: read_temperature_log(path)?, sensors: Vec::new(), reference_c: None },
+            Some(path),
+        ),
         ProfileSpec::TomlFile(path) => {
             let text = read_text(path)?;
             let profile: TimeProfile = toml::from_str(&text).map_err(|e| {
                 let line = e.span().map(|s| line_of(&text, s.start));
                 IoError::input(path, line, "profile", e.message())
             })?;
-            profile.validate(0).map_err(|e| IoError::input(path, None, "profile", e.to_string()))?;
-            Ok(profile)
+            (profile, Some(path))
         }
+    };
+    // An inline law was checked when its text was parsed (`TimeProfile::parse_spec`); a file's profile here,
+    // against the robot's joints.
+    if let Some(path) = path {
+        profile.validate(dof).map_err(|e| IoError::input(path, None, "profile", e.to_string()))?;
     }
+    Ok(profile)
 }
 
 /// Reads a temperature log: a `time_min` column and one column per sensor (°C); a `temp_` prefix is

@@ -219,3 +219,26 @@ fn orientation_columns_in_each_convention_read_alike() {
         .to_string();
     assert!(err.contains("m.csv:2: qw,qx,qy,qz") && err.contains("norm"), "{err}");
 }
+
+#[test]
+fn a_profile_file_is_checked_against_the_robots_joints() {
+    // A temperature profile naming one sensor per joint: right for six joints, refused (named) for five.
+    // Before, the file was checked against zero joints and refused for every robot.
+    let dir = std::env::temp_dir().join(format!("thermokin-profile-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("warmup.toml");
+    let sensors: Vec<String> = (1..=6).map(|j| format!("\"temp_j{j}\"")).collect();
+    let series: Vec<String> = (1..=6).map(|j| format!("[\"temp_j{j}\", [20.0, 2{j}.0]]")).collect();
+    let text = format!(
+        "kind = \"temperature\"\nsensors = [{}]\n[log]\ntimes_min = [0.0, 60.0]\nsensors = [{}]\n",
+        sensors.join(", "),
+        series.join(", ")
+    );
+    std::fs::write(&path, text).unwrap();
+    let spec = thermokin_deform::ProfileSpec::TomlFile(path.clone());
+    let profile = thermokin_io::read_profile_spec(&spec, 6).unwrap();
+    assert!(matches!(profile, thermokin_deform::TimeProfile::Temperature { ref sensors, .. } if sensors.len() == 6));
+    let err = thermokin_io::read_profile_spec(&spec, 5).unwrap_err().to_string();
+    assert!(err.contains("warmup.toml") && err.contains("6 sensors named for 5 joints"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
