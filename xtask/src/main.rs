@@ -457,27 +457,6 @@ mod tests {
 
     use std::collections::BTreeSet;
 
-    /// ARCHITECTURE.md's layer table (between the `layers` markers) as crate → allowed crates.
-    fn documented_layers() -> Vec<(String, BTreeSet<String>)> {
-        let text = std::fs::read_to_string(super::workspace_root().join("ARCHITECTURE.md")).unwrap();
-        let start = text.find("<!-- layers:begin -->").unwrap();
-        let end = text.find("<!-- layers:end -->").unwrap();
-        text[start..end]
-            .lines()
-            .filter(|l| l.starts_with("| `"))
-            .map(|l| {
-                let cells: Vec<&str> = l.split('|').map(str::trim).collect();
-                let name = cells[1].trim_matches('`').to_string();
-                let allowed = cells[2]
-                    .split(',')
-                    .map(|c| c.trim().trim_matches('`').to_string())
-                    .filter(|c| c.starts_with("thermokin"))
-                    .collect();
-                (name, allowed)
-            })
-            .collect()
-    }
-
     #[test]
     fn the_unit_boundary_holds_and_a_stray_conversion_is_caught() {
         // The repository as it is passes ...
@@ -543,7 +522,7 @@ mod tests {
 
     #[test]
     fn the_documented_layers_are_the_checked_ones() {
-        let documented = documented_layers();
+        let documented = documented_table("layers");
         let checked: Vec<(String, BTreeSet<String>)> = super::ALLOWED
             .iter()
             .map(|(k, allowed)| (k.to_string(), allowed.iter().map(|a| a.to_string()).collect()))

@@ -544,20 +544,8 @@ fn partial_rotations(angles: &Vector3<f64>) -> [Matrix3<f64>; 2] {
 /// partial products `[Rx(a), Rx(a) · Ry(b)]` (the axes of its Jacobian columns), from one sine and
 /// cosine per angle: the per-measurement path of a drifting row ([`Chain::set_joint_error`]).
 fn row_rotations(angles: &Vector3<f64>) -> (Matrix3<f64>, [Matrix3<f64>; 2]) {
-    let (sa, ca) = sin_cos(angles.x);
-    let (sb, cb) = sin_cos(angles.y);
-    let (sc, cc) = sin_cos(angles.z);
-    let full = Matrix3::new(
-        cb * cc,
-        -cb * sc,
-        sb,
-        ca * sc + sa * sb * cc,
-        ca * cc - sa * sb * sc,
-        -sa * cb,
-        sa * sc - ca * sb * cc,
-        sa * cc + ca * sb * sc,
-        ca * cb,
-    );
+    let [(sa, ca), (sb, cb), (sc, cc)] = [sin_cos(angles.x), sin_cos(angles.y), sin_cos(angles.z)];
+    let full = crate::error_params::xyz_rotation_from_sines([(sa, ca), (sb, cb), (sc, cc)]);
     let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, ca, -sa, 0.0, sa, ca);
     let rx_ry = Matrix3::new(cb, 0.0, sb, sa * sb, ca, -sa * cb, -ca * sb, sa, ca * cb);
     (full, [rx, rx_ry])

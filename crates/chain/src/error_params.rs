@@ -116,9 +116,12 @@ impl ErrorParams {
 
 /// `Rx(a) · Ry(b) · Rz(c)` for `angles = (a, b, c)` in radians.
 pub fn xyz_rotation(angles: &Vector3<f64>) -> Matrix3<f64> {
-    let (sa, ca) = angles.x.sin_cos();
-    let (sb, cb) = angles.y.sin_cos();
-    let (sc, cc) = angles.z.sin_cos();
+    xyz_rotation_from_sines([angles.x.sin_cos(), angles.y.sin_cos(), angles.z.sin_cos()])
+}
+
+/// `Rx(a) · Ry(b) · Rz(c)` from `[(sin a, cos a), (sin b, cos b), (sin c, cos c)]`.
+pub(crate) fn xyz_rotation_from_sines(sines: [(f64, f64); 3]) -> Matrix3<f64> {
+    let [(sa, ca), (sb, cb), (sc, cc)] = sines;
     Matrix3::new(
         cb * cc,
         -cb * sc,

@@ -71,19 +71,19 @@ fn reduce(x: f64) -> (i64, f64, f64) {
     let mut w = n * PIO2_1T;
     let mut y0 = r - w;
     let ex = exponent(x);
+    // One more round of the reduction with the next part of π/2 and its tail.
+    let round = |r: f64, part: f64, tail: f64| {
+        let w = n * part;
+        let next = r - w;
+        (next, n * tail - ((r - next) - w))
+    };
     if ex - exponent(y0) > 16 {
         // x is close to a multiple of π/2: a second round, good to 118 bits.
-        let t = r;
-        w = n * PIO2_2;
-        r = t - w;
-        w = n * PIO2_2T - ((t - r) - w);
+        (r, w) = round(r, PIO2_2, PIO2_2T);
         y0 = r - w;
         if ex - exponent(y0) > 49 {
             // A third, good to 151 bits: every double below the limit.
-            let t = r;
-            w = n * PIO2_3;
-            r = t - w;
-            w = n * PIO2_3T - ((t - r) - w);
+            (r, w) = round(r, PIO2_3, PIO2_3T);
             y0 = r - w;
         }
     }
