@@ -40,7 +40,7 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
         write_atomic(p, r.report.as_bytes()).map_err(Failure::internal)?;
     }
     if let Some(p) = &a.json {
-        let text = serde_json::to_string_pretty(&r.json).map_err(Failure::internal)?;
+        let text = serde_json::to_string_pretty(&r.measurements.golden_json()).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
     }
     println!("{}", r.headline.text());
@@ -52,7 +52,7 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
             .map_err(Failure::input)?;
         let g: serde_json::Value =
             serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
-        let drift = check(&g, &r.json);
+        let drift = check(&g, &r.measurements.golden_json());
         if drift.is_empty() {
             println!("check: no drift against {}", golden.display());
         } else {

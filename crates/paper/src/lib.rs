@@ -9,10 +9,16 @@
 //! Every number here is computed from the authors' files (`fixtures/paper/authors/`) and Table 9; none
 //! is transcribed from our own earlier output.
 
+mod measure;
 pub mod print;
+mod render;
 mod reproduce;
 pub mod scene;
 
+pub use measure::{
+    AuthorsComparison, FkResidual, Measurements, PrintComparison, PrintRow, SceneReplay, Table14Row, Table16Comparison,
+    Table16Row,
+};
 pub use reproduce::{Headline, Inputs, Reproduction, check, reproduce};
 
 pub use scene::{
