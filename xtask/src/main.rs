@@ -338,13 +338,26 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-compensate",
         ],
     ),
+    // The Python front end calls the libraries the CLI calls, never the CLI (nor the paper crate).
+    (
+        "thermokin-python",
+        &[
+            "thermokin-chain",
+            "thermokin-deform",
+            "thermokin-io",
+            "thermokin-urdf",
+            "thermokin-ik",
+            "thermokin-compensate",
+            "thermokin-diagnose",
+        ],
+    ),
 ];
 
 /// File-format and CLI crates, allowed only where named.
 /// (`thermokin-paper`, `thermokin-compensate` and `thermokin-diagnose` see them only through `thermokin-io`.)
 const FORMAT_CRATES: &[(&str, &[&str])] = &[
-    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper"]),
-    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper"]),
+    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper", "thermokin-python"]),
+    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper", "thermokin-python"]),
     ("clap", &[]),
 ];
 
@@ -408,11 +421,21 @@ fn stray_conversions(text: &str) -> Vec<(usize, String)> {
     out
 }
 
-/// Every library source file: `crates/*/src/**/*.rs`, the test-support crate excepted.
+/// The workspace's crate directories: `crates/*` and the Python binding (`python/`).
+fn crate_dirs(root: &Path) -> Result<Vec<PathBuf>> {
+    let mut dirs: Vec<PathBuf> =
+        std::fs::read_dir(root.join("crates"))?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    dirs.push(root.join("python"));
+    dirs.sort();
+    Ok(dirs)
+}
+
+/// Every library source file: `crates/*/src/**/*.rs` and `python/src`, the test-support crate excepted.
 fn library_sources(root: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    let mut stack: Vec<PathBuf> = std::fs::read_dir(root.join("crates"))?
-        .filter_map(|e| e.ok().map(|e| e.path().join("src")))
+    let mut stack: Vec<PathBuf> = crate_dirs(root)?
+        .into_iter()
+        .map(|d| d.join("src"))
         .filter(|p| p.is_dir() && !p.starts_with(root.join("crates/testdata")))
         .collect();
     while let Some(dir) = stack.pop() {
@@ -494,10 +517,11 @@ mod tests {
     #[test]
     fn the_documented_crate_map_is_the_workspace() {
         let root = super::workspace_root();
-        let mut packages: Vec<String> = std::fs::read_dir(root.join("crates"))
+        let mut packages: Vec<String> = super::crate_dirs(&root)
             .unwrap()
-            .map(|e| {
-                let manifest = std::fs::read_to_string(e.unwrap().path().join("Cargo.toml")).unwrap();
+            .into_iter()
+            .map(|dir| {
+                let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap();
                 let line = manifest.lines().find(|l| l.starts_with("name")).unwrap();
                 line.split('"').nth(1).unwrap().to_string()
             })
@@ -541,7 +565,7 @@ mod tests {
     #[test]
     fn no_dangling_notes_reference_and_every_source_file_opens_with_a_doc_comment() {
         let root = super::workspace_root();
-        let mut stack = vec![root.join("crates"), root.join("xtask/src")];
+        let mut stack = vec![root.join("crates"), root.join("xtask/src"), root.join("python/src")];
         let mut checked = 0;
         while let Some(dir) = stack.pop() {
             for entry in std::fs::read_dir(&dir).unwrap() {

@@ -10,7 +10,7 @@ use thermokin_compensate::{
     write_long_csv, write_results_csv, write_results_json,
 };
 use thermokin_deform::TimeProfile;
-use thermokin_ik::{Goal, Params, Workspace, solve, solve_branches};
+use thermokin_ik::{Goal, Params, Workspace, solve_branches};
 use thermokin_io::units::{degrees, joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
 
@@ -131,9 +131,8 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     };
     let params = Params { restarts: a.restarts, ..Params::default() };
     let mut ws = Workspace::new(chain.dof());
-    let seed = model.joint_values(&seed, &loaded.state).map_err(Failure::input)?;
-    let mut s = solve(&chain, &target, &seed, &params, &mut ws, 0).map_err(Failure::input)?;
-    commanded(&model, &loaded.state, &target, &params, &mut s)?;
+    let s = thermokin_compensate::solve_on_model(&model, &loaded.state, &target, &seed, &params, &mut ws, 0)
+        .map_err(Failure::input)?;
     let deg = joints_to_external(&chain, &s.q);
     if a.json {
         println!(

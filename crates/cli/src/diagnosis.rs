@@ -5,10 +5,8 @@ use std::path::Path;
 
 use anyhow::anyhow;
 use plotters::prelude::*;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Robot;
-use thermokin_diagnose::{Config, Effect, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
+use thermokin_diagnose::{Config, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
 use thermokin_io::{
     JointUnits, MeasurementFormat, read_measurements_joined, read_measurements_with, write_atomic, write_atomic_with,
     write_measurements,
@@ -244,28 +242,6 @@ fn plot_additive(path: &Path, r: &Report) -> anyhow::Result<()> {
     write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
 }
 
-/// Parses `KIND[:JOINT][=VALUES]` into a hidden effect (report units → internal), with a seeded random
-/// effect of typical size when no values are given.
-fn parse_effect(spec: &str, robot: &Robot, rng: &mut ChaCha8Rng) -> anyhow::Result<HiddenEffect> {
-    let (head, values) = match spec.split_once('=') {
-        Some((h, v)) => (h, Some(crate::args::parse_list("effect", v)?)),
-        None => (spec, None),
-    };
-    let (name, joint) = match head.split_once(':') {
-        Some((k, j)) => {
-            let j: usize = j.parse().map_err(|_| anyhow!("--effect {spec}: joint `{j}` is not a number"))?;
-            anyhow::ensure!(j >= 1, "--effect {spec}: joints are numbered from 1");
-            (k, Some(j - 1))
-        }
-        None => (head, None),
-    };
-    let effect = Effect::named(robot, name, joint).map_err(|e| anyhow!("--effect {spec}: {e}"))?;
-    match values {
-        Some(v) => HiddenEffect::from_report_units(effect, v).map_err(|e| anyhow!("--effect {spec}: {e}")),
-        None => Ok(HiddenEffect::typical(effect, rng)),
-    }
-}
-
 pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     if !loaded.model.is_plain() {
@@ -276,14 +252,7 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         )));
     }
     let chain = working_chain(&a.robot, &loaded)?;
-    let mut rng = ChaCha8Rng::seed_from_u64(a.seed ^ 0x5eed);
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
-    let hidden = a
-        .effects
-        .iter()
-        .map(|s| parse_effect(s, &robot, &mut rng))
-        .collect::<anyhow::Result<Vec<_>>>()
-        .map_err(Failure::input)?;
     let config = SimulationConfig {
         poses: a.poses,
         minutes: a.minutes,
@@ -292,6 +261,13 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),
         ..SimulationConfig::default()
     };
+    let mut rng = config.effect_rng();
+    let hidden = a
+        .effects
+        .iter()
+        .map(|s| HiddenEffect::parse(s, &robot, &mut rng).map_err(|e| anyhow!("--effect {e}")))
+        .collect::<anyhow::Result<Vec<_>>>()
+        .map_err(Failure::input)?;
     let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(setting_error)?;
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
     write_atomic_with(&a.out, |w| write_measurements(w, &data, &kinds)).map_err(Failure::internal)?;

@@ -18,7 +18,7 @@ mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
-pub use model_run::{command_solution, compensate_model, compensate_model_cycle, state_or};
+pub use model_run::{command_solution, compensate_model, compensate_model_cycle, solve_on_model, state_or};
 pub use program::{
     AbbTargets, ArmConfiguration, Controller, Program, ProgramError, ProgramSettings, arm_configuration, confdata,
     kuka_status, kuka_turn, programs,

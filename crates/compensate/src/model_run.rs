@@ -132,6 +132,29 @@ fn solve_in_states(
     Ok(rows)
 }
 
+/// One goal solved on `model` in `state`, from a seed given as joints to command: IK on the chain in
+/// force ([`RobotModel::chain_at`]) from the seed's chain values ([`RobotModel::joint_values`]), then, for
+/// a robot that corrects its joint values, the solution made the joints to command and re-measured
+/// ([`command_solution`]). What `thermokin ik` and the Python `Robot.ik` run; `index` seeds the solver's
+/// restarts (a batch passes each target's position, so that the result does not depend on threads).
+pub fn solve_on_model(
+    model: &RobotModel,
+    state: &OperatingState,
+    goal: &Goal,
+    seed: &[f64],
+    params: &Params,
+    ws: &mut thermokin_ik::Workspace,
+    index: u64,
+) -> Result<Solution, CompensateError> {
+    let chain = model.chain_at(state)?;
+    let seed = model.joint_values(seed, state)?;
+    let mut solution = thermokin_ik::solve(&chain, goal, &seed, params, ws, index)?;
+    if !model.joint_corrections().iter().all(|c| c.is_none()) {
+        command_solution(model, state, goal, params, &mut solution)?;
+    }
+    Ok(solution)
+}
+
 /// A solution on the chain in force made the joint values to command on `model` (its joint corrections
 /// inverted, [`RobotModel::commanded_for`]), with the reached pose measured again through the whole
 /// model, independently of the IK: `solution.q` becomes the commanded joints and its errors the

@@ -101,6 +101,14 @@ pub enum DiagnoseError {
         /// What the value must be.
         rule: &'static str,
     },
+    /// An effect spec (`KIND[:JOINT][=VALUES]`) that cannot be read.
+    #[error("{spec}: {message}")]
+    BadEffectSpec {
+        /// The spec as given.
+        spec: String,
+        /// What is wrong.
+        message: String,
+    },
     /// Too few measurements for the validation asked for.
     #[error("{count} measurements are too few for {folds}-fold cross-validation (at least {needed})")]
     TooFewMeasurements {

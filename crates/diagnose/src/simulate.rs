@@ -37,6 +37,59 @@ impl HiddenEffect {
         Ok(Self { effect, values })
     }
 
+    /// Parses `KIND[:JOINT][=VALUES]` — the catalogue name ([`Effect::named`]), the joint numbered from 1,
+    /// values in report units (comma-separated; [`HiddenEffect::from_report_units`]) — with a random
+    /// effect of typical size drawn from `rng` when no values are given ([`HiddenEffect::typical`]). The
+    /// one reading of an effect spec: `thermokin simulate --effect` and the Python `simulate(effects=…)`.
+    ///
+    /// ```
+    /// use rand::SeedableRng;
+    /// use thermokin_chain::{Chain, FixedRow, Joint, Robot};
+    /// use thermokin_diagnose::{Effect, HiddenEffect};
+    ///
+    /// let joints = (0..2).map(|i| Joint::revolute(format!("j{i}"), nalgebra::Vector3::z() * 100.0, nalgebra::Vector3::y_axis())).collect();
+    /// let robot = Robot::new("two", Chain::new(FixedRow::identity(), joints, FixedRow::identity()).unwrap());
+    /// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+    /// let h = HiddenEffect::parse("joint_offset:2=0.05", &robot, &mut rng).unwrap();
+    /// assert_eq!(h.effect, Effect::JointOffset(1));
+    /// assert!((h.values[0] - 0.05f64.to_radians()).abs() < 1e-15);
+    /// assert!(HiddenEffect::parse("joint_offset:0", &robot, &mut rng).is_err());
+    /// ```
+    pub fn parse(spec: &str, robot: &Robot, rng: &mut impl Rng) -> Result<Self, DiagnoseError> {
+        let bad = |message: String| DiagnoseError::BadEffectSpec { spec: spec.to_string(), message };
+        let (head, values) =
+            match spec.split_once('=') {
+                Some((h, v)) => {
+                    let values =
+                        v.split(',')
+                            .enumerate()
+                            .map(|(i, x)| {
+                                x.trim().parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
+                                    bad(format!("value {} `{}` is not a finite number", i + 1, x.trim()))
+                                })
+                            })
+                            .collect::<Result<Vec<_>, _>>()?;
+                    (h, Some(values))
+                }
+                None => (spec, None),
+            };
+        let (name, joint) = match head.split_once(':') {
+            Some((k, j)) => {
+                let j: usize = j.trim().parse().map_err(|_| bad(format!("joint `{j}` is not a number")))?;
+                if j == 0 {
+                    return Err(bad("joints are numbered from 1".to_string()));
+                }
+                (k, Some(j - 1))
+            }
+            None => (head, None),
+        };
+        let effect = Effect::named(robot, name.trim(), joint).map_err(|e| bad(e.to_string()))?;
+        match values {
+            Some(v) => Self::from_report_units(effect, v).map_err(|e| bad(e.to_string())),
+            None => Ok(Self::typical(effect, rng)),
+        }
+    }
+
     /// The effect at a random size typical of a calibrated industrial arm, drawn from `rng`: a zero
     /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m, a gear-ratio error of 2e-4–6e-4,
     /// cyclic amplitudes within ±0.03°, an exponential drift's τ of 30–90 min, translations within
@@ -79,6 +132,13 @@ pub struct SimulationConfig {
 }
 
 impl SimulationConfig {
+    /// The generator that draws hidden effects of typical size ([`HiddenEffect::parse`] without values)
+    /// for this configuration: seeded from [`SimulationConfig::seed`], apart from the poses' and noise's
+    /// generator, so that adding an effect does not move the poses.
+    pub fn effect_rng(&self) -> ChaCha8Rng {
+        ChaCha8Rng::seed_from_u64(self.seed ^ 0x5eed)
+    }
+
     /// Checks every setting against its domain: at least one pose, a time span and noises ≥ 0 (a
     /// noise-free set is a valid simulation).
     pub fn validate(&self) -> Result<(), DiagnoseError> {

@@ -1,0 +1,243 @@
+"""The Python API against the command line (an independent front end on the same files), against
+properties (batch = loop, FK∘IK = identity, round trips), and on bad input (the field named)."""
+
+import json
+import math
+import subprocess
+
+import numpy as np
+import pytest
+
+import thermokin
+from thermokin import InputError, MissingFileError, ThermokinError
+
+Q = [0, 30, 10, 0, -40, 0]
+SEED = [0, 20, 20, 0, -45, 0]
+
+
+@pytest.fixture(scope="module")
+def irb140(root):
+    return thermokin.Robot.from_file(root / "configs" / "irb140.toml")
+
+
+def configurations(robot, n, seed):
+    rng = np.random.default_rng(seed)
+    lim = robot.limits_deg
+    return rng.uniform(lim[:, 0] * 0.8, lim[:, 1] * 0.8, size=(n, robot.dof))
+
+
+def test_robot_facts(irb140):
+    assert irb140.dof == 6
+    assert irb140.joint_names == ["A1", "A2", "A3", "A4", "A5", "A6"]
+    assert irb140.limits_deg.shape == (6, 2)
+    assert np.all(irb140.limits_deg[:, 0] < irb140.limits_deg[:, 1])
+    assert irb140.is_plain
+
+
+def test_fk_equals_the_command_line(irb140, root, cli):
+    out = subprocess.run(
+        [cli, "fk", "--robot", "configs/irb140.toml", "--joints", ",".join(map(str, Q)), "--json"],
+        cwd=root, check=True, capture_output=True, text=True,
+    )
+    theirs = json.loads(out.stdout)
+    T = irb140.fk(Q)
+    # The CLI prints positions rounded to 1e-10 mm and matrix entries to 1e-13.
+    np.testing.assert_allclose(T[:3, 3], theirs["position_mm"], rtol=0, atol=1e-10)
+    np.testing.assert_allclose(T[:3, :3], theirs["rotation"], rtol=0, atol=1e-13)
+    np.testing.assert_array_equal(T[3], [0, 0, 0, 1])
+
+
+def test_batches_equal_the_loop(irb140):
+    qs = configurations(irb140, 64, seed=1)
+    np.testing.assert_array_equal(irb140.fk(qs), np.stack([irb140.fk(q) for q in qs]))
+    np.testing.assert_array_equal(irb140.jacobian(qs), np.stack([irb140.jacobian(q) for q in qs]))
+    poses = irb140.fk(qs)
+    batch = irb140.ik(poses, seed=SEED)
+    for k, pose in enumerate(poses[:16]):
+        one = irb140.ik(pose, seed=SEED)
+        assert one.status == batch.status[k]
+        # Restart generators are seeded by the target's index: without restarts the paths are equal.
+        if one.iterations == batch.iterations[k]:
+            np.testing.assert_array_equal(one.q, batch.q[k])
+
+
+def test_ik_answers_are_verified_by_fk(irb140):
+    qs = configurations(irb140, 200, seed=2)
+    targets = irb140.fk(qs)
+    result = irb140.ik(targets, seed=SEED)
+    assert result.q.shape == (200, 6)
+    assert len(result.status) == 200
+    converged = np.asarray(result.converged)
+    assert converged.mean() > 0.95, result.status
+    reached = irb140.fk(result.q[converged])
+    # FK∘IK = identity: the solver's tolerance is 1e-9 mm (and its rotation counterpart).
+    np.testing.assert_allclose(reached[:, :3, 3], targets[converged][:, :3, 3], rtol=0, atol=1e-8)
+    np.testing.assert_allclose(reached[:, :3, :3], targets[converged][:, :3, :3], rtol=0, atol=1e-10)
+    assert np.all(result.position_error_mm[converged] <= 1e-8)
+
+
+def test_position_only_and_unreachable_targets_are_records_not_errors(irb140):
+    r = irb140.ik([[600, 0, 400], [5000, 0, 0]], position_only=True, seed=SEED)
+    assert r.status[0] == "Converged"
+    assert r.status[1] == "Unreachable"
+    assert not r.converged[1]
+
+
+def test_jacobian_matches_finite_differences(irb140):
+    # Units: linear rows mm per radian; a central difference in degrees converted to radians.
+    q = np.array(Q, dtype=float)
+    J = irb140.jacobian(q)
+    h = 1e-5  # degrees: truncation ~ h² of a 1 m lever, rounding ~ 1e-13 / h
+    for k in range(6):
+        dq = np.zeros(6)
+        dq[k] = h
+        dp = (irb140.fk(q + dq)[:3, 3] - irb140.fk(q - dq)[:3, 3]) / (2 * math.radians(h))
+        np.testing.assert_allclose(J[:3, k], dp, rtol=0, atol=1e-5)
+
+
+def test_dh_robot_matches_its_closed_form():
+    # A planar two-link arm, classic DH: a1 = 300, a2 = 200 mm.
+    robot = thermokin.Robot.from_dh([[300, 0, 0, 0], [200, 0, 0, 0]])
+    for a, b in [(0, 0), (30, 45), (-90, 120)]:
+        x = 300 * math.cos(math.radians(a)) + 200 * math.cos(math.radians(a + b))
+        y = 300 * math.sin(math.radians(a)) + 200 * math.sin(math.radians(a + b))
+        np.testing.assert_allclose(robot.fk([a, b])[:3, 3], [x, y, 0], rtol=0, atol=1e-10)
+
+
+def test_simulate_writes_the_command_lines_set(irb140, root, cli, tmp_path):
+    effects = ["joint_offset:2", "thermal_drift:3"]
+    ours = tmp_path / "ours.csv"
+    thermokin.simulate(irb140, effects, poses=60, minutes=120).to_csv(ours)
+    theirs = tmp_path / "theirs.csv"
+    args = [cli, "simulate", "--robot", "configs/irb140.toml", "--poses", "60", "--minutes", "120", "-o", theirs]
+    for e in effects:
+        args += ["--effect", e]
+    subprocess.run(args, cwd=root, check=True, capture_output=True)
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
+def test_measurements_round_trip_through_csv(irb140, tmp_path):
+    m = thermokin.simulate(irb140, ["thermal_drift:2"], poses=30)
+    path = tmp_path / "m.csv"
+    m.to_csv(path)
+    back = thermokin.Measurements.from_csv(path, irb140)
+    assert len(back) == 30
+    # The writer prints 1e-9 mm / degree digits.
+    np.testing.assert_allclose(back.q, m.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(back.xyz, m.xyz, rtol=0, atol=1e-9)
+    again = thermokin.Measurements(irb140, back.q, back.xyz, time_min=back.time_min)
+    np.testing.assert_array_equal(again.xyz, back.xyz)
+
+
+def test_diagnose_equals_the_command_lines_json_on_the_real_ur10(root, cli, tmp_path):
+    """Series C diagnosed with series B held out (other configurations), as the README's CLI does."""
+    ur10 = root / "fixtures" / "urdf" / "ur10.urdf"
+    series = root / "fixtures" / "real" / "ur10-ipa"
+    robot = thermokin.Robot.from_file(ur10, tip="tool0")
+    c = thermokin.Measurements.from_csv(series / "series_C.csv", robot)
+    b = thermokin.Measurements.from_csv(series / "series_B.csv", robot)
+    report = thermokin.diagnose(robot, c, holdout=b, noise_mm=0.01, frame="tracker", tool="unknown")
+    out = tmp_path / "report.json"
+    subprocess.run(
+        [cli, "diagnose", "--robot", ur10, "--tip", "tool0", "--frame", "tracker", "--tool", "unknown",
+         "--measurements", series / "series_C.csv", "--holdout", series / "series_B.csv", "--noise", "0.01",
+         "--quiet", "--json", out],
+        cwd=root, check=True, capture_output=True,
+    )
+    assert report.to_dict() == json.loads(out.read_text())
+    assert report.effects, report.text
+    assert report.text.startswith(report.text.splitlines()[0])
+    # The export is the model the report scored: its FK differs from the nominal robot's.
+    calibrated = report.calibrated
+    assert calibrated.dof == 6
+    assert np.abs(calibrated.fk(c.q[:5])[:, :3, 3] - robot.fk(c.q[:5])[:, :3, 3]).max() > 0.01
+
+
+def test_compensate_writes_the_command_lines_joints(root, cli, tmp_path):
+    scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
+    table = root / "fixtures" / "paper" / "authors" / "deformations-case-study.csv"
+    targets = root / "fixtures" / "paper" / "table12-targets.csv"
+    run = thermokin.compensate(scene, targets, deformation=table, semantics="coppeliasim", seed=SEED)
+    assert len(run) == 50
+    assert run.status == ["Converged"] * 50
+    assert run.position_error_mm.max() < 1e-8
+    assert run.uncompensated_error_mm.max() > 1.0
+    ours = tmp_path / "ours.csv"
+    run.write(ours, format="joints")
+    theirs = tmp_path / "theirs.csv"
+    subprocess.run(
+        [cli, "compensate", "--robot", "configs/irb140-scene.toml", "--semantics", "coppeliasim",
+         "--deformation", table, "--targets", targets, "--seed", ",".join(map(str, SEED)),
+         "--format", "joints", "--out", theirs],
+        cwd=root, check=True, capture_output=True,
+    )
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
+def test_the_warm_up_loop_from_measurements(irb140, tmp_path):
+    """Diagnose a simulated warm-up, then compensate the next one with what it found (the paper's purpose)."""
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05", "thermal_drift:3=0.3,-0.2,0.25,0.004,0.006,0.01"], poses=240, minutes=180)
+    report = thermokin.diagnose(irb140, data, noise_mm=0.005)
+    assert any(e.startswith("thermal_drift") for e in report.effects), report.text
+    warm = report.calibrated
+    assert not warm.is_plain
+    targets = np.array([[600, 0, 400, 0, 90, 0], [500, 200, 500, 0, 90, 0]], dtype=float)
+    run = thermokin.compensate(warm, targets, time_min=60, seed=SEED)
+    assert run.status == ["Converged", "Converged"]
+    # The compensated joints put the warm robot (at minute 60) on the targets.
+    reached = warm.fk(run.joints, time_min=60)
+    np.testing.assert_allclose(reached[:, :3, 3], targets[:, :3], rtol=0, atol=1e-6)
+
+
+def test_dataframes_when_pandas_is_installed(irb140, root):
+    pd = pytest.importorskip("pandas")
+    scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
+    run = thermokin.compensate(
+        scene, root / "fixtures" / "paper" / "table12-targets.csv",
+        deformation=root / "fixtures" / "paper" / "authors" / "deformations-case-study.csv", seed=SEED,
+    )
+    df = run.to_dataframe()
+    assert isinstance(df, pd.DataFrame) and len(df) == 50 and "q6_deg" in df
+
+
+@pytest.mark.parametrize(
+    "call,kind,needle",
+    [
+        (lambda r: r.fk([0, 1, 2]), InputError, "q: expected shape (6,) or (N, 6)"),
+        (lambda r: r.fk([0, 1, 2, 3, 4, float("nan")]), InputError, "q: value 5 is not finite"),
+        (lambda r: r.fk([[0] * 6, [0, 0, 0, float("inf"), 0, 0]]), InputError, "q: row 1, value 3 is not finite"),
+        (lambda r: r.ik(np.eye(3)), InputError, "pose: expected shape (4, 4)"),
+        (lambda r: r.ik(np.diag([1.0, 2.0, 1.0, 1.0])), InputError, "pose"),
+        (lambda r: r.fk(Q, time_min=float("nan")), InputError, "time_min"),
+        (lambda r: thermokin.simulate(r, ["joint_offset:0"]), InputError, "joint_offset:0: joints are numbered from 1"),
+        (lambda r: thermokin.simulate(r, ["no_such_effect"]), InputError, "unknown effect `no_such_effect`"),
+        (lambda r: thermokin.simulate(r, poses=0), InputError, "poses must be at least 1"),
+        (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), folds=1), InputError, "folds"),
+        (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), frame="world"), InputError, "frame: `world`"),
+        (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]]), InputError, "nothing to compensate"),
+        (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]], deformation="nope.toml"), MissingFileError, "nope.toml"),
+        (lambda r: r.deformed("fixtures/paper/deformations-case-study.toml", semantics="blender"), InputError, "semantics"),
+        (lambda r: thermokin.Robot.from_file("no/such/robot.toml"), MissingFileError, "no/such/robot.toml"),
+    ],
+)
+def test_bad_inputs_raise_with_the_field_named(irb140, root, monkeypatch, call, kind, needle):
+    monkeypatch.chdir(root)
+    with pytest.raises(kind) as e:
+        call(irb140)
+    assert needle in str(e.value), str(e.value)
+    assert isinstance(e.value, ThermokinError)
+
+
+def test_a_malformed_file_names_its_line_and_field(irb140, tmp_path):
+    bad = tmp_path / "m.csv"
+    bad.write_text("q1,q2,q3,q4,q5,q6,x,y,z\n0,0,0,0,0,0,1,2,3\n0,0,0,0,0,zero,1,2,3\n")
+    with pytest.raises(InputError) as e:
+        thermokin.Measurements.from_csv(bad, irb140)
+    assert f"{bad}:3" in str(e.value) and "q6" in str(e.value), str(e.value)
+    robot = tmp_path / "r.toml"
+    robot.write_text("[robot]\nname = 'x'\n[[joints]]\nname = 'a'\n")
+    with pytest.raises(InputError) as e:
+        thermokin.Robot.from_file(robot)
+    assert str(robot) in str(e.value), str(e.value)
+    with pytest.raises(ValueError):  # an InputError is a ValueError
+        thermokin.Measurements.from_csv(bad, irb140)
