@@ -185,6 +185,9 @@ pub struct Chain {
     joints: Vec<Joint>,
     tool: FixedRow,
     base_frame: Frame,
+    /// The base frame is exactly the identity (no base row, no registration): FK starts from the first
+    /// joint's fixed row instead of multiplying it by the identity (`Chain::after_fixed`).
+    base_is_identity: bool,
     tool_frame: Frame,
     /// Partial error rotations of the base and tool rows (see [`Link::partial`]).
     row_partials: [[Matrix3<f64>; 2]; 2],
@@ -229,8 +232,10 @@ impl Chain {
                 zero_sin_cos: sin_cos(joint.zero),
             });
         }
+        let base_frame = base.frame();
         Ok(Self {
-            base_frame: base.frame(),
+            base_is_identity: base_frame.rot == Matrix3::identity() && base_frame.trans == Vector3::zeros(),
+            base_frame,
             tool_frame: tool.frame(),
             row_partials: [partial_rotations(&base.error.rotation), partial_rotations(&tool.error.rotation)],
             base,
@@ -399,12 +404,21 @@ impl Chain {
         }
     }
 
+    /// `base_from_link` after link `i`'s fixed row, from the frame before it: the product — or, for the
+    /// first link of a chain whose base is exactly the identity, the row itself. The fast path is exact:
+    /// a product with an exact identity reproduces the row's numbers (to the sign of a zero), so it only
+    /// saves one 3 × 3 product per evaluation (a seventh of FK's).
+    #[inline(always)]
+    fn after_fixed(&self, i: usize, before: &Frame, link: &Link) -> Frame {
+        if i == 0 && self.base_is_identity { link.fixed } else { before.mul(&link.fixed) }
+    }
+
     /// Forward kinematics, unchecked length: `base_from_tcp`.
     #[inline]
     fn tool_frame_unchecked(&self, q: &[f64], given: Option<&[(f64, f64)]>) -> Frame {
         let mut base_from_link = self.base_frame;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
-            base_from_link = base_from_link.mul(&link.fixed);
+            base_from_link = self.after_fixed(i, &base_from_link, link);
             Self::apply_joint(link, &mut base_from_link, qi, given.map(|g| g[i]));
         }
         base_from_link.mul(&self.tool_frame)
@@ -494,8 +508,8 @@ impl Chain {
             return Err(ChainError::WrongJointCount { expected: self.dof(), got: columns.len() });
         }
         let mut base_from_link = self.base_frame;
-        for ((link, &qi), col) in self.links.iter().zip(q).zip(columns.iter_mut()) {
-            base_from_link = base_from_link.mul(&link.fixed);
+        for (i, ((link, &qi), col)) in self.links.iter().zip(q).zip(columns.iter_mut()).enumerate() {
+            base_from_link = self.after_fixed(i, &base_from_link, link);
             // The axis is the same before and after the joint's own motion; store it and the origin now,
             // the lever arm is completed once the TCP is known.
             let z = base_from_link.rot * link.axis_vec;

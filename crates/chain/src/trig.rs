@@ -19,6 +19,11 @@ const PIO2_2T: f64 = 2.022_266_248_795_950_631_54e-21;
 const PIO2_3: f64 = 2.022_266_248_711_166_455_80e-21;
 const PIO2_3T: f64 = 8.478_427_660_368_899_569_97e-32;
 
+/// 1.5 · 2⁵²: added to and subtracted from a double of magnitude below 2⁵¹, it rounds that double to
+/// the nearest integer (ties to even) in two additions — musl's `toint`, where `f64::round` is a call
+/// into the C library on x86-64 without SSE 4.1.
+const TOINT: f64 = 1.5 / f64::EPSILON;
+
 /// Above this magnitude the reduction's quotient could lose bits: the library takes over.
 const REDUCTION_LIMIT: f64 = 1e6;
 
@@ -66,7 +71,8 @@ fn exponent(x: f64) -> i64 {
 /// `x = n·π/2 + (y0 + y1)` with |y0 + y1| ≤ π/4 (about), for |x| ≤ [`REDUCTION_LIMIT`].
 #[inline(always)]
 fn reduce(x: f64) -> (i64, f64, f64) {
-    let n = (x * INV_PIO2).round();
+    // |x| ≤ REDUCTION_LIMIT keeps x·2/π far below 2⁵¹, where TOINT's rounding is exact.
+    let n = (x * INV_PIO2 + TOINT) - TOINT;
     let mut r = x - n * PIO2_1;
     let mut w = n * PIO2_1T;
     let mut y0 = r - w;
@@ -92,7 +98,7 @@ fn reduce(x: f64) -> (i64, f64, f64) {
 }
 
 /// `(sin x, cos x)` to 1 ulp, one argument reduction for both.
-#[inline]
+#[inline(always)]
 pub(crate) fn sin_cos_reduced(x: f64) -> (f64, f64) {
     if x.is_nan() || x.abs() > REDUCTION_LIMIT {
         return x.sin_cos();

@@ -45,13 +45,13 @@ impl HiddenEffect {
     /// ```
     /// use rand::SeedableRng;
     /// use thermokin_chain::{Chain, FixedRow, Joint, Robot};
-    /// use thermokin_diagnose::{Effect, HiddenEffect};
+    /// use thermokin_diagnose::HiddenEffect;
     ///
     /// let joints = (0..2).map(|i| Joint::revolute(format!("j{i}"), nalgebra::Vector3::z() * 100.0, nalgebra::Vector3::y_axis())).collect();
     /// let robot = Robot::new("two", Chain::new(FixedRow::identity(), joints, FixedRow::identity()).unwrap());
     /// let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
     /// let h = HiddenEffect::parse("joint_offset:2=0.05", &robot, &mut rng).unwrap();
-    /// assert_eq!(h.effect, Effect::JointOffset(1));
+    /// assert_eq!(h.effect.label(), "joint_offset[2]");
     /// assert!((h.values[0] - 0.05f64.to_radians()).abs() < 1e-15);
     /// assert!(HiddenEffect::parse("joint_offset:0", &robot, &mut rng).is_err());
     /// ```
