@@ -10,7 +10,7 @@ use numpy::{AllowTypeChange, PyArrayDyn, PyArrayLikeDyn};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use thermokin_chain::{Dataset, JointKind, Measurement, OperatingState, Target};
-use thermokin_compensate::{Cycle, RunOutput, RunSettings, SummaryOut};
+use thermokin_compensate::{Plan, PlanError, Request, RunOutput, RunSettings, SummaryOut};
 use thermokin_deform::{CoppeliaSimEdits, TableSemantics, TimeProfile};
 use thermokin_diagnose::{Config, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
 use thermokin_io::units::{joints_to_internal, xyz_euler_deg, xyz_rotation_deg};
@@ -564,8 +564,10 @@ fn targets_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<Target>> {
 ///
 /// A plain robot with `deformation` (a deviation table): the static case, or with a growing `profile`
 /// the warm-up over `duration_min` (200 by default, the paper's) every `step_min`. A calibrated robot
-/// (what `diagnose` exports, its drift and joint corrections): every target in its state — `time_min`
-/// and `temps` — or, with `duration_min` or a drift growing in time and no `time_min`, the warm-up.
+/// (what `diagnose` exports, its drift and joint corrections), or any robot given a state: every target
+/// in its state — `time_min` and `temps` — or, with `duration_min` (or a growing `profile` and no
+/// `time_min`), every target at every step of the warm-up. The same decision as the command line's
+/// (`thermokin_compensate::Plan`).
 /// `seed` in degrees seeds the first solve (zeros by default); the program is chained target to target.
 #[pyfunction]
 #[pyo3(signature = (robot, targets, *, deformation=None, semantics="canonical", profile=None, time_min=None, temps=None, duration_min=None, step_min=1.0, seed=None))]
@@ -601,54 +603,39 @@ pub fn compensate(
         None => vec![0.0; dof],
     };
     let state = crate::robot::state(time_min, temps)?;
+    let semantics = semantics_of(semantics, dof)?;
     let settings = RunSettings {
-        semantics: semantics_of(semantics, dof)?,
+        semantics: semantics.clone(),
         accumulation: thermokin_compensate::Accumulation::FromNominal,
         ik: thermokin_ik::Params::default(),
         start,
     };
-    let cycle = Cycle { duration_min: duration_min.unwrap_or(PAPER_CYCLE_MIN), step_min };
-    let model = &robot.model;
-    let run = match &table {
-        Some(table) if model.is_plain() && state == OperatingState::default() => match &profile {
-            None | Some(TimeProfile::Static) => {
-                py.detach(|| thermokin_compensate::compensate_static(chain, table, &program, &settings))
-            }
-            Some(p) => py.detach(|| {
-                thermokin_compensate::compensate_transient(chain, table, p, cycle, &program, &settings, |_, _| {})
-            }),
-        },
-        None if model.is_nominal() => {
-            return Err(input(
-                "nothing to compensate: the robot is as designed (no error parameters, zero offsets or corrections); give deformation=TABLE, or the calibrated robot diagnose returns",
-            ));
-        }
-        _ => {
-            let profile = profile.unwrap_or(TimeProfile::Static);
-            let mut model = model.clone();
-            if let Some(table) = &table {
-                if settings.semantics != TableSemantics::Canonical {
-                    return Err(input(
-                        "semantics=\"coppeliasim\" applies to a plain robot's table; a calibrated robot's rows drift canonically",
-                    ));
-                }
-                model = model.with_table(table, &profile).map_err(input)?;
-            }
-            let growing = !matches!(profile, TimeProfile::Static) || model.needs().0;
-            if duration_min.is_some() || (growing && state.time_min.is_none()) {
-                py.detach(|| {
-                    thermokin_compensate::compensate_model_cycle(&model, cycle, &program, &state, &settings, |_, _| {})
-                })
-            } else {
-                py.detach(|| thermokin_compensate::compensate_model(&model, &program, &state, &settings))
-            }
-        }
+    // Which run this is, decided by the library as for the command line (`Plan::new`).
+    let request = Request {
+        model: &robot.model,
+        table: table.as_ref(),
+        profile: profile.as_ref(),
+        state: &state,
+        semantics: &semantics,
+        accumulation: settings.accumulation,
+        duration_min,
+        step_min,
     };
-    Ok(PyCompensation { run: run.map_err(input)?, dof })
+    let plan = Plan::new(&request).map_err(plan_error)?;
+    let run = py.detach(|| plan.run(&request, &program, &settings, |_, _| {})).map_err(input)?;
+    Ok(PyCompensation { run, dof })
 }
 
-/// The paper's cycle length, minutes (section 4: 200 minutes, every minute).
-const PAPER_CYCLE_MIN: f64 = 200.0;
+/// A request the library refuses, in the words of the keyword arguments.
+fn plan_error(e: thermokin_compensate::CompensateError) -> PyErr {
+    let thermokin_compensate::CompensateError::Plan(plan) = &e else { return input(e) };
+    input(match plan {
+        PlanError::NothingToCompensate => "nothing to compensate: the robot is as designed (no error parameters, zero offsets or corrections); give deformation=TABLE, or the calibrated robot diagnose returns".to_string(),
+        PlanError::SemanticsOnCalibrated => "semantics=\"coppeliasim\" applies to a plain robot's table; a calibrated robot's rows drift canonically".to_string(),
+        PlanError::TemperatureLogOnCalibrated => "profile: a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead".to_string(),
+        other => other.to_string(),
+    })
+}
 
 /// A pose as x, y, z (mm) and the paper's X-Y-Z Euler angles (degrees) from a 4×4 matrix — and back:
 /// the targets' convention.

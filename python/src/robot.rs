@@ -238,7 +238,7 @@ impl PyRobot {
                     for ((v, &x), &k) in q.iter_mut().zip(row).zip(&kinds) {
                         *v = thermokin_io::units::joint_value_in(k, x);
                     }
-                    let at = |e: String| if batch.is_some() { format!("q row {i}: {e}") } else { format!("q: {e}") };
+                    let at = |e: String| if batch.is_some() { format!("q row {i}: {e}") } else { e };
                     let (p, r) = if plain {
                         chain.tool_position_rotation(q).map_err(|e| at(e.to_string()))?
                     } else {

@@ -181,6 +181,10 @@ def test_the_warm_up_loop_from_measurements(irb140, tmp_path):
     assert any(e.startswith("thermal_drift") for e in report.effects), report.text
     warm = report.calibrated
     assert not warm.is_plain
+    # A drifting robot has no pose without a time: an error that says so, not a cold pose.
+    with pytest.raises(InputError) as e:
+        warm.fk(Q)
+    assert "time" in str(e.value), str(e.value)
     targets = np.array([[600, 0, 400, 0, 90, 0], [500, 200, 500, 0, 90, 0]], dtype=float)
     run = thermokin.compensate(warm, targets, time_min=60, seed=SEED)
     assert run.status == ["Converged", "Converged"]

@@ -5,11 +5,10 @@ use nalgebra::{Isometry3, Vector3};
 use serde_json::json;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    AbbTargets, Controller, Cycle, ProgramSettings, RunOutput, RunSettings, StreamSettings, Summary, SummaryOut,
-    arm_configuration, compensate_static, compensate_static_stream, compensate_transient, programs, write_joint_csv,
-    write_long_csv, write_results_csv, write_results_json,
+    AbbTargets, Controller, Cycle, Plan, PlanError, ProgramSettings, Request, RunOutput, RunSettings, StreamSettings,
+    Summary, SummaryOut, arm_configuration, compensate_static_stream, programs, write_joint_csv, write_long_csv,
+    write_results_csv, write_results_json,
 };
-use thermokin_deform::TimeProfile;
 use thermokin_ik::{Goal, Params, Workspace, solve_branches};
 use thermokin_io::units::{degrees, joints_to_external, quaternion_wxyz, ros_rpy_deg, rounded, xyz_euler_deg};
 use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, write_atomic, write_atomic_with};
@@ -17,7 +16,7 @@ use thermokin_io::{RobotOptions, TargetReader, read_robot_with, robot_to_toml, w
 use std::path::{Path, PathBuf};
 
 use crate::args::{
-    AccumulateArg, Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
+    Cli, Command, CompensateArgs, ControllerArg, FkArgs, IkArgs, ResultsFormat, UrdfCommand, parse_list,
 };
 use crate::input::{Loaded, joints, load, pose, program, progress_bar, working_model};
 use crate::{Failure, exit, plots, reproduce};
@@ -241,103 +240,66 @@ fn ik_branches(
     Ok(if any { exit::OK } else { exit::PARTIAL })
 }
 
-/// The paper's cycle length, minutes (section 4: 200 minutes, every minute).
-const PAPER_CYCLE_MIN: f64 = 200.0;
-
 fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
-    // A robot file with corrections, or an operating state: every target on the robot as it is in its
-    // state. A plain robot with a deviation table: the paper's static and transient runs, unchanged.
-    let table = match &loaded.table {
-        Some(table) if loaded.model.is_plain() && loaded.state.is_empty() => table.clone(),
-        None if loaded.model.is_nominal() => {
-            return Err(Failure::input(anyhow!(
-                "nothing to compensate: {} is a robot as designed (no error parameters, zero offsets or corrections); give --deformation TABLE, or the calibrated robot `diagnose --export` writes",
-                a.robot.robot.display()
-            )));
-        }
-        _ => return compensate_model_run(&a, &loaded),
+    // Which run this is — the paper's static or transient case on a plain robot's table, or a calibrated
+    // robot's targets in their states or over a warm-up — is the library's decision (`Plan::new`).
+    let request = Request {
+        model: &loaded.model,
+        table: loaded.table.as_ref(),
+        profile: loaded.profile.as_ref(),
+        state: &loaded.state,
+        semantics: &loaded.semantics,
+        accumulation: a.accumulate.into(),
+        duration_min: a.duration,
+        step_min: a.step,
     };
-    if a.robot.time.is_some() {
-        return Err(Failure::input(anyhow!("--time is for fk/ik; compensate runs over --duration with --profile")));
-    }
-    let transient = loaded.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static);
-    if a.accumulate == AccumulateArg::Increments && !transient {
-        return Err(Failure::input(anyhow!(
-            "--accumulate increments needs a transient run: give --profile (e.g. linear-grow:180)"
-        )));
-    }
-    let chain = loaded.robot.chain();
-    let settings = run_settings(&a, loaded.semantics.clone(), chain)?;
+    let plan = Plan::new(&request).map_err(|e| plan_error(&a, e))?;
+    let settings = run_settings(&a, loaded.semantics.clone(), loaded.model.robot().chain())?;
     if a.stream {
-        return compensate_streamed(&a, &loaded, &table, settings);
+        return match &plan {
+            Plan::Static { table } => compensate_streamed(&a, &loaded, table, settings),
+            Plan::Transient { .. } => Err(Failure::input(anyhow!("--stream runs the static case: drop --profile"))),
+            Plan::InStates { .. } | Plan::Warmup { .. } => Err(Failure::input(anyhow!(
+                "--stream runs a plain robot's static case; a calibrated robot's run holds its targets in memory"
+            ))),
+        };
     }
     let prog = program(&a.targets)?;
-    let (run, transient) = match &loaded.profile {
-        None | Some(TimeProfile::Static) => {
-            (compensate_static(chain, &table, &prog, &settings).map_err(Failure::input)?, false)
-        }
-        Some(profile) => {
-            let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
-            let run = with_cycle_bar(cycle, |progress| {
-                compensate_transient(chain, &table, profile, cycle, &prog, &settings, progress)
-            })?;
-            (run.map_err(Failure::input)?, true)
-        }
-    };
-    write_outputs(&a, &loaded, &run, transient)?;
+    let run = match plan.cycle() {
+        Some(cycle) => with_cycle_bar(cycle, |progress| plan.run(&request, &prog, &settings, progress))?,
+        None => plan.run(&request, &prog, &settings, |_, _| {}),
+    }
+    .map_err(Failure::input)?;
+    // A time column when the run has times: a transient run, or a calibrated robot's targets at theirs.
+    let with_time = matches!(plan, Plan::Transient { .. }) || run.rows.iter().any(|r| r.time_min != 0.0);
+    write_outputs(&a, &loaded, &run, with_time)?;
     print_summary(&run.summary, a.json);
     Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
 }
 
-/// `compensate` on a calibrated robot (its drift, joint corrections and payload; a deviation table added
-/// to its rows with its profile): each target solved in its own state — the targets file's `time_min` and
-/// `temp_*` columns, else `--time`, `--temperature`, `--payload` — or, with `--duration` (or a growing
-/// `--profile`), every target at every step of a warm-up.
-fn compensate_model_run(a: &CompensateArgs, loaded: &Loaded) -> Result<u8, Failure> {
-    let mut model = loaded.model.clone();
-    let profile = loaded.profile.clone().unwrap_or(TimeProfile::Static);
-    if let Some(table) = &loaded.table {
-        if loaded.semantics != thermokin_deform::TableSemantics::Canonical {
-            return Err(Failure::input(anyhow!(
-                "--semantics coppeliasim applies to a plain robot's table; a calibrated robot's rows drift canonically"
-            )));
+/// A request the library refuses, in the words of the command line.
+fn plan_error(a: &CompensateArgs, e: thermokin_compensate::CompensateError) -> Failure {
+    let thermokin_compensate::CompensateError::Plan(plan) = &e else { return Failure::input(e) };
+    Failure::input(match plan {
+        PlanError::NothingToCompensate => anyhow!(
+            "nothing to compensate: {} is a robot as designed (no error parameters, zero offsets or corrections); give --deformation TABLE, or the calibrated robot `diagnose --export` writes",
+            a.robot.robot.display()
+        ),
+        PlanError::IncrementsNeedTransient => {
+            anyhow!("--accumulate increments needs a transient run: give --profile (e.g. linear-grow:180)")
         }
-        if matches!(profile, TimeProfile::Temperature { .. }) {
-            return Err(Failure::input(anyhow!(
-                "a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead"
-            )));
+        PlanError::IncrementsOnCalibrated => {
+            anyhow!("--accumulate increments replays the authors' CoppeliaSim updates on a plain robot's table")
         }
-        model = model.with_table(table, &profile).map_err(Failure::input)?;
-    }
-    if a.accumulate == AccumulateArg::Increments {
-        return Err(Failure::input(anyhow!(
-            "--accumulate increments replays the authors' CoppeliaSim updates on a plain robot's table"
-        )));
-    }
-    if a.stream {
-        return Err(Failure::input(anyhow!(
-            "--stream runs a plain robot's static case; a calibrated robot's run holds its targets in memory"
-        )));
-    }
-    let settings = run_settings(a, loaded.semantics.clone(), model.robot().chain())?;
-    let prog = program(&a.targets)?;
-    // A warm-up cycle when asked for (--duration), or for a growing table with no moment given; one
-    // state per target otherwise (its own columns, else --time / --temperature / --payload).
-    let growing = !matches!(profile, TimeProfile::Static);
-    let run = if a.duration.is_some() || (growing && loaded.state.time_min.is_none()) {
-        let cycle = Cycle { duration_min: a.duration.unwrap_or(PAPER_CYCLE_MIN), step_min: a.step };
-        with_cycle_bar(cycle, |progress| {
-            thermokin_compensate::compensate_model_cycle(&model, cycle, &prog, &loaded.state, &settings, progress)
-        })?
-        .map_err(Failure::input)?
-    } else {
-        thermokin_compensate::compensate_model(&model, &prog, &loaded.state, &settings).map_err(Failure::input)?
-    };
-    let with_time = run.rows.iter().any(|r| r.time_min != 0.0);
-    write_outputs(a, loaded, &run, with_time)?;
-    print_summary(&run.summary, a.json);
-    Ok(if run.summary.failures > 0 { exit::PARTIAL } else { exit::OK })
+        PlanError::SemanticsOnCalibrated => anyhow!(
+            "--semantics coppeliasim applies to a plain robot's table; a calibrated robot's rows drift canonically"
+        ),
+        PlanError::TemperatureLogOnCalibrated => anyhow!(
+            "a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead"
+        ),
+        other => anyhow!("{other}"),
+    })
 }
 
 /// A run's settings: the semantics, `--accumulate`, the IK's defaults, and `--seed` (degrees; all zero by
@@ -371,9 +333,6 @@ fn compensate_streamed(
     table: &thermokin_deform::DeviationTable,
     settings: RunSettings,
 ) -> Result<u8, Failure> {
-    if loaded.profile.as_ref().is_some_and(|p| *p != TimeProfile::Static) {
-        return Err(Failure::input(anyhow!("--stream runs the static case: drop --profile")));
-    }
     if a.format != ResultsFormat::Joints {
         return Err(Failure::input(anyhow!("--stream writes the joints only: add --format joints")));
     }

@@ -9,16 +9,19 @@
 //! deviation from the programmed pose (position per axis; orientation as a rotation vector — per-axis
 //! small-angle errors — never as differences of Euler triplets, which are degenerate at the programmed
 //! RY = 90°), and, for comparison, the deviation of the *uncompensated* program (nominal IK angles run
-//! on the deformed robot).
+//! on the deformed robot). Which run a request is — static, transient, a calibrated robot's targets in
+//! their states or over a warm-up — is decided once, by [`Plan::new`], for every front end.
 
 mod export;
 mod model_run;
+mod plan;
 mod program;
 mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use model_run::{command_solution, compensate_model, compensate_model_cycle, solve_on_model, state_or};
+pub use plan::{PAPER_CYCLE_MIN, Plan, PlanError, Request};
 pub use program::{
     AbbTargets, ArmConfiguration, Controller, Program, ProgramError, ProgramSettings, arm_configuration, confdata,
     kuka_status, kuka_turn, programs,
@@ -66,6 +69,9 @@ pub enum CompensateError {
         /// Steps asked for.
         steps: usize,
     },
+    /// The request is not a run (see [`PlanError`]).
+    #[error(transparent)]
+    Plan(#[from] crate::plan::PlanError),
     /// A robot program could not be written.
     #[error(transparent)]
     Program(#[from] crate::program::ProgramError),
