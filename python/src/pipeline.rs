@@ -355,18 +355,22 @@ impl PyRobot {
 }
 
 /// The sim-to-real diagnosis (`thermokin diagnose`): which unmodelled effects explain where `robot`
-/// and `measurements` disagree, chosen by cross-validation and scored by nested validation (and on
-/// `holdout`, never seen by the selection). Settings as the command line's flags: `noise_mm` (the
-/// tracker's σ per axis), `folds`, `folds_by` (`"neighbourhood"`, `"time"`, `"region"`,
-/// `"configuration"`), `frame` (`"base"` or `"tracker"`: estimate the measurement frame), `tool`
-/// (`"known"` or `"unknown"`: estimate the tool point), `orientation_lever_mm`,
-/// `orientation_noise_deg`. Runs without the GIL.
+/// and the measurements disagree, chosen by cross-validation and scored by nested validation (and on
+/// `holdout`, never seen by the selection). The measurements: a `Measurements`, or arrays — `data` the
+/// joint values `(N, n)` in degrees with `xyz` `(N, 3)` in mm, `time_min` `(N,)` and `temps` (°C by
+/// sensor) as for `Measurements`. Settings as the command line's flags: `noise_mm` (the tracker's σ per
+/// axis), `folds`, `folds_by` (`"neighbourhood"`, `"time"`, `"region"`, `"configuration"`), `frame`
+/// (`"base"` or `"tracker"`: estimate the measurement frame), `tool` (`"known"` or `"unknown"`:
+/// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, measurements, holdout=None, *, noise_mm=None, folds=None, folds_by="neighbourhood", frame="base", tool="known", orientation_lever_mm=None, orientation_noise_deg=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by="neighbourhood", frame="base", tool="known", orientation_lever_mm=None, orientation_noise_deg=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
-    measurements: &PyMeasurements,
+    data: &Bound<'_, PyAny>,
+    xyz: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    time_min: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    temps: Option<HashMap<String, PyArrayLikeDyn<'_, f64, AllowTypeChange>>>,
     holdout: Option<&PyMeasurements>,
     noise_mm: Option<f64>,
     folds: Option<usize>,
@@ -376,6 +380,22 @@ pub fn diagnose(
     orientation_lever_mm: Option<f64>,
     orientation_noise_deg: Option<f64>,
 ) -> PyResult<PyReport> {
+    let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
+        (Ok(m), None) => {
+            if time_min.is_some() || temps.is_some() {
+                return Err(input("time_min, temps: given with the arrays (a Measurements carries its own)"));
+            }
+            m.get().clone()
+        }
+        (Ok(_), Some(_)) => {
+            return Err(input("xyz: a Measurements carries its positions; give q and xyz, or a Measurements"));
+        }
+        (Err(_), Some(xyz)) => PyMeasurements::new(robot, data.extract()?, xyz, time_min, temps)?,
+        (Err(_), None) => {
+            return Err(input("xyz: the measured positions (N, 3) in mm go with joint values (or give a Measurements)"));
+        }
+    };
+    let measurements = &measurements;
     let defaults = Config::default();
     let config = Config {
         folds_by: match folds_by {

@@ -153,6 +153,20 @@ def test_diagnose_equals_the_command_lines_json_on_the_real_ur10(root, cli, tmp_
     assert np.abs(calibrated.fk(c.q[:5])[:, :3, 3] - robot.fk(c.q[:5])[:, :3, 3]).max() > 0.01
 
 
+def test_diagnose_takes_arrays_as_it_takes_a_measurement_set(irb140):
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05", "thermal_drift:3"], poses=120, minutes=120)
+    # The same numbers either way (degrees in both: `data.q` is the set's radians in degrees, which a
+    # round trip may move by an ulp, so the set compared is built from those degrees too).
+    same = thermokin.Measurements(irb140, data.q, data.xyz, time_min=data.time_min)
+    from_set = thermokin.diagnose(irb140, same, noise_mm=0.005)
+    from_arrays = thermokin.diagnose(irb140, data.q, data.xyz, time_min=data.time_min, noise_mm=0.005)
+    assert from_arrays.to_dict() == from_set.to_dict()
+    with pytest.raises(InputError, match="xyz"):
+        thermokin.diagnose(irb140, data.q)
+    with pytest.raises(InputError, match="xyz"):
+        thermokin.diagnose(irb140, data, data.xyz)
+
+
 def test_compensate_writes_the_command_lines_joints(root, cli, tmp_path):
     scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
     table = root / "fixtures" / "paper" / "authors" / "deformations-case-study.csv"

@@ -176,9 +176,12 @@ def simulate(
 ) -> Measurements: ...
 def diagnose(
     robot: Robot,
-    measurements: Measurements,
-    holdout: Measurements | None = None,
+    data: Measurements | _Array,
+    xyz: _Array | None = None,
     *,
+    time_min: _Array | None = None,
+    temps: dict[str, _Array] | None = None,
+    holdout: Measurements | None = None,
     noise_mm: float | None = None,
     folds: int | None = None,
     folds_by: str = "neighbourhood",
