@@ -392,7 +392,9 @@ pub fn diagnose(
         }
         (Err(_), Some(xyz)) => PyMeasurements::new(robot, data.extract()?, xyz, time_min, temps)?,
         (Err(_), None) => {
-            return Err(input("xyz: the measured positions (N, 3) in mm go with joint values (or give a Measurements)"));
+            return Err(input(
+                "xyz: the measured positions (N, 3) in mm go with joint values (or give a Measurements)",
+            ));
         }
     };
     let measurements = &measurements;
@@ -589,8 +591,10 @@ fn targets_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<Target>> {
 /// `time_min`), every target at every step of the warm-up. The same decision as the command line's
 /// (`thermokin_compensate::Plan`).
 /// `seed` in degrees seeds the first solve (zeros by default); the program is chained target to target.
+/// `accumulate="increments"` replays the authors' minute-by-minute CoppeliaSim updates of a plain robot's
+/// growing table (the command line's `--accumulate increments`).
 #[pyfunction]
-#[pyo3(signature = (robot, targets, *, deformation=None, semantics="canonical", profile=None, time_min=None, temps=None, duration_min=None, step_min=1.0, seed=None))]
+#[pyo3(signature = (robot, targets, *, deformation=None, semantics="canonical", profile=None, time_min=None, temps=None, duration_min=None, step_min=1.0, seed=None, accumulate="nominal"))]
 pub fn compensate(
     py: Python<'_>,
     robot: &PyRobot,
@@ -603,7 +607,13 @@ pub fn compensate(
     duration_min: Option<f64>,
     step_min: f64,
     seed: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    accumulate: &str,
 ) -> PyResult<PyCompensation> {
+    let accumulation = match accumulate {
+        "nominal" => thermokin_compensate::Accumulation::FromNominal,
+        "increments" => thermokin_compensate::Accumulation::Increments,
+        other => return Err(input(format!("accumulate: `{other}` is not \"nominal\" or \"increments\""))),
+    };
     let chain = robot.chain();
     let dof = chain.dof();
     let program = targets_of(targets)?;
@@ -624,12 +634,8 @@ pub fn compensate(
     };
     let state = crate::robot::state(time_min, temps)?;
     let semantics = semantics_of(semantics, dof)?;
-    let settings = RunSettings {
-        semantics: semantics.clone(),
-        accumulation: thermokin_compensate::Accumulation::FromNominal,
-        ik: thermokin_ik::Params::default(),
-        start,
-    };
+    let settings =
+        RunSettings { semantics: semantics.clone(), accumulation, ik: thermokin_ik::Params::default(), start };
     // Which run this is, decided by the library as for the command line (`Plan::new`).
     let request = Request {
         model: &robot.model,
@@ -653,6 +659,8 @@ fn plan_error(e: thermokin_compensate::CompensateError) -> PyErr {
         PlanError::NothingToCompensate => "nothing to compensate: the robot is as designed (no error parameters, zero offsets or corrections); give deformation=TABLE, or the calibrated robot diagnose returns".to_string(),
         PlanError::SemanticsOnCalibrated => "semantics=\"coppeliasim\" applies to a plain robot's table; a calibrated robot's rows drift canonically".to_string(),
         PlanError::TemperatureLogOnCalibrated => "profile: a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead".to_string(),
+        PlanError::IncrementsNeedTransient => "accumulate=\"increments\" needs a transient run: give profile= (e.g. \"linear-grow:180\")".to_string(),
+        PlanError::IncrementsOnCalibrated => "accumulate=\"increments\" replays the authors' CoppeliaSim updates on a plain robot's table".to_string(),
         other => other.to_string(),
     })
 }

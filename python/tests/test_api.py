@@ -188,6 +188,27 @@ def test_compensate_writes_the_command_lines_joints(root, cli, tmp_path):
     assert ours.read_bytes() == theirs.read_bytes()
 
 
+def test_the_authors_transient_replay_writes_the_command_lines_file(root, cli, tmp_path):
+    scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
+    table = root / "fixtures" / "paper" / "authors" / "deformations-case-study.csv"
+    targets = root / "fixtures" / "paper" / "table12-targets.csv"
+    run = thermokin.compensate(
+        scene, targets, deformation=table, semantics="coppeliasim", profile="linear-grow:180",
+        accumulate="increments", seed=SEED,
+    )
+    assert len(run) == 201 * 50
+    ours = tmp_path / "ours.csv"
+    run.write(ours, format="long")
+    theirs = tmp_path / "theirs.csv"
+    subprocess.run(
+        [cli, "compensate", "--robot", "configs/irb140-scene.toml", "--semantics", "coppeliasim",
+         "--deformation", table, "--targets", targets, "--seed", ",".join(map(str, SEED)),
+         "--profile", "linear-grow:180", "--accumulate", "increments", "--format", "long", "--out", theirs],
+        cwd=root, check=True, capture_output=True,
+    )
+    assert ours.read_bytes() == theirs.read_bytes()
+
+
 def test_the_warm_up_loop_from_measurements(irb140, tmp_path):
     """Diagnose a simulated warm-up, then compensate the next one with what it found (the paper's purpose)."""
     data = thermokin.simulate(irb140, ["joint_offset:2=0.05", "thermal_drift:3=0.3,-0.2,0.25,0.004,0.006,0.01"], poses=240, minutes=180)
@@ -235,6 +256,7 @@ def test_dataframes_when_pandas_is_installed(irb140, root):
         (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]]), InputError, "nothing to compensate"),
         (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]], deformation="nope.toml"), MissingFileError, "nope.toml"),
         (lambda r: r.deformed("fixtures/paper/deformations-case-study.toml", semantics="blender"), InputError, "semantics"),
+        (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]], deformation="fixtures/paper/deformations-case-study.toml", accumulate="increments"), InputError, 'accumulate="increments" needs a transient run'),
         (lambda r: thermokin.Robot.from_file("no/such/robot.toml"), MissingFileError, "no/such/robot.toml"),
     ],
 )

@@ -202,5 +202,6 @@ def compensate(
     duration_min: float | None = None,
     step_min: float = 1.0,
     seed: _Array | None = None,
+    accumulate: str = "nominal",
 ) -> Compensation: ...
 def pose_to_xyz_euler(pose: _Array) -> _F64: ...
