@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use thermokin_chain::{Dataset, JointKind, Measurement, OperatingState, Target};
 use thermokin_compensate::{Plan, PlanError, Request, RunOutput, RunSettings, SummaryOut};
-use thermokin_deform::{CoppeliaSimEdits, TableSemantics, TimeProfile};
+use thermokin_deform::{TableSemantics, TimeProfile};
 use thermokin_diagnose::{Config, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
 use thermokin_io::units::{joints_to_internal, xyz_euler_deg, xyz_rotation_deg};
 
@@ -23,7 +23,7 @@ use crate::robot::PyRobot;
 pub fn semantics_of(name: &str, dof: usize) -> PyResult<TableSemantics> {
     match name {
         "canonical" => Ok(TableSemantics::Canonical),
-        "coppeliasim" => Ok(TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof]))),
+        "coppeliasim" => Ok(TableSemantics::coppeliasim_at_home(dof)),
         other => Err(input(format!("semantics: `{other}` is not \"canonical\" or \"coppeliasim\""))),
     }
 }
@@ -338,19 +338,6 @@ impl PyReport {
 
     fn __repr__(&self) -> String {
         format!("Report(effects={:?})", self.effects())
-    }
-}
-
-impl PyRobot {
-    /// [`PyRobot::save`] for the report's export.
-    pub fn save_to(&self, path: &std::path::Path) -> PyResult<()> {
-        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-        let text = if urdf {
-            thermokin_urdf::export_robot_noting(self.model.robot(), &self.model.beyond_urdf())
-        } else {
-            thermokin_io::robot_model_to_toml(&self.model)
-        };
-        thermokin_io::write_atomic(path, text.as_bytes()).map_err(io)
     }
 }
 

@@ -30,6 +30,14 @@ impl PyRobot {
         self.model.robot().chain()
     }
 
+    /// Writes the robot: URDF when the path ends in `.urdf` (what URDF cannot hold named in its header),
+    /// the complete TOML otherwise; atomically. `save` and a report's `export`.
+    pub fn save_to(&self, path: &std::path::Path) -> PyResult<()> {
+        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
+        let text = if urdf { self.to_urdf() } else { self.to_toml() };
+        thermokin_io::write_atomic(path, text.as_bytes()).map_err(io)
+    }
+
     /// A batch of joint rows (degrees; mm for prismatic joints) in the chain's units.
     fn joint_rows(
         &self,
@@ -401,9 +409,7 @@ impl PyRobot {
     /// Writes the robot: URDF when the path ends in `.urdf`, TOML otherwise; atomically (a temporary
     /// file renamed).
     fn save(&self, path: PathBuf) -> PyResult<()> {
-        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-        let text = if urdf { self.to_urdf() } else { self.to_toml() };
-        thermokin_io::write_atomic(&path, text.as_bytes()).map_err(io)
+        self.save_to(&path)
     }
 
     fn __repr__(&self) -> String {
@@ -420,7 +426,6 @@ fn ik_result(py: Python<'_>, chain: &Chain, solved: &[Solution], batch: Option<u
     let dr: Vec<f64> = solved.iter().map(|s| thermokin_chain::units::degrees(s.orientation_error_rad)).collect();
     let it: Vec<usize> = solved.iter().map(|s| s.iterations).collect();
     let ok: Vec<bool> = solved.iter().map(Solution::converged).collect();
-    let one = |v: Py<PyAny>| v;
     Ok(match batch {
         Some(_) => IkResult {
             q: output(py, q, batch, &[n])?.into_any().unbind(),
@@ -432,7 +437,7 @@ fn ik_result(py: Python<'_>, chain: &Chain, solved: &[Solution], batch: Option<u
         },
         None => IkResult {
             q: output(py, q, None, &[n])?.into_any().unbind(),
-            status: one(status[0].clone().into_pyobject(py)?.into_any().unbind()),
+            status: status[0].clone().into_pyobject(py)?.into_any().unbind(),
             position_error_mm: dp[0].into_pyobject(py)?.into_any().unbind(),
             orientation_error_deg: dr[0].into_pyobject(py)?.into_any().unbind(),
             iterations: it[0].into_pyobject(py)?.into_any().unbind(),

@@ -154,22 +154,6 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
 }
 
-/// [`thermokin_compensate::command_solution`] for a calibrated robot (one with joint corrections); a
-/// plain robot's solution is already the joints to command.
-fn commanded(
-    model: &thermokin_deform::RobotModel,
-    state: &thermokin_chain::OperatingState,
-    target: &Goal,
-    params: &Params,
-    s: &mut thermokin_ik::Solution,
-) -> Result<(), Failure> {
-    if model.joint_corrections().iter().all(|c| c.is_none()) {
-        return Ok(());
-    }
-    thermokin_compensate::command_solution(model, state, target, params, s).map_err(Failure::input)?;
-    Ok(())
-}
-
 /// `ik --branches`: every configuration of a closed-form arm, refined on the working robot.
 fn ik_branches(
     a: &IkArgs,
@@ -188,7 +172,8 @@ fn ik_branches(
         )));
     };
     for (_, s) in &mut found {
-        commanded(model, state, target, &Params::default(), s)?;
+        thermokin_compensate::commanded_on_model(model, state, target, &Params::default(), s)
+            .map_err(Failure::input)?;
     }
     let rows: Vec<serde_json::Value> = found
         .iter()

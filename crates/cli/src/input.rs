@@ -10,7 +10,7 @@ use nalgebra::{Isometry3, Translation3, Vector3};
 use thermokin_chain::Robot;
 use thermokin_chain::Target;
 use thermokin_chain::{Chain, FixedRow, OperatingState};
-use thermokin_deform::{CoppeliaSimEdits, DeviationTable, RobotModel, TableSemantics, TimeProfile};
+use thermokin_deform::{DeviationTable, RobotModel, TableSemantics, TimeProfile};
 use thermokin_io::units::{joints_to_internal, rotation_from_matrix};
 use thermokin_io::{Orientation, RobotOptions, read_deviation_table_for, read_robot_model_with, read_targets};
 
@@ -124,7 +124,7 @@ pub fn working_model(args: &RobotArgs, loaded: &Loaded) -> Result<RobotModel, Fa
 pub fn semantics(s: Semantics, dof: usize) -> TableSemantics {
     match s {
         Semantics::Canonical => TableSemantics::Canonical,
-        Semantics::Coppeliasim => TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof])),
+        Semantics::Coppeliasim => TableSemantics::coppeliasim_at_home(dof),
     }
 }
 

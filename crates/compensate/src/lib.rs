@@ -20,8 +20,10 @@ mod run;
 mod stream;
 
 pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
-pub use model_run::{command_solution, compensate_model, compensate_model_cycle, solve_on_model, state_or};
-pub use plan::{PAPER_CYCLE_MIN, Plan, PlanError, Request};
+pub use model_run::{
+    command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, state_or,
+};
+pub use plan::{Plan, PlanError, Request};
 pub use program::{
     AbbTargets, ArmConfiguration, Controller, Program, ProgramError, ProgramSettings, arm_configuration, confdata,
     kuka_status, kuka_turn, programs,

@@ -149,10 +149,24 @@ pub fn solve_on_model(
     let chain = model.chain_at(state)?;
     let seed = model.joint_values(seed, state)?;
     let mut solution = thermokin_ik::solve(&chain, goal, &seed, params, ws, index)?;
-    if !model.joint_corrections().iter().all(|c| c.is_none()) {
-        command_solution(model, state, goal, params, &mut solution)?;
-    }
+    commanded_on_model(model, state, goal, params, &mut solution)?;
     Ok(solution)
+}
+
+/// A solution on the chain in force made the joints to command on `model`: [`command_solution`] when the
+/// model corrects its joint values (gear ratio, cyclic error, compliance), nothing otherwise — a plain
+/// or drifting robot's chain values are the joints to command.
+pub fn commanded_on_model(
+    model: &RobotModel,
+    state: &OperatingState,
+    goal: &Goal,
+    params: &Params,
+    solution: &mut Solution,
+) -> Result<(), thermokin_deform::DeformError> {
+    if model.joint_corrections().iter().any(|c| !c.is_none()) {
+        command_solution(model, state, goal, params, solution)?;
+    }
+    Ok(())
 }
 
 /// A solution on the chain in force made the joint values to command on `model` (its joint corrections

@@ -9,9 +9,6 @@ use thermokin_deform::{DeviationTable, RobotModel, TableSemantics, TimeProfile};
 use crate::run::{Accumulation, Cycle, RunOutput, RunSettings, compensate_static, compensate_transient};
 use crate::{CompensateError, compensate_model, compensate_model_cycle};
 
-/// The paper's cycle length, minutes (section 4: 200 minutes, every minute): a warm-up's default.
-pub const PAPER_CYCLE_MIN: f64 = 200.0;
-
 /// A compensation request, as a front end read it.
 #[derive(Clone, Copy, Debug)]
 pub struct Request<'a> {
@@ -96,7 +93,8 @@ impl Plan {
     /// table grows with no time given, each target in its state otherwise.
     pub fn new(request: &Request<'_>) -> Result<Plan, CompensateError> {
         let r = request;
-        let cycle = Cycle { duration_min: r.duration_min.unwrap_or(PAPER_CYCLE_MIN), step_min: r.step_min };
+        // A warm-up lasts the paper's 200 minutes unless a duration is given.
+        let cycle = Cycle { duration_min: r.duration_min.unwrap_or(Cycle::PAPER.duration_min), step_min: r.step_min };
         let increments = r.accumulation == Accumulation::Increments;
         match r.table {
             Some(table) if r.model.is_plain() && r.state.is_empty() => {
@@ -205,7 +203,7 @@ mod tests {
         assert_eq!((cycle.duration_min, cycle.step_min), (30.0, 1.0));
         // The paper's 200 minutes when no duration is given.
         let p = plan(&plain, Some(&table), Some(&grow), &cold, &canonical, nominal, None).unwrap();
-        assert_eq!(p.cycle().unwrap().duration_min, super::PAPER_CYCLE_MIN);
+        assert_eq!(p.cycle().unwrap().duration_min, crate::Cycle::PAPER.duration_min);
         // A state given makes it a calibrated robot's run: each target in its state, or a warm-up.
         let at_60 = OperatingState::at_time(60.0);
         let p = plan(&plain, Some(&table), Some(&grow), &at_60, &canonical, nominal, None).unwrap();
@@ -221,7 +219,7 @@ mod tests {
         assert_eq!(e, PlanError::NothingToCompensate);
         let e = refused(plan(&plain, Some(&table), None, &cold, &canonical, Accumulation::Increments, None));
         assert_eq!(e, PlanError::IncrementsNeedTransient);
-        let coppelia = TableSemantics::CoppeliaSim(thermokin_deform::CoppeliaSimEdits::at(vec![0.0; 6]));
+        let coppelia = TableSemantics::coppeliasim_at_home(6);
         let e = refused(plan(&plain, Some(&table), Some(&grow), &at_60, &coppelia, nominal, None));
         assert_eq!(e, PlanError::SemanticsOnCalibrated);
         let e = refused(plan(&plain, Some(&table), Some(&grow), &at_60, &canonical, Accumulation::Increments, None));

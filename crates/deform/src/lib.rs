@@ -119,6 +119,14 @@ pub enum TableSemantics {
     CoppeliaSim(CoppeliaSimEdits),
 }
 
+impl TableSemantics {
+    /// The authors' CoppeliaSim edits with the robot standing at home (every joint at zero): how their
+    /// script applied the case-study table, and what `--semantics coppeliasim` means.
+    pub fn coppeliasim_at_home(dof: usize) -> Self {
+        TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof]))
+    }
+}
+
 impl DeviationTable {
     /// A table of zeros for `dof` joints.
     pub fn zeros(dof: usize) -> Self {

@@ -13,7 +13,7 @@ use thermokin_chain::Target;
 use thermokin_compensate::{
     Accumulation, Cycle, RunOutput, RunSettings, SummaryOut, compensate_static, compensate_transient,
 };
-use thermokin_deform::{AfterStabilization, CoppeliaSimEdits, TableSemantics, TimeProfile};
+use thermokin_deform::{AfterStabilization, TableSemantics, TimeProfile};
 use thermokin_ik::Params;
 use thermokin_io::{read_deviation_table, read_robot, read_targets};
 
@@ -139,7 +139,7 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
     let table = read_deviation_table(&f("deformations-case-study.toml"))?;
     let table14 = labelled_rows(&f("table14-reached-static.csv"))?;
     let table16 = labelled_rows(&f("table16-joints-static.csv"))?;
-    let coppelia = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; chain.dof()]));
+    let coppelia = TableSemantics::coppeliasim_at_home(chain.dof());
     // The authors' IK ran in CoppeliaSim from the robot's current pose; a seed with the wrist bent down
     // (A5 = −45°) puts every target on the branch of their Table 16 (A5 < 0).
     let start = to_internal(&scene, &[0.0, 20.0, 20.0, 0.0, -45.0, 0.0], "the start configuration")?;

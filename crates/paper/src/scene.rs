@@ -249,7 +249,7 @@ pub fn static_hypotheses(
     let table9_identified = table9.with_tool(identified)?;
     let (scene, _rank) = identify_scene_geometry(&scene_chain(table9, tool_point)?, minute0)?;
     let floor = residuals(&scene, minute0.iter().copied())?;
-    let at_home = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; table9.dof()]));
+    let at_home = TableSemantics::coppeliasim_at_home(table9.dof());
     let last = table9.dof() - 1;
 
     let mut candidates: Vec<(String, Chain, DeviationTable)> = vec![
@@ -324,7 +324,7 @@ pub fn transient_candidates(
     let minutes = rows.iter().map(|r| r.time_min).fold(0.0, f64::max) as usize;
     let by_minute: Vec<Vec<&PaperResultRow>> =
         (0..=minutes).map(|m| rows.iter().filter(|r| r.time_min == m as f64).collect()).collect();
-    let at_home = TableSemantics::CoppeliaSim(CoppeliaSimEdits::at(vec![0.0; dof]));
+    let at_home = TableSemantics::coppeliasim_at_home(dof);
     let increment = table.scaled(1.0 / 180.0);
     let mut out = Vec::new();
     for replay in
