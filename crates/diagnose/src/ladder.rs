@@ -256,7 +256,8 @@ pub fn diagnose_with_progress(
         report.holdout = Some(HoldoutStats { nominal: score(&always)?, selected: score(&effects)?, refitted });
         tell("hold-out set".into());
     }
-    report.warnings = warnings(robot, data, config, &report);
+    let more = warnings(robot, data, config, &report);
+    report.warnings.extend(more);
     report.verdict = verdict(config, &report);
     report.honest_end = honest_end(&report);
     Ok(report)

@@ -619,9 +619,19 @@ fn report(
     // The identified robot carries every chosen effect: the model written is the model scored.
     let identified = model.robot_model(robot, &final_fit.theta, data)?;
     debug_assert!(left_out.iter().all(|e| !e.is_static()));
+    // A claim checked, not assumed: the parameters reported and exported are a least-squares minimum only
+    // if the final fit ended by its own test.
+    let warnings = if final_fit.converged {
+        Vec::new()
+    } else {
+        vec![format!(
+            "the final model's fit stopped at its {}-iteration limit before converging: its parameters (and an exported robot) are not at the least-squares minimum",
+            crate::fit::MAX_ITERATIONS
+        )]
+    };
     let report = Report {
         frames,
-        warnings: Vec::new(),
+        warnings,
         verdict: String::new(),
         honest_end: None,
         nominal: sel.additive[0].stats,
