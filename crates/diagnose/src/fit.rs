@@ -543,16 +543,26 @@ pub(crate) fn fit(
     rows: &[usize],
     pre: &Pre,
 ) -> Result<Fit, DiagnoseError> {
-    let start = Start { theta: model.initial(), movable: vec![true; model.len()] };
-    fit_from(robot, model, data, rows, pre, &start)
+    fit_from(robot, model, data, rows, pre, &Start::new(model.initial(), vec![true; model.len()]))
 }
 
-/// Where a fit starts and what it may move: parameters with `movable[k] = false` keep `theta[k]`.
+/// Where a fit starts, what it may move (parameters with `movable[k] = false` keep `theta[k]`), and how
+/// many Levenberg–Marquardt iterations per pass it may take.
 pub(crate) struct Start {
     pub(crate) theta: Vec<f64>,
     pub(crate) movable: Vec<bool>,
+    pub(crate) max_iterations: usize,
 }
 
+impl Start {
+    /// From `theta`, moving the `movable` parameters, at most [`MAX_ITERATIONS`] per pass.
+    pub(crate) fn new(theta: Vec<f64>, movable: Vec<bool>) -> Self {
+        Self { theta, movable, max_iterations: MAX_ITERATIONS }
+    }
+}
+
+// Long on purpose (~140 lines): the two identifiability passes, the damping loop and the covariance share
+// the Jacobian, the residuals and the scales in flight; split, each part would take all of them back.
 /// [`fit`] from `start`, moving only its movable parameters (a transfer: the effects fitted on one
 /// file, only the frame and tool refitted on another).
 pub(crate) fn fit_from(
@@ -562,21 +572,6 @@ pub(crate) fn fit_from(
     rows: &[usize],
     pre: &Pre,
     start: &Start,
-) -> Result<Fit, DiagnoseError> {
-    fit_limited(robot, model, data, rows, pre, start, MAX_ITERATIONS)
-}
-
-// Long on purpose (~140 lines): the two identifiability passes, the damping loop and the covariance share
-// the Jacobian, the residuals and the scales in flight; split, each part would take all of them back.
-/// [`fit_from`] with at most `max_iterations` Levenberg–Marquardt iterations per pass.
-fn fit_limited(
-    robot: &Robot,
-    model: &Model,
-    data: &Dataset,
-    rows: &[usize],
-    pre: &Pre,
-    start: &Start,
-    max_iterations: usize,
 ) -> Result<Fit, DiagnoseError> {
     let names = model.parameter_names();
     let rates = Rates { columns: model.time_constants() };
@@ -615,7 +610,7 @@ fn fit_limited(
         let mut lm = Lm::new(&cols);
         lm.refresh(&jac, &theta, &rates);
         let mut stopped = false;
-        for _ in 0..max_iterations {
+        for _ in 0..start.max_iterations {
             let g = lm.gradient(&jac, &r);
             let mut step_taken = false;
             let mut converged = false;
@@ -840,7 +835,7 @@ mod tests {
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
 mod convergence {
-    use super::{Start, fit_limited};
+    use super::{Start, fit_from};
     use crate::model::prepare;
     use crate::{Effect, HiddenEffect, JointIndex, Model, SimulationConfig, simulate};
 
@@ -861,10 +856,11 @@ mod convergence {
         let model = Model::new(&robot, vec![Effect::JointOffset(joint(1)), Effect::LinkDeviation(joint(3))]).unwrap();
         let rows: Vec<usize> = (0..data.len()).collect();
         let pre = prepare(&robot, &data, 0.0);
-        let start = Start { theta: model.initial(), movable: vec![true; model.len()] };
-        let one = fit_limited(&robot, &model, &data, &rows, &pre, &start, 1).unwrap();
+        let start = Start::new(model.initial(), vec![true; model.len()]);
+        let one = fit_from(&robot, &model, &data, &rows, &pre, &Start { max_iterations: 1, ..start }).unwrap();
         assert!(!one.converged);
-        let full = fit_limited(&robot, &model, &data, &rows, &pre, &start, super::MAX_ITERATIONS).unwrap();
+        let full = fit_from(&robot, &model, &data, &rows, &pre, &Start::new(model.initial(), vec![true; model.len()]))
+            .unwrap();
         assert!(full.converged);
         assert!(full.ssr < one.ssr);
         for (k, truth) in [(0, offset), (1, link_dx_mm)] {

@@ -290,7 +290,7 @@ pub(crate) fn transfer_score(
                 movable[o..o + b.len()].fill(true);
             }
         }
-        let refit = fit_from(robot, &model, holdout, &rows, &pre, &Start { theta, movable })?;
+        let refit = fit_from(robot, &model, holdout, &rows, &pre, &Start::new(theta, movable))?;
         (model, refit.theta)
     } else {
         (trained, f.theta)
