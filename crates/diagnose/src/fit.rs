@@ -247,7 +247,11 @@ pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> 
         for &c in &kept {
             free[c] = true;
         }
-        fixed.extend(parallel.iter().map(|&c| reason(c, &kept, &cos)));
+        // The reason names an accepted column before `c` (columns are tested in order).
+        fixed.extend(parallel.iter().map(|&c| {
+            let before = kept.iter().take_while(|&&a| a < c).count();
+            reason(c, &kept[..before], &cos)
+        }));
     } else {
         let r = unit_r_factor(jac, &norm, &candidates);
         let column = |c: usize| -> Vec<f64> {
