@@ -263,15 +263,9 @@ pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> 
         let mut basis: Vec<Vec<f64>> = Vec::new();
         let mut accepted: Vec<usize> = Vec::new();
         for &c in &candidates {
-            // Gram–Schmidt on R's columns, twice ("twice is enough").
+            // Gram–Schmidt on R's columns.
             let mut v = column(c);
-            for _ in 0..2 {
-                for q in &basis {
-                    let h: f64 = q.iter().zip(&v).map(|(a, b)| a * b).sum();
-                    v.iter_mut().zip(q).for_each(|(x, y)| *x -= h * y);
-                }
-            }
-            let d = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            let d = project_out(&basis, &mut v);
             if d < DEPENDENT {
                 fixed.push(reason(c, &accepted, &r_cos));
             } else {
@@ -283,6 +277,18 @@ pub(crate) fn identifiable(jac: &Mat<f64>, names: &[String], prior: &[bool]) -> 
     }
     fixed.sort_by_key(|(c, _)| *c);
     (free, fixed.into_iter().map(|(_, f)| f).collect())
+}
+
+/// Removes from `v` its components along the orthonormal `basis` — twice ("twice is enough": the second
+/// pass takes out what rounding left of the first) — and returns the norm of what remains.
+pub(crate) fn project_out(basis: &[Vec<f64>], v: &mut [f64]) -> f64 {
+    for _ in 0..2 {
+        for q in basis {
+            let h: f64 = q.iter().zip(v.iter()).map(|(a, b)| a * b).sum();
+            v.iter_mut().zip(q).for_each(|(x, y)| *x -= h * y);
+        }
+    }
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
 
 /// Whether the `kept` unit columns are so far from dependent that the Gram matrix decides

@@ -407,13 +407,7 @@ fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
             continue;
         }
         let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
-        for _ in 0..2 {
-            for u in &basis {
-                let d: f64 = v.iter().zip(u).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(u).for_each(|(x, y)| *x -= d * y);
-            }
-        }
-        let n = norm(&v);
+        let n = crate::fit::project_out(&basis, &mut v);
         if n >= crate::fit::DEPENDENT {
             basis.push(v.iter().map(|x| x / n).collect());
         }
@@ -424,13 +418,7 @@ fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
             return true;
         }
         let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
-        for _ in 0..2 {
-            for u in &basis {
-                let d: f64 = v.iter().zip(u).map(|(x, y)| x * y).sum();
-                v.iter_mut().zip(u).for_each(|(x, y)| *x -= d * y);
-            }
-        }
-        norm(&v) < crate::fit::DEPENDENT
+        crate::fit::project_out(&basis, &mut v) < crate::fit::DEPENDENT
     })
 }
 
