@@ -4,6 +4,7 @@
 //! rayon; library errors become `thermokin.errors` exceptions with the command line's text.
 
 mod arrays;
+mod convert;
 mod errors;
 mod pipeline;
 mod robot;

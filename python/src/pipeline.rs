@@ -11,29 +11,14 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use thermokin_chain::{Dataset, JointKind, Measurement, OperatingState, Target};
 use thermokin_compensate::{Plan, PlanError, Request, RunOutput, RunSettings, SummaryOut};
-use thermokin_deform::{TableSemantics, TimeProfile};
-use thermokin_diagnose::{Config, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
+use thermokin_diagnose::{Config, FoldGrouping, HiddenEffect, Report, SimulationConfig};
+use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::units::{joints_to_internal, xyz_euler_deg, xyz_rotation_deg};
 
 use crate::arrays::{Rows, output};
+use crate::convert::{profile_of, semantics_of, state};
 use crate::errors::{Kind, input, io, must_exist, raise};
 use crate::robot::PyRobot;
-
-/// `"canonical"` or `"coppeliasim"` (the authors' scene: joint objects edited at home).
-pub fn semantics_of(name: &str, dof: usize) -> PyResult<TableSemantics> {
-    match name {
-        "canonical" => Ok(TableSemantics::Canonical),
-        "coppeliasim" => Ok(TableSemantics::coppeliasim_at_home(dof)),
-        other => Err(input(format!("semantics: `{other}` is not \"canonical\" or \"coppeliasim\""))),
-    }
-}
-
-/// A profile spec (`static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`,
-/// `temperature:LOG.csv`, `FILE.toml`), its file read and checked against `dof` joints.
-pub fn profile_of(spec: &str, dof: usize) -> PyResult<TimeProfile> {
-    let spec = TimeProfile::parse_spec(spec).map_err(|e| input(format!("profile: {e}")))?;
-    thermokin_io::read_profile_spec(&spec, dof).map_err(io)
-}
 
 /// A measurement set: joint values, measured tool positions (and orientations), times and sensor
 /// readings, in the robot's joint order.
@@ -619,7 +604,7 @@ pub fn compensate(
         }
         None => vec![0.0; dof],
     };
-    let state = crate::robot::state(time_min, temps)?;
+    let state = state(time_min, temps)?;
     let semantics = semantics_of(semantics, dof)?;
     let settings =
         RunSettings { semantics: semantics.clone(), accumulation, ik: thermokin_ik::Params::default(), start };

@@ -15,6 +15,7 @@ use thermokin_ik::{Goal, Params, Solution, Workspace};
 use thermokin_io::units::{joints_to_external, joints_to_internal, rotation_from_matrix};
 
 use crate::arrays::{Rows, output};
+use crate::convert::{profile_of, semantics_of, state};
 use crate::errors::{input, io, must_exist};
 
 /// A robot: its kinematic chain (same-orientation joint frames with their error parameters) and what a
@@ -55,25 +56,6 @@ impl PyRobot {
             .collect::<PyResult<Vec<_>>>()?;
         Ok((internal, rows.batch))
     }
-}
-
-/// The operating state of `time_min` (minutes of the warm-up) and `temps` (°C by sensor name; the
-/// `temp_` prefix added when left out).
-pub fn state(time_min: Option<f64>, temps: Option<HashMap<String, f64>>) -> PyResult<OperatingState> {
-    if let Some(t) = time_min
-        && !t.is_finite()
-    {
-        return Err(input(format!("time_min: {t} is not a time in minutes")));
-    }
-    let mut temperatures_c: Vec<(String, f64)> = Vec::new();
-    for (name, value) in temps.unwrap_or_default() {
-        if !value.is_finite() {
-            return Err(input(format!("temps[{name}]: {value} is not a temperature in °C")));
-        }
-        temperatures_c.push((thermokin_io::sensor_name(&name), value));
-    }
-    temperatures_c.sort_by(|a, b| a.0.cmp(&b.0));
-    Ok(OperatingState { time_min, temperatures_c, payload: None })
 }
 
 /// A 4×4 homogeneous matrix (mm) as a pose; the rotation block must be a rotation.
@@ -387,11 +369,11 @@ impl PyRobot {
         must_exist(&deformation)?;
         let table = thermokin_io::read_deviation_table_for(&deformation, dof).map_err(io)?;
         let table = match (profile, time_min) {
-            (Some(p), Some(t)) => crate::pipeline::profile_of(&p, dof)?.table_at(&table, t).map_err(input)?,
+            (Some(p), Some(t)) => profile_of(&p, dof)?.table_at(&table, t).map_err(input)?,
             (Some(_), None) => return Err(input("profile needs time_min (minutes)")),
             (None, _) => table,
         };
-        let chain = table.apply(self.chain(), &crate::pipeline::semantics_of(semantics, dof)?).map_err(input)?;
+        let chain = table.apply(self.chain(), &semantics_of(semantics, dof)?).map_err(input)?;
         let robot = self.model.robot().with_chain(chain).map_err(input)?;
         Ok(Self { model: self.model.clone().with_robot(robot).map_err(input)? })
     }

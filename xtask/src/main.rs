@@ -23,7 +23,8 @@ Tasks:
   tidy                        Check the unit boundary: no literal unit conversion (/ 1000.0, * 1000.0,
                               PI / 180, to_radians, to_degrees) in the libraries outside
                               crates/chain/src/units.rs (tests, benches, examples and doc comments
-                              excepted).";
+                              excepted); and no function over 100 lines in crates/*/src or
+                              python/src.";
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -319,8 +320,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
     // Readers sit below the algorithms: io builds chains, tables and measurement data (all in chain and
     // deform) and knows no identification, IK or compensation.
     ("thermokin-io", &["thermokin-chain", "thermokin-deform", "thermokin-urdf"]),
-    // The diagnosis converts its report units through io's one unit boundary.
-    ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform", "thermokin-io", "thermokin-urdf"]),
+    // Identification: the model of effects, its fit and identifiability, on the chain and the calibrated
+    // robot it identifies; no file format.
+    ("thermokin-identify", &["thermokin-chain", "thermokin-deform"]),
+    // The diagnosis stands on identification; it reads no file (the front ends do).
+    ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform", "thermokin-identify"]),
     // The compensation's writers put results in degrees through io's one unit boundary.
     (
         "thermokin-compensate",
@@ -348,6 +352,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-urdf",
             "thermokin-ik",
             "thermokin-compensate",
+            "thermokin-identify",
             "thermokin-diagnose",
         ],
     ),
@@ -356,8 +361,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
 /// File-format and CLI crates, allowed only where named.
 /// (`thermokin-paper`, `thermokin-compensate` and `thermokin-diagnose` see them only through `thermokin-io`.)
 const FORMAT_CRATES: &[(&str, &[&str])] = &[
-    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper", "thermokin-python"]),
-    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-diagnose", "thermokin-paper", "thermokin-python"]),
+    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-python"]),
+    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-python"]),
     ("clap", &[]),
 ];
 
@@ -452,26 +457,73 @@ fn library_sources(root: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
+/// The longest a function of the libraries and front ends may be, in lines from its signature to its
+/// closing brace: past it, split it by meaning.
+const MAX_FUNCTION_LINES: usize = 100;
+
+/// The functions of one source file's text longer than [`MAX_FUNCTION_LINES`]: (1-based line of the
+/// signature, name, lines). A function is an item `fn` (after `pub`, `const`, `async`, `unsafe`) whose
+/// body closes on a line holding only `}` at the signature's indentation, as rustfmt writes it.
+fn long_functions(text: &str) -> Vec<(usize, String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let code = line.trim_start();
+        let indent = &line[..line.len() - code.len()];
+        let mut rest = code;
+        for prefix in ["pub(crate) ", "pub(super) ", "pub ", "const ", "async ", "unsafe ", "extern \"C\" "] {
+            rest = rest.strip_prefix(prefix).unwrap_or(rest);
+        }
+        let Some(signature) = rest.strip_prefix("fn ") else { continue };
+        let name: String = signature.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+        // The body opens on the signature's last line; a declaration ends with `;` first.
+        let Some(open) = (i..lines.len()).find(|&k| lines[k].contains('{') || lines[k].trim_end().ends_with(';'))
+        else {
+            continue;
+        };
+        if !lines[open].contains('{') || lines[open].trim_end().ends_with('}') {
+            continue;
+        }
+        let closing = format!("{indent}}}");
+        if let Some(end) = (open + 1..lines.len()).find(|&k| lines[k].trim_end() == closing) {
+            let length = end - i + 1;
+            if length > MAX_FUNCTION_LINES {
+                out.push((i + 1, name, length));
+            }
+        }
+    }
+    out
+}
+
 fn tidy() -> Result<()> {
     let root = workspace_root();
     let mut bad = Vec::new();
+    let mut long = Vec::new();
     let files = library_sources(&root)?;
     for path in &files {
         let relative = path.strip_prefix(&root).unwrap_or(path);
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        for (line, name, length) in long_functions(&text) {
+            long.push(format!("{}:{line}: fn {name} has {length} lines", relative.display()));
+        }
         if relative == Path::new(UNITS_MODULE) {
             continue;
         }
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
         for (line, code) in stray_conversions(&text) {
             bad.push(format!("{}:{line}: {code}", relative.display()));
         }
     }
-    if bad.is_empty() {
-        println!("tidy: every unit conversion goes through {UNITS_MODULE} ({} files checked)", files.len());
-        Ok(())
-    } else {
+    if !bad.is_empty() {
         bail!("a unit converted outside {UNITS_MODULE} (call its functions instead):\n  {}", bad.join("\n  "))
     }
+    if !long.is_empty() {
+        bail!("functions longer than {MAX_FUNCTION_LINES} lines (split them by meaning):\n  {}", long.join("\n  "))
+    }
+    println!(
+        "tidy: every unit conversion goes through {UNITS_MODULE}, no function over {MAX_FUNCTION_LINES} lines ({} files checked)",
+        files.len()
+    );
+    Ok(())
 }
 
 #[cfg(test)]
@@ -479,6 +531,24 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::panic)]
 
     use std::collections::BTreeSet;
+
+    #[test]
+    fn a_long_function_is_caught_and_a_short_one_is_not() {
+        let body = |n: usize| (0..n).map(|i| format!("        let x{i} = {i};\n")).collect::<String>();
+        let long = format!(
+            "impl A {{\n    pub(crate) fn long(\n        a: u8,\n    ) -> u8 {{\n{}        a\n    }}\n}}\n",
+            body(100)
+        );
+        assert_eq!(super::long_functions(&long), vec![(2, "long".to_string(), 105)]);
+        let short = format!("fn short() {{\n{}}}\nfn decl();\nfn one() {{ 1 }}\n", body(90));
+        assert!(super::long_functions(&short).is_empty());
+        // The workspace itself holds none.
+        let root = super::workspace_root();
+        for path in super::library_sources(&root).unwrap() {
+            let text = std::fs::read_to_string(&path).unwrap();
+            assert!(super::long_functions(&text).is_empty(), "{}: {:?}", path.display(), super::long_functions(&text));
+        }
+    }
 
     #[test]
     fn the_unit_boundary_holds_and_a_stray_conversion_is_caught() {

@@ -6,7 +6,8 @@ use std::path::Path;
 use anyhow::anyhow;
 use plotters::prelude::*;
 use thermokin_chain::Robot;
-use thermokin_diagnose::{Config, FoldGrouping, FrameMode, HiddenEffect, Report, SimulationConfig, ToolMode};
+use thermokin_diagnose::{Config, FoldGrouping, HiddenEffect, Report, SimulationConfig};
+use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{
     JointUnits, MeasurementFormat, read_measurements_joined, read_measurements_with, write_atomic, write_atomic_with,
     write_measurements,

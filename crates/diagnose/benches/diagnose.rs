@@ -3,9 +3,8 @@
 #![allow(missing_docs, clippy::unwrap_used)] // criterion_group! makes an undocumented fn; benches unwrap.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use thermokin_diagnose::{
-    Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, Validation, diagnose, simulate,
-};
+use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, Validation, diagnose, simulate};
+use thermokin_identify::{DriftShape, Effect, JointIndex};
 
 fn benches(c: &mut Criterion) {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");

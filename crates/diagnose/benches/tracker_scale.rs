@@ -8,7 +8,8 @@
 
 use std::time::Instant;
 
-use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
+use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, simulate};
+use thermokin_identify::{DriftShape, Effect, JointIndex};
 
 fn main() {
     // `cargo bench` passes `--bench`; anything else (`cargo test --benches`) runs a tiny size only.

@@ -17,55 +17,24 @@
 //!   else drifted).
 //! - **Nuisance.** A parameter whose estimate would move with one of the always-estimated blocks'
 //!   (tracker registration, unknown tool point) — correlation of the two estimates above
-//!   [`crate::NEARLY_DEPENDENT`], the report's criterion for a nearly unidentifiable pair, at which each
+//!   [`NEARLY_DEPENDENT`], the report's criterion for a nearly unidentifiable pair, at which each
 //!   one's standard deviation is inflated 7× — is a re-description of the frame, not an effect of the
 //!   robot. (Exact equivalences are not refused here: the identifiability gate fixes those parameters
 //!   and the block is scored with the rest.)
 
 use faer::linalg::solvers::DenseSolveCore;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use serde::Serialize;
-use thermokin_chain::{JointKind, Robot};
-use thermokin_io::units;
+use thermokin_chain::{Dataset, JointKind, Robot, units};
+use thermokin_identify::{DriftShape, Effect, NEARLY_DEPENDENT, identifiable, max_gravity_torque};
 
-use crate::fit::{identifiable, residuals};
-use crate::model::{DriftShape, Effect, gravity_torques};
-use crate::validation::Ctx;
-use crate::{Dataset, DiagnoseError, NEARLY_DEPENDENT};
-
-/// The thresholds of eligibility ([`crate::Config::eligibility`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Eligibility {
-    /// Fraction of a joint's travel (between its limits; a revolution without limits) the data must
-    /// cover for an effect that is a function of the joint's angle — and of the gravity-torque range for
-    /// a compliance. Default 0.25.
-    pub min_travel_fraction: f64,
-    /// Temperature span (K) a per-kelvin drift needs. Default 2 K.
-    pub min_temperature_span_k: f64,
-}
-
-impl Default for Eligibility {
-    fn default() -> Self {
-        Self { min_travel_fraction: 0.25, min_temperature_span_k: 2.0 }
-    }
-}
-
-/// A candidate the data cannot pin down: not selectable, reported with what to measure.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Refusal {
-    /// The candidate's label.
-    pub effect: String,
-    /// Why the data cannot pin it down.
-    pub reason: String,
-    /// What to measure so that they could.
-    pub remedy: String,
-}
+use crate::config::Eligibility;
+use crate::error::DiagnoseError;
+use crate::report::Refusal;
+use crate::scoring::Scorer;
 
 /// Splits `candidates` into the selectable ones and the refused ones. `nuisance` are the always-estimated
 /// blocks.
 pub(crate) fn check(
-    ctx: &Ctx<'_>,
+    scorer: &Scorer<'_>,
     nuisance: &[Effect],
     candidates: &[Effect],
     rules: &Eligibility,
@@ -73,9 +42,9 @@ pub(crate) fn check(
     let mut eligible = Vec::new();
     let mut refused = Vec::new();
     for &c in candidates {
-        let verdict = match coverage(ctx, c, rules) {
+        let verdict = match coverage(scorer, c, rules) {
             Some(r) => Some(r),
-            None => nuisance_trade(ctx, nuisance, c)?,
+            None => nuisance_trade(scorer, nuisance, c)?,
         };
         match verdict {
             Some(r) => refused.push(r),
@@ -106,13 +75,13 @@ pub(crate) fn needed_arc(travel: f64, cyclic: bool, rules: &Eligibility) -> f64 
     if cyclic { std::f64::consts::PI.min(travel) } else { rules.min_travel_fraction * travel }
 }
 
-fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
-    let robot = ctx.robot;
+fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
+    let robot = scorer.robot;
     match e {
         Effect::JointScale(j) | Effect::Periodic(j)
             if robot.chain().joints()[j.index()].kind == JointKind::Revolute =>
         {
-            let (lo, hi) = arc(ctx.data, j.index());
+            let (lo, hi) = arc(scorer.data, j.index());
             let t = travel(robot, j.index());
             let need = needed_arc(t, matches!(e, Effect::Periodic(_)), rules);
             (hi - lo < need).then(|| Refusal {
@@ -136,8 +105,8 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
         }
         Effect::JointCompliance(j) => {
             let j = j.index();
-            let (lo, hi) = span(ctx.pre.torques.iter().map(|t| t[j]));
-            let bound = torque_bound(robot, j);
+            let (lo, hi) = span(scorer.terms.torques.iter().map(|t| t[j]));
+            let bound = max_gravity_torque(robot, j);
             if bound <= 0.0 {
                 return None; // No gravity torque: the identifiability gate says it moves nothing.
             }
@@ -158,7 +127,7 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
         }
         Effect::ThermalDrift(j, DriftShape::Temperature) => {
             let j = j.index();
-            let (lo, hi) = span(ctx.pre.rise.iter().map(|r| r[j]));
+            let (lo, hi) = span(scorer.terms.rise.iter().map(|r| r[j]));
             (hi - lo < rules.min_temperature_span_k).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(
@@ -177,41 +146,20 @@ fn coverage(ctx: &Ctx<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
     }
 }
 
-/// The largest gravity torque about joint `j` over its robot's joint space (2,000 seeded configurations
-/// within the limits, ±π without), N·m.
-pub(crate) fn torque_bound(robot: &Robot, j: usize) -> f64 {
-    let mut rng = ChaCha8Rng::seed_from_u64(0x7a0e);
-    let joints = robot.chain().joints();
-    (0..2000)
-        .map(|_| {
-            let q: Vec<f64> = joints
-                .iter()
-                .map(|jt| {
-                    let (lo, hi) =
-                        jt.limits.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| (l.lower, l.upper));
-                    rng.random_range(lo..=hi)
-                })
-                .collect();
-            gravity_torques(robot.chain(), robot.masses(), &q)[j].abs()
-        })
-        .fold(0.0, f64::max)
-}
-
 /// The refusal of a candidate one of whose identifiable parameters is estimated in a nearly
 /// unidentifiable pair with a parameter of the always-estimated blocks: correlation of the two estimates
 /// above [`NEARLY_DEPENDENT`] (the report's own criterion for naming a pair), linearised at the start on
 /// all data.
-fn nuisance_trade(ctx: &Ctx<'_>, nuisance: &[Effect], c: Effect) -> Result<Option<Refusal>, DiagnoseError> {
+fn nuisance_trade(scorer: &Scorer<'_>, nuisance: &[Effect], c: Effect) -> Result<Option<Refusal>, DiagnoseError> {
     if nuisance.is_empty() {
         return Ok(None);
     }
-    let all: Vec<usize> = (0..ctx.data.len()).collect();
     let mut effects = nuisance.to_vec();
     effects.push(c);
-    let model = ctx.model(&effects, &all)?;
-    let (_, jac) = residuals(ctx.robot, &model, &model.initial(), ctx.data, &all, &ctx.pre, true)?;
+    let model = scorer.model(&effects, &scorer.all())?;
+    let jac = scorer.jacobian_at_start(&model)?;
     let names = model.parameter_names();
-    let (free, _) = identifiable(&jac, &names, &vec![true; model.len()]);
+    let free = identifiable(&jac, &vec![true; model.len()]).free;
     let cols: Vec<usize> = (0..model.len()).filter(|&k| free[k]).collect();
     let start = model.offsets()[model.offsets().len() - 1];
     let m = jac.nrows();

@@ -4,7 +4,8 @@
 
 use std::fmt;
 
-use crate::report::{Report, Stats};
+use crate::report::Report;
+use crate::stats::Stats;
 
 /// The text rendering of a report ([`Report::text`]): held-out errors (nested, hold-out set, the
 /// selection's own), the effects with their parameters, frames, verdict, where the residuals lie, and

@@ -1,53 +1,34 @@
 //! What the diagnosis reports: held-out statistics, the additive and leave-one-out tables (the DLR
-//! format), each effect with its parameters, identifiability, and where the residuals lie.
+//! format), each effect with its parameters, identifiability, refusals, and where the residuals lie.
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
-use thermokin_chain::Robot;
+use thermokin_chain::{Dataset, Robot};
+use thermokin_identify::{CorrelatedPair, FixedParameter, Model, Observability, PoseTerms, norms, residuals};
 
-use crate::fit::{FixedParameter, Observability, residuals};
-use crate::model::{Model, Pre};
-use crate::{Dataset, DiagnoseError};
+use crate::error::DiagnoseError;
+use crate::regions::{arm_branches, workspace_quadrants};
+use crate::stats::Stats;
 
-/// Held-out error statistics of the 3-D position residual, mm.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Stats {
-    /// Mean |e|.
-    pub heldout_mean_mm: f64,
-    /// RMS |e|.
-    pub heldout_rms_mm: f64,
-    /// Max |e|.
-    pub heldout_max_mm: f64,
-    /// Median |e|: robust to a few wild poses.
-    pub heldout_median_mm: f64,
-    /// 95th percentile of |e| (nearest rank).
-    pub heldout_p95_mm: f64,
-    /// Held-out residuals counted.
-    pub heldout_count: usize,
+/// A candidate the data cannot pin down: not selectable, reported with what to measure.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Refusal {
+    /// The candidate's label.
+    pub effect: String,
+    /// Why the data cannot pin it down.
+    pub reason: String,
+    /// What to measure so that they could.
+    pub remedy: String,
 }
 
-impl Stats {
-    pub(crate) fn of(norms: &[f64]) -> Stats {
-        let n = norms.len().max(1) as f64;
-        let mut sorted = norms.to_vec();
-        sorted.sort_by(f64::total_cmp);
-        let rank = |p: f64| -> f64 {
-            if sorted.is_empty() {
-                return 0.0;
-            }
-            let k = ((p * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
-            sorted[k - 1]
-        };
-        Stats {
-            heldout_mean_mm: norms.iter().sum::<f64>() / n,
-            heldout_rms_mm: (norms.iter().map(|x| x * x).sum::<f64>() / n).sqrt(),
-            heldout_max_mm: norms.iter().copied().fold(0.0, f64::max),
-            heldout_median_mm: rank(0.5),
-            heldout_p95_mm: rank(0.95),
-            heldout_count: norms.len(),
-        }
-    }
+/// A candidate skipped because it adds nothing identifiable to the model.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Skipped {
+    /// The candidate's label.
+    pub effect: String,
+    /// Why: the block a parameter duplicates, or that it moves nothing.
+    pub reason: String,
 }
 
 /// A row of the additive or leave-one-out table.
@@ -107,15 +88,15 @@ pub struct Identifiability {
     pub observability: Option<Observability>,
     /// Parameters fixed as unidentifiable, with the reason.
     pub fixed: Vec<FixedParameter>,
-    /// Candidates skipped because they add nothing identifiable to the model: (candidate, reason).
-    pub skipped_candidates: Vec<(String, String)>,
+    /// Candidates skipped because they add nothing identifiable to the model.
+    pub skipped_candidates: Vec<Skipped>,
     /// Candidates the data cannot pin down (too little of the joint's travel, of the load, of the
     /// temperature; a near re-description of the tracker frame or probe): not selectable, each with what
-    /// to measure ([`crate::Eligibility`]).
-    pub not_identifiable: Vec<crate::Refusal>,
+    /// to measure ([`crate::config::Eligibility`]).
+    pub not_identifiable: Vec<Refusal>,
     /// Nearly unidentifiable combinations of the final model: pairs of parameters whose estimates are
     /// correlated above 0.99 (their combination is determined, not each).
-    pub correlated: Vec<crate::fit::CorrelatedPair>,
+    pub correlated: Vec<CorrelatedPair>,
 }
 
 /// Residual RMS broken down by groups of measurements, mm.
@@ -252,16 +233,18 @@ pub struct FittedFrames {
     pub tool_rotation_deg: Option<[f64; 3]>,
 }
 
+/// Where the residuals of `model` at `theta` lie on `data`: RMS by quartile of each joint's angle, by
+/// workspace quadrant and arm branch ([`crate::regions`]), by time quartile, and per measurement.
 pub(crate) fn breakdown(
     robot: &Robot,
     data: &Dataset,
     model: &Model,
     theta: &[f64],
-    pre: &Pre,
+    terms: &PoseTerms,
 ) -> Result<Breakdown, DiagnoseError> {
     let all: Vec<usize> = (0..data.len()).collect();
-    let (r, _) = residuals(robot, model, theta, data, &all, pre, false)?;
-    let e: Vec<f64> = crate::fit::norms(&r, pre.stride()).iter().map(|x| x * x).collect();
+    let r = residuals(robot, model, theta, data, &all, terms)?;
+    let e: Vec<f64> = norms(&r, terms.stride()).iter().map(|x| x * x).collect();
     let rms_of = |sel: &[usize]| -> f64 {
         if sel.is_empty() { f64::NAN } else { (sel.iter().map(|&i| e[i]).sum::<f64>() / sel.len() as f64).sqrt() }
     };
@@ -273,22 +256,11 @@ pub(crate) fn breakdown(
     };
     let n = robot.chain().dof();
     let by_joint = (0..n).map(|j| quartiles(&|i| data.measurements[i].q[j])).collect();
-    let median = |v: &mut Vec<f64>| -> f64 {
-        v.sort_by(f64::total_cmp);
-        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    let region = |labels: &[usize]| -> [f64; 4] {
+        [0, 1, 2, 3].map(|k| rms_of(&all.iter().copied().filter(|&i| labels[i] == k).collect::<Vec<_>>()))
     };
-    let reach: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.xy().norm()).collect();
-    let height: Vec<f64> = data.measurements.iter().map(|m| m.position_mm.z).collect();
-    let (mr, mh) = (median(&mut reach.clone()), median(&mut height.clone()));
-    let region = |f: &dyn Fn(usize) -> usize| -> [f64; 4] {
-        [0, 1, 2, 3].map(|k| rms_of(&all.iter().copied().filter(|&i| f(i) == k).collect::<Vec<_>>()))
-    };
-    let by_workspace_region = region(&|i| usize::from(reach[i] > mr) * 2 + usize::from(height[i] > mh));
-    let elbow: Vec<f64> = data.measurements.iter().map(|m| m.q.get(2).copied().unwrap_or(0.0)).collect();
-    let me = median(&mut elbow.clone());
-    let by_joint_space_region = region(&|i| {
-        usize::from(elbow[i] > me) * 2 + usize::from(data.measurements[i].q.get(4).copied().unwrap_or(0.0) > 0.0)
-    });
+    let by_workspace_region = region(&workspace_quadrants(data));
+    let by_joint_space_region = region(&arm_branches(data));
     let by_time =
         if data.time_span() > 0.0 { quartiles(&|i| data.measurements[i].time_min).to_vec() } else { Vec::new() };
     let per_measurement_mm = e.iter().map(|x| x.sqrt()).collect();

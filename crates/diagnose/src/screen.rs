@@ -27,29 +27,12 @@ use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
 use faer::{Accum, Mat, Par};
 
-use crate::DiagnoseError;
-use crate::fit::residuals;
-use crate::model::Effect;
-use crate::validation::Ctx;
+use thermokin_identify::{Effect, residuals_and_jacobian};
 
-/// How many candidates a forward step fits in full after the linearised ranking.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
-pub struct Screen {
-    /// Candidates kept for the full scoring, best linearised held-out error first; 0 keeps every
-    /// candidate (the exhaustive selection, for comparisons).
-    pub keep: usize,
-}
-
-impl Default for Screen {
-    /// Four. Measured over the whole diagnosis test suite with eight kept (391 forward steps on simulated,
-    /// Rokae and UR10 sets): the candidate finally chosen — after the step's parsimony, which prefers a
-    /// smaller block within reach of the best — stood at linearised rank 1 in 329 steps, 2 in 44, 3 in 17,
-    /// 4 in one, never lower (9 were exponential drifts, scored outside the screen). Four keeps them all;
-    /// three would have changed one step.
-    fn default() -> Self {
-        Self { keep: 4 }
-    }
-}
+use crate::config::Screen;
+use crate::error::DiagnoseError;
+use crate::plausibility::Implausible;
+use crate::scoring::Scorer;
 
 /// Ridge on the scaled normal equations, relative to their unit diagonal: keeps a candidate that
 /// duplicates a current column (no gain, singular equations) solvable without moving the others.
@@ -63,37 +46,32 @@ pub(crate) struct Shortlist {
     /// The candidates to fit in full, best linearised held-out error first.
     pub(crate) keep: Vec<Effect>,
     /// Candidates whose values one linearised step on all data puts beyond physical bounds, with the
-    /// reason: refused without a full fit, which would run away (a block trading with the probe takes a
+    /// value: refused without a full fit, which would run away (a block trading with the probe takes a
     /// hundred LM iterations per fold to reach 16 mm on the UR10) and be refused.
-    pub(crate) runaway: Vec<(Effect, String)>,
+    pub(crate) runaway: Vec<(Effect, Implausible)>,
 }
 
 /// The candidates to fit in full: all when `keep` is 0 or covers them, otherwise the `keep` with the
 /// lowest linearised held-out sum of squares over the selection's folds, after refusing those whose
-/// linearised values `implausible` (the selection's [`crate::Plausibility`] test) rejects.
+/// linearised values `implausible` (the selection's [`crate::config::Plausibility`] test) rejects.
 pub(crate) fn shortlist(
-    ctx: &Ctx<'_>,
+    scorer: &Scorer<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
     screen: Screen,
-    implausible: &(dyn Fn(Effect, &[f64]) -> Option<String> + Sync),
+    implausible: &(dyn Fn(Effect, &[f64]) -> Option<Implausible> + Sync),
 ) -> Result<Shortlist, DiagnoseError> {
     if screen.keep == 0 || candidates.len() <= screen.keep {
         return Ok(Shortlist { keep: candidates.to_vec(), runaway: Vec::new() });
     }
-    let (predicted, values) = linearised_heldout(ctx, effects, theta, candidates)?;
+    let (predicted, values) = linearised_heldout(scorer, effects, theta, candidates)?;
     let mut runaway = Vec::new();
     let mut order: Vec<usize> = Vec::new();
     for (k, (&c, v)) in candidates.iter().zip(&values).enumerate() {
         match implausible(c, v) {
-            // "its translation fitted at 575 mm (…)" → "one linearised step on all data puts its translation
-            // at 575 mm (…)": a prediction, not a fit — far off where the block trades with another.
-            Some(reason) => {
-                let reason =
-                    format!("one linearised step on all data puts {}", reason.replacen(" fitted at ", " at ", 1));
-                runaway.push((c, reason));
-            }
+            // A prediction, not a fit — far off where the block trades with another.
+            Some(why) => runaway.push((c, why)),
             None => order.push(k),
         }
     }
@@ -105,18 +83,18 @@ pub(crate) fn shortlist(
 /// fit on each fold's training part predicts on its test part, and its own values after that step on all
 /// data (internal units; zeros where a column carries nothing).
 fn linearised_heldout(
-    ctx: &Ctx<'_>,
+    scorer: &Scorer<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
 ) -> Result<(Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
-    let all: Vec<usize> = (0..ctx.data.len()).collect();
+    let all = scorer.all();
     let mut joint_model: Vec<Effect> = effects.to_vec();
     joint_model.extend_from_slice(candidates);
-    let model = ctx.model(&joint_model, &all)?;
+    let model = scorer.model(&joint_model, &all)?;
     let mut at = model.initial();
     at[..theta.len()].copy_from_slice(theta);
-    let (r, mut jac) = residuals(ctx.robot, &model, &at, ctx.data, &all, &ctx.pre, true)?;
+    let (r, mut jac) = residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, &all, &scorer.terms)?;
     // Unit columns (mm, radians and minutes weigh alike); negligible columns dropped. Scaled in place and
     // copied only when a column is dropped: with every candidate's columns (~200 on a six-joint arm with
     // time and temperatures) the Jacobian of 12,000 poses is 60 MB, the largest matrix of a diagnosis.
@@ -156,9 +134,9 @@ fn linearised_heldout(
             v
         })
         .collect();
-    let stride = ctx.pre.stride();
+    let stride = scorer.terms.stride();
     let mut sse = vec![0.0; candidates.len()];
-    for (_, test) in &ctx.folds {
+    for (_, test) in &scorer.folds {
         if test.is_empty() {
             continue;
         }

@@ -1,14 +1,12 @@
 //! Measurement sets generated from hidden effects, to check that the diagnosis finds what it is not told.
 
-use self::rand_distr_free::normal;
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use thermokin_chain::{Dataset, Measurement, Robot};
+use thermokin_identify::{DriftShape, Effect, IdentifyError, Model, PoseInputs, PoseTerms, normal};
 
-use thermokin_chain::Robot;
-
-use crate::model::{Effect, Model, prepare};
-use crate::{Dataset, DiagnoseError, Measurement};
+use crate::error::DiagnoseError;
 
 /// A hidden effect with its parameter values (internal units: mm, radians, minutes, rad per N·m).
 #[derive(Clone, Debug, PartialEq)]
@@ -27,11 +25,12 @@ impl HiddenEffect {
             values.extend([0.0; 3]);
         }
         if values.len() != effect.len() {
-            return Err(DiagnoseError::ParameterCount {
+            return Err(IdentifyError::ParameterCount {
                 effect: effect.label(),
                 expected: effect.len(),
                 got: values.len(),
-            });
+            }
+            .into());
         }
         let values = values.iter().enumerate().map(|(k, &v)| effect.from_report_units(k, v)).collect();
         Ok(Self { effect, values })
@@ -103,7 +102,7 @@ impl HiddenEffect {
                 (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
-                (Effect::ThermalDrift(_, crate::DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
+                (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
                 (_, 0..=2) => rng.random_range(-0.4..0.4),
                 _ => rng.random_range(-0.02..0.02),
             })
@@ -207,17 +206,19 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
     let mut theta = model.initial();
     for (h, &o) in hidden.iter().zip(model.offsets()) {
         if h.values.len() != h.effect.len() {
-            return Err(DiagnoseError::ParameterCount {
+            return Err(IdentifyError::ParameterCount {
                 effect: h.effect.label(),
                 expected: h.effect.len(),
                 got: h.values.len(),
-            });
+            }
+            .into());
         }
         theta[o..o + h.values.len()].copy_from_slice(&h.values);
     }
-    let pre = prepare(robot, &data, 0.0);
+    let terms = PoseTerms::of(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let (p, rot) = model.predict(robot, &theta, m, &pre.rise[i], &pre.torques[i], None, None, &mut None)?;
+        let inputs = PoseInputs { torques: &terms.torques[i], temp_rise: &terms.rise[i], sin_cos: None };
+        let (p, rot) = model.predict(robot, &theta, m, &inputs, None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
         if let Some(sigma) = config.orientation_noise_rad {
@@ -229,14 +230,4 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
         }
     }
     Ok(data)
-}
-
-/// A tiny standard-normal sampler (Box–Muller), to avoid a dependency for one function.
-mod rand_distr_free {
-    use rand::Rng;
-    pub fn normal(rng: &mut impl Rng) -> f64 {
-        let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
-        let u2: f64 = rng.random_range(0.0..1.0);
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
 }

@@ -189,24 +189,9 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
     Ok(model.robot().clone())
 }
 
-// Long on purpose (~160 lines): every error of a robot file is located here (line, key, row) from the
-// same parsed spans; the per-part conversions are already separate functions.
 /// Parses robot TOML text with every correction it carries; `path` is used in error messages.
 pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoError> {
-    let file: RobotFile = toml::from_str(text).map_err(|e| {
-        let line = e.span().map(|s| line_of(text, s.start));
-        let message = e.message().to_string();
-        let names_a_key = ["unknown field", "missing field", "duplicate key", "duplicate field"].iter().any(|p| message.starts_with(p));
-        let field = if names_a_key { key_in(&message).unwrap_or_else(|| "toml".to_string()) } else { "toml".to_string() };
-        // A key in other units than the file's: say which units the file takes.
-        let other_units = ["_m", "_rad", "_in", "_meters", "_radians", "_inches"];
-        let hint = if message.starts_with("unknown field") && other_units.iter().any(|u| field.ends_with(u)) {
-            " (robot files are in millimetres and degrees: offset_mm, translation_mm, rotation_xyz_deg, limits in degrees)"
-        } else {
-            ""
-        };
-        IoError::input(path, line, field, format!("{message}{hint}"))
-    })?;
+    let file: RobotFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
     let _ = &file.description;
     let name = file
         .name
@@ -225,74 +210,7 @@ pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoE
                     "[[dh]] rows need convention = \"dh\" or \"mdh\"",
                 ));
             }
-            if file.joint.is_empty() {
-                return Err(IoError::input(path, None, "joint", "no [[joint]] rows"));
-            }
-            let mut joints = Vec::with_capacity(file.joint.len());
-            let mut masses = Vec::with_capacity(file.joint.len());
-            let mut ratings = Vec::with_capacity(file.joint.len());
-            let mut names = std::collections::HashSet::new();
-            for (i, spanned) in file.joint.iter().enumerate() {
-                let line = at(spanned.span());
-                let spec = spanned.get_ref();
-                let field = |f: &str| format!("joint[{}].{f}", i + 1);
-                if let Some(n) = &spec.name
-                    && !names.insert(n.clone())
-                {
-                    return Err(IoError::input(path, line, field("name"), format!("duplicate joint name `{n}`")));
-                }
-                let axis = axis(&spec.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
-                finite(path, line, &field("offset_mm"), &spec.offset_mm)?;
-                finite(path, line, &field("zero"), &[spec.zero])?;
-                let name = spec.name.clone().unwrap_or_else(|| format!("A{}", i + 1));
-                let offset = Vector3::from(spec.offset_mm);
-                let mut joint = match spec.kind {
-                    KindSpec::Revolute => Joint::revolute(name, offset, axis),
-                    KindSpec::Prismatic => Joint::prismatic(name, offset, axis),
-                };
-                let kind = joint.kind;
-                joint.zero = units::joint_value_in(kind, spec.zero);
-                joint.limits = limits(path, line, &field("limits"), spec.limits, kind)?;
-                if let Some(e) = spec.error {
-                    finite(path, line, &field("error"), &e)?;
-                    joint.error = units::error_params_in(e);
-                }
-                let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, IoError> {
-                    match v {
-                        Some(x) if !(x.is_finite() && x > 0.0) => {
-                            Err(IoError::input(path, line, field(key), format!("must be positive, got {x}")))
-                        }
-                        other => Ok(other),
-                    }
-                };
-                ratings.push(JointRatings {
-                    velocity: positive("max_velocity", spec.max_velocity)?.map(|v| units::joint_value_in(kind, v)),
-                    effort: positive("max_effort", spec.max_effort)?,
-                });
-                joints.push(joint);
-                masses.push(match (spec.mass_kg, spec.com_mm) {
-                    (None, None) => None,
-                    (Some(m), com) => {
-                        let com = com.unwrap_or_default();
-                        finite(path, line, &field("com_mm"), &com)?;
-                        if !(m.is_finite() && m >= 0.0) {
-                            return Err(IoError::input(
-                                path,
-                                line,
-                                field("mass_kg"),
-                                format!("must be a finite mass ≥ 0, got {m}"),
-                            ));
-                        }
-                        Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) })
-                    }
-                    (None, Some(_)) => {
-                        return Err(IoError::input(path, line, field("com_mm"), "com_mm needs mass_kg"));
-                    }
-                });
-            }
-            let chain =
-                Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
-            (chain, masses, ratings)
+            extended_chain(path, text, &file.joint, base, tool)?
         }
         conv @ (Convention::Dh | Convention::Mdh) => {
             if !file.joint.is_empty() {
@@ -303,52 +221,164 @@ pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoE
                     "[[joint]] rows need convention = \"extended\"",
                 ));
             }
-            if file.dh.is_empty() {
-                return Err(IoError::input(path, None, "dh", "no [[dh]] rows"));
-            }
-            let mut rows = Vec::with_capacity(file.dh.len());
-            for (i, spanned) in file.dh.iter().enumerate() {
-                let line = at(spanned.span());
-                let s = spanned.get_ref();
-                let field = |f: &str| format!("dh[{}].{f}", i + 1);
-                finite(
-                    path,
-                    line,
-                    &field("a_mm, alpha_deg, d_mm, theta_deg"),
-                    &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg],
-                )?;
-                let kind = match s.kind {
-                    KindSpec::Revolute => JointKind::Revolute,
-                    KindSpec::Prismatic => JointKind::Prismatic,
-                };
-                rows.push(DhRow {
-                    name: s.name.clone().unwrap_or_else(|| format!("A{}", i + 1)),
-                    a: s.a_mm,
-                    alpha: units::radians(s.alpha_deg),
-                    d: s.d_mm,
-                    theta: units::radians(s.theta_deg),
-                    kind,
-                    limits: limits(path, line, &field("limits"), s.limits, kind)?,
-                });
-            }
-            let convention = if conv == Convention::Dh { DhConvention::Classic } else { DhConvention::Modified };
-            if !base.error.is_zero() || !tool.error.is_zero() {
-                return Err(IoError::input(
-                    path,
-                    None,
-                    "error",
-                    "DH tables take error parameters only after conversion",
-                ));
-            }
-            let table = DhTable { convention, rows, base: base.nominal(), tool: tool.nominal() };
-            let n = table.dof();
-            let chain = table.to_extended().map_err(|e| IoError::input(path, None, "dh", e.to_string()))?;
-            (chain, vec![None; n], vec![JointRatings::default(); n])
+            dh_chain(path, text, &file.dh, conv, base, tool)?
         }
     };
     let described = |e: thermokin_chain::ChainError| IoError::input(path, None, "joint", e.to_string());
     let robot = Robot::new(name, chain).with_masses(masses).and_then(|r| r.with_ratings(ratings)).map_err(described)?;
     corrections(path, text, &file, robot)
+}
+
+/// A TOML syntax or schema error located: the line, the key it names, and for a key in other units
+/// than the file's, which units the file takes.
+fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> IoError {
+    let line = e.span().map(|s| line_of(text, s.start));
+    let message = e.message().to_string();
+    let names_a_key =
+        ["unknown field", "missing field", "duplicate key", "duplicate field"].iter().any(|p| message.starts_with(p));
+    let field = if names_a_key { key_in(&message).unwrap_or_else(|| "toml".to_string()) } else { "toml".to_string() };
+    let other_units = ["_m", "_rad", "_in", "_meters", "_radians", "_inches"];
+    let hint = if message.starts_with("unknown field") && other_units.iter().any(|u| field.ends_with(u)) {
+        " (robot files are in millimetres and degrees: offset_mm, translation_mm, rotation_xyz_deg, limits in degrees)"
+    } else {
+        ""
+    };
+    IoError::input(path, line, field, format!("{message}{hint}"))
+}
+
+/// What a robot file's rows give besides the chain: each joint's link mass and ratings.
+type ChainParts = (Chain, Vec<Option<LinkMass>>, Vec<JointRatings>);
+
+/// The chain of an extended table's `[[joint]]` rows, each row's errors located.
+fn extended_chain(
+    path: &Path,
+    text: &str,
+    rows: &[Spanned<JointSpec>],
+    base: FixedRow,
+    tool: FixedRow,
+) -> Result<ChainParts, IoError> {
+    if rows.is_empty() {
+        return Err(IoError::input(path, None, "joint", "no [[joint]] rows"));
+    }
+    let mut joints = Vec::with_capacity(rows.len());
+    let mut masses = Vec::with_capacity(rows.len());
+    let mut ratings = Vec::with_capacity(rows.len());
+    let mut names = std::collections::HashSet::new();
+    for (i, spanned) in rows.iter().enumerate() {
+        let line = Some(line_of(text, spanned.span().start));
+        let spec = spanned.get_ref();
+        if let Some(n) = &spec.name
+            && !names.insert(n.clone())
+        {
+            let field = format!("joint[{}].name", i + 1);
+            return Err(IoError::input(path, line, field, format!("duplicate joint name `{n}`")));
+        }
+        let (joint, rating, mass) = extended_joint(path, line, i, spec)?;
+        joints.push(joint);
+        ratings.push(rating);
+        masses.push(mass);
+    }
+    let chain = Chain::new(base, joints, tool).map_err(|e| IoError::input(path, None, "joint", e.to_string()))?;
+    Ok((chain, masses, ratings))
+}
+
+/// One `[[joint]]` row (the `i`-th, at `line`): the joint, its ratings and its link mass.
+fn extended_joint(
+    path: &Path,
+    line: Option<usize>,
+    i: usize,
+    spec: &JointSpec,
+) -> Result<(Joint, JointRatings, Option<LinkMass>), IoError> {
+    let field = |f: &str| format!("joint[{}].{f}", i + 1);
+    let axis = axis(&spec.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
+    finite(path, line, &field("offset_mm"), &spec.offset_mm)?;
+    finite(path, line, &field("zero"), &[spec.zero])?;
+    let name = spec.name.clone().unwrap_or_else(|| format!("A{}", i + 1));
+    let offset = Vector3::from(spec.offset_mm);
+    let mut joint = match spec.kind {
+        KindSpec::Revolute => Joint::revolute(name, offset, axis),
+        KindSpec::Prismatic => Joint::prismatic(name, offset, axis),
+    };
+    let kind = joint.kind;
+    joint.zero = units::joint_value_in(kind, spec.zero);
+    joint.limits = limits(path, line, &field("limits"), spec.limits, kind)?;
+    if let Some(e) = spec.error {
+        finite(path, line, &field("error"), &e)?;
+        joint.error = units::error_params_in(e);
+    }
+    let positive = |key: &str, v: Option<f64>| -> Result<Option<f64>, IoError> {
+        match v {
+            Some(x) if !(x.is_finite() && x > 0.0) => {
+                Err(IoError::input(path, line, field(key), format!("must be positive, got {x}")))
+            }
+            other => Ok(other),
+        }
+    };
+    let rating = JointRatings {
+        velocity: positive("max_velocity", spec.max_velocity)?.map(|v| units::joint_value_in(kind, v)),
+        effort: positive("max_effort", spec.max_effort)?,
+    };
+    let mass = match (spec.mass_kg, spec.com_mm) {
+        (None, None) => None,
+        (Some(m), com) => {
+            let com = com.unwrap_or_default();
+            finite(path, line, &field("com_mm"), &com)?;
+            if !(m.is_finite() && m >= 0.0) {
+                return Err(IoError::input(
+                    path,
+                    line,
+                    field("mass_kg"),
+                    format!("must be a finite mass ≥ 0, got {m}"),
+                ));
+            }
+            Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) })
+        }
+        (None, Some(_)) => return Err(IoError::input(path, line, field("com_mm"), "com_mm needs mass_kg")),
+    };
+    Ok((joint, rating, mass))
+}
+
+/// The chain of a classic or modified DH table's `[[dh]]` rows (converted exactly); DH rows carry no
+/// masses or ratings.
+fn dh_chain(
+    path: &Path,
+    text: &str,
+    dh: &[Spanned<DhSpec>],
+    conv: Convention,
+    base: FixedRow,
+    tool: FixedRow,
+) -> Result<ChainParts, IoError> {
+    if dh.is_empty() {
+        return Err(IoError::input(path, None, "dh", "no [[dh]] rows"));
+    }
+    let mut rows = Vec::with_capacity(dh.len());
+    for (i, spanned) in dh.iter().enumerate() {
+        let line = Some(line_of(text, spanned.span().start));
+        let s = spanned.get_ref();
+        let field = |f: &str| format!("dh[{}].{f}", i + 1);
+        finite(path, line, &field("a_mm, alpha_deg, d_mm, theta_deg"), &[s.a_mm, s.alpha_deg, s.d_mm, s.theta_deg])?;
+        let kind = match s.kind {
+            KindSpec::Revolute => JointKind::Revolute,
+            KindSpec::Prismatic => JointKind::Prismatic,
+        };
+        rows.push(DhRow {
+            name: s.name.clone().unwrap_or_else(|| format!("A{}", i + 1)),
+            a: s.a_mm,
+            alpha: units::radians(s.alpha_deg),
+            d: s.d_mm,
+            theta: units::radians(s.theta_deg),
+            kind,
+            limits: limits(path, line, &field("limits"), s.limits, kind)?,
+        });
+    }
+    let convention = if conv == Convention::Dh { DhConvention::Classic } else { DhConvention::Modified };
+    if !base.error.is_zero() || !tool.error.is_zero() {
+        return Err(IoError::input(path, None, "error", "DH tables take error parameters only after conversion"));
+    }
+    let table = DhTable { convention, rows, base: base.nominal(), tool: tool.nominal() };
+    let n = table.dof();
+    let chain = table.to_extended().map_err(|e| IoError::input(path, None, "dh", e.to_string()))?;
+    Ok((chain, vec![None; n], vec![JointRatings::default(); n]))
 }
 
 /// The corrections of a parsed file on its robot: per-joint scale, cyclic and compliance terms, drift rows,

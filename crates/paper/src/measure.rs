@@ -236,11 +236,6 @@ impl Measurements {
         }
         j
     }
-
-    /// The Markdown report (`docs/paper-reproduction.md`).
-    pub fn report(&self) -> Result<String, PaperError> {
-        crate::render::report(self)
-    }
 }
 
 /// The chains and the three runs a reproduction measures.

@@ -356,3 +356,10 @@ fn print_section(w: &mut String, p: &PrintComparison, m: &Measurements) -> Resul
     )?;
     Ok(())
 }
+
+impl Measurements {
+    /// The Markdown report (`docs/paper-reproduction.md`).
+    pub fn report(&self) -> Result<String, PaperError> {
+        report(self)
+    }
+}

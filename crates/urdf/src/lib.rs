@@ -114,131 +114,216 @@ fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
 /// ```
 pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Result<ImportedRobot, UrdfError> {
     let src = source_name.to_string();
-    check_namespaces(text).map_err(|message| UrdfError::Parse { source_name: src.clone(), message })?;
+    let robot = parse(text, &src)?;
+    let tree = Tree::of(&robot, &src)?;
+    let base = tree.base(options.base.as_deref())?;
+    let tip = tree.tip(&base, options.tip.as_deref())?;
+    let path = tree.path(&base, &tip)?;
+    let folded = fold(&robot, &path, &src)?;
+    if folded.factors.is_empty() {
+        return Err(tree.structure(format!("no revolute or prismatic joint between `{base}` and `{tip}`")));
+    }
+    let described = |source: ChainError| UrdfError::Chain { source_name: src.clone(), source };
+    let chain = Chain::from_factors(&folded.factors, &folded.pending).map_err(described)?;
+    let frames = chain.joint_frames(&vec![0.0; chain.dof()]).map_err(described)?;
+    let masses = folded
+        .mass_acc
+        .iter()
+        .zip(&frames)
+        .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
+        .collect();
+    let imported = Robot::new(robot.name.clone(), chain)
+        .with_masses(masses)
+        .and_then(|r| r.with_ratings(folded.ratings))
+        .map_err(described)?;
+    Ok(ImportedRobot { robot: imported, base_link: base, tip_link: tip })
+}
+
+/// The URDF parsed, after the namespace check.
+fn parse(text: &str, src: &str) -> Result<urdf_rs::Robot, UrdfError> {
+    let parse_error = |message: String| UrdfError::Parse { source_name: src.to_string(), message };
+    check_namespaces(text).map_err(parse_error)?;
     // urdf-rs re-serialises through RustyXML, which panics on namespace shapes the check above refuses;
     // the unwind guard is the backstop for any other panic inside the third-party parser.
-    let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text)).map_err(|_| UrdfError::Parse {
-        source_name: src.clone(),
-        message: "the XML parser failed on this input".into(),
-    })?;
-    let robot = parsed.map_err(|e| UrdfError::Parse { source_name: src.clone(), message: e.to_string() })?;
-    let element = |element: &'static str, name: &str, message: String| UrdfError::Element {
-        source_name: src.clone(),
-        element,
+    let parsed = std::panic::catch_unwind(|| urdf_rs::read_from_string(text))
+        .map_err(|_| parse_error("the XML parser failed on this input".into()))?;
+    parsed.map_err(|e| parse_error(e.to_string()))
+}
+
+/// The kinematic tree of a URDF, checked: unique names, joints between existing links, every link the
+/// child of at most one joint, no cycle.
+struct Tree<'r> {
+    robot: &'r urdf_rs::Robot,
+    src: String,
+    links: HashSet<&'r str>,
+    parent_joint: HashMap<&'r str, &'r urdf_rs::Joint>,
+    children: HashMap<&'r str, Vec<&'r str>>,
+}
+
+impl<'r> Tree<'r> {
+    fn of(robot: &'r urdf_rs::Robot, src: &str) -> Result<Self, UrdfError> {
+        let element = |element: &'static str, name: &str, message: String| UrdfError::Element {
+            source_name: src.to_string(),
+            element,
+            name: name.to_string(),
+            message,
+        };
+        let links: HashSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
+        let mut seen_links = HashSet::new();
+        for l in &robot.links {
+            if !seen_links.insert(l.name.as_str()) {
+                return Err(element("link", &l.name, "duplicate link name".into()));
+            }
+        }
+        let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
+        let mut seen_joints = HashSet::new();
+        for j in &robot.joints {
+            if !seen_joints.insert(j.name.as_str()) {
+                return Err(element("joint", &j.name, "duplicate joint name".into()));
+            }
+            for (role, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
+                if !links.contains(link.as_str()) {
+                    return Err(element("joint", &j.name, format!("its {role} link `{link}` does not exist")));
+                }
+            }
+            if j.parent.link == j.child.link {
+                return Err(element("joint", &j.name, "parent and child are the same link (a cycle)".into()));
+            }
+            if let Some(other) = parent_joint.insert(j.child.link.as_str(), j) {
+                return Err(element(
+                    "link",
+                    &j.child.link,
+                    format!("is the child of two joints, `{}` and `{}` (not a tree)", other.name, j.name),
+                ));
+            }
+        }
+        // Cycles: walking up from any link must end at a root.
+        for l in &robot.links {
+            let mut at = l.name.as_str();
+            let mut steps = 0;
+            while let Some(j) = parent_joint.get(at) {
+                at = j.parent.link.as_str();
+                steps += 1;
+                if steps > robot.joints.len() {
+                    return Err(element("link", &l.name, "lies on a cycle of joints".into()));
+                }
+            }
+        }
+        let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
+        for j in &robot.joints {
+            children.entry(j.parent.link.as_str()).or_default().push(j.child.link.as_str());
+        }
+        Ok(Self { robot, src: src.to_string(), links, parent_joint, children })
+    }
+
+    fn structure(&self, message: String) -> UrdfError {
+        UrdfError::Structure { source_name: self.src.clone(), message }
+    }
+
+    /// The base: the one given, or the single root link.
+    fn base(&self, given: Option<&str>) -> Result<String, UrdfError> {
+        let roots: Vec<&str> =
+            self.robot.links.iter().map(|l| l.name.as_str()).filter(|l| !self.parent_joint.contains_key(l)).collect();
+        match given {
+            Some(b) if self.links.contains(b) => Ok(b.to_string()),
+            Some(b) => {
+                Err(self.structure(format!("base link `{b}` does not exist (root links: {})", roots.join(", "))))
+            }
+            None => match roots.as_slice() {
+                [one] => Ok((*one).to_string()),
+                [] => Err(self.structure("no root link".into())),
+                many => Err(self.structure(format!("several root links: {}; choose one with --base", many.join(", ")))),
+            },
+        }
+    }
+
+    /// The leaf links below `base`, sorted.
+    fn leaves(&self, base: &str) -> Vec<&'r str> {
+        let mut leaves = Vec::new();
+        let mut stack = match self.links.get(base) {
+            Some(b) => vec![*b],
+            None => Vec::new(),
+        };
+        while let Some(l) = stack.pop() {
+            match self.children.get(l) {
+                Some(c) if !c.is_empty() => stack.extend(c.iter().copied()),
+                _ => leaves.push(l),
+            }
+        }
+        leaves.sort_unstable();
+        leaves
+    }
+
+    /// The tip: the one given, or the single leaf below `base`.
+    fn tip(&self, base: &str, given: Option<&str>) -> Result<String, UrdfError> {
+        match given {
+            Some(t) if self.links.contains(t) => Ok(t.to_string()),
+            Some(t) => {
+                let mut all: Vec<&str> = self.links.iter().copied().collect();
+                all.sort_unstable();
+                Err(self.structure(format!(
+                    "tip link `{t}` does not exist (leaves below `{base}`: {}; links: {})",
+                    self.leaves(base).join(", "),
+                    all.join(", ")
+                )))
+            }
+            None => match self.leaves(base).as_slice() {
+                [one] => Ok((*one).to_string()),
+                many => Err(self.structure(format!(
+                    "the tip is ambiguous: leaves below `{base}` are {}; choose one with --tip",
+                    many.join(", ")
+                ))),
+            },
+        }
+    }
+
+    /// The joints from `base` to `tip`, in order.
+    fn path(&self, base: &str, tip: &str) -> Result<Vec<&'r urdf_rs::Joint>, UrdfError> {
+        let mut path = Vec::new();
+        let mut at = tip;
+        while at != base {
+            let Some(j) = self.parent_joint.get(at) else {
+                return Err(self.structure(format!("`{tip}` is not below `{base}`: no serial path between them")));
+            };
+            path.push(*j);
+            at = j.parent.link.as_str();
+        }
+        path.reverse();
+        Ok(path)
+    }
+}
+
+/// A serial path folded into joint factors: each moving joint with the fixed transforms before it, its
+/// ratings, the fixed transform after the last one, and the links' masses accumulated per joint.
+struct Folded {
+    factors: Vec<JointFactor>,
+    ratings: Vec<JointRatings>,
+    pending: Isometry3<f64>,
+    /// Per joint: Σm and Σ m·c (centres in the world frame at the zero configuration).
+    mass_acc: Vec<(f64, Vector3<f64>)>,
+}
+
+/// Folds `path`: fixed joints into the transforms beside the moving ones, each link's mass onto the joint
+/// that moves it.
+fn fold(robot: &urdf_rs::Robot, path: &[&urdf_rs::Joint], src: &str) -> Result<Folded, UrdfError> {
+    let element = |name: &str, message: String| UrdfError::Element {
+        source_name: src.to_string(),
+        element: "joint",
         name: name.to_string(),
         message,
     };
-    let structure = |message: String| UrdfError::Structure { source_name: src.clone(), message };
-
-    let links: HashSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
-    let mut seen_links = HashSet::new();
-    for l in &robot.links {
-        if !seen_links.insert(l.name.as_str()) {
-            return Err(element("link", &l.name, "duplicate link name".into()));
-        }
-    }
-    let mut parent_joint: HashMap<&str, &urdf_rs::Joint> = HashMap::new();
-    let mut seen_joints = HashSet::new();
-    for j in &robot.joints {
-        if !seen_joints.insert(j.name.as_str()) {
-            return Err(element("joint", &j.name, "duplicate joint name".into()));
-        }
-        for (role, link) in [("parent", &j.parent.link), ("child", &j.child.link)] {
-            if !links.contains(link.as_str()) {
-                return Err(element("joint", &j.name, format!("its {role} link `{link}` does not exist")));
-            }
-        }
-        if j.parent.link == j.child.link {
-            return Err(element("joint", &j.name, "parent and child are the same link (a cycle)".into()));
-        }
-        if let Some(other) = parent_joint.insert(j.child.link.as_str(), j) {
-            return Err(element(
-                "link",
-                &j.child.link,
-                format!("is the child of two joints, `{}` and `{}` (not a tree)", other.name, j.name),
-            ));
-        }
-    }
-    // Cycles: walking up from any link must end at a root.
-    for l in &robot.links {
-        let mut at = l.name.as_str();
-        let mut steps = 0;
-        while let Some(j) = parent_joint.get(at) {
-            at = j.parent.link.as_str();
-            steps += 1;
-            if steps > robot.joints.len() {
-                return Err(element("link", &l.name, "lies on a cycle of joints".into()));
-            }
-        }
-    }
-    let roots: Vec<&str> =
-        robot.links.iter().map(|l| l.name.as_str()).filter(|l| !parent_joint.contains_key(l)).collect();
-    let base = match &options.base {
-        Some(b) if links.contains(b.as_str()) => b.clone(),
-        Some(b) => return Err(structure(format!("base link `{b}` does not exist"))),
-        None => match roots.as_slice() {
-            [one] => (*one).to_string(),
-            [] => return Err(structure("no root link".into())),
-            many => return Err(structure(format!("several root links: {}; choose one with --base", many.join(", ")))),
-        },
-    };
-    // Descendants of the base and their leaves.
-    let mut children: HashMap<&str, Vec<&str>> = HashMap::new();
-    for j in &robot.joints {
-        children.entry(j.parent.link.as_str()).or_default().push(j.child.link.as_str());
-    }
-    let tip = match &options.tip {
-        Some(t) if links.contains(t.as_str()) => t.clone(),
-        Some(t) => return Err(structure(format!("tip link `{t}` does not exist"))),
-        None => {
-            let mut leaves = Vec::new();
-            let mut stack = vec![base.as_str()];
-            while let Some(l) = stack.pop() {
-                match children.get(l) {
-                    Some(c) if !c.is_empty() => stack.extend(c.iter().copied()),
-                    _ => leaves.push(l),
-                }
-            }
-            leaves.sort_unstable();
-            match leaves.as_slice() {
-                [one] => (*one).to_string(),
-                many => {
-                    return Err(structure(format!(
-                        "the tip is ambiguous: leaves below `{base}` are {}; choose one with --tip",
-                        many.join(", ")
-                    )));
-                }
-            }
-        }
-    };
-    // The path tip → base.
-    let mut path: Vec<&urdf_rs::Joint> = Vec::new();
-    let mut at = tip.as_str();
-    while at != base {
-        let Some(j) = parent_joint.get(at) else {
-            return Err(structure(format!("`{tip}` is not below `{base}`: no serial path between them")));
-        };
-        path.push(j);
-        at = j.parent.link.as_str();
-    }
-    path.reverse();
-
     let inertial = |link: &str| -> Option<(f64, Isometry3<f64>)> {
         let l = robot.links.iter().find(|l| l.name == link)?;
         let m = l.inertial.mass.value;
         (m > 0.0 && m.is_finite()).then(|| (m, pose_mm(&l.inertial.origin)))
     };
-
-    let mut factors: Vec<JointFactor> = Vec::new();
-    let mut ratings: Vec<JointRatings> = Vec::new();
-    let mut pending = Isometry3::identity();
-    // Mass bookkeeping: (joint index or none for the base, world-at-zero pose of each link).
+    let mut out =
+        Folded { factors: Vec::new(), ratings: Vec::new(), pending: Isometry3::identity(), mass_acc: Vec::new() };
     let mut world_at_zero = Isometry3::identity();
-    let mut mass_acc: Vec<(f64, Vector3<f64>)> = Vec::new(); // per joint: Σm, Σ m·c (world at zero)
-    for j in &path {
+    for j in path {
         let origin = pose_mm(&j.origin);
         if j.mimic.is_some() {
-            return Err(element("joint", &j.name, "mimic joints are not supported in a serial chain".into()));
+            return Err(element(&j.name, "mimic joints are not supported in a serial chain".into()));
         }
         let kind = match j.joint_type {
             urdf_rs::JointType::Fixed => None,
@@ -246,70 +331,54 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
             urdf_rs::JointType::Prismatic => Some(JointKind::Prismatic),
             ref other => {
                 return Err(element(
-                    "joint",
                     &j.name,
                     format!("joint type {other:?} is not supported (serial revolute/prismatic chains only)"),
                 ));
             }
         };
         world_at_zero *= origin;
-        pending *= origin;
+        out.pending *= origin;
         if let Some(kind) = kind {
-            let axis = Vector3::from(j.axis.xyz.0);
-            let n = axis.norm();
-            if !(n.is_finite() && n > 1e-12) {
-                return Err(element("joint", &j.name, "the axis is zero or not finite".into()));
-            }
-            let lim = &j.limit;
-            let limits = if j.joint_type == urdf_rs::JointType::Continuous {
-                None
-            } else if lim.lower.is_finite() && lim.upper.is_finite() && lim.lower < lim.upper {
-                let scale = if kind == JointKind::Prismatic { MM_PER_M } else { 1.0 };
-                Some(JointLimits { lower: lim.lower * scale, upper: lim.upper * scale })
-            } else {
-                None
-            };
-            let unit = if kind == JointKind::Prismatic { MM_PER_M } else { 1.0 };
-            let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
-            ratings.push(JointRatings {
-                velocity: positive(lim.velocity).map(|v| v * unit),
-                effort: positive(lim.effort),
-            });
-            factors.push(JointFactor {
-                before: pending,
-                axis: Unit::new_normalize(axis),
-                kind,
-                name: j.name.clone(),
-                limits,
-            });
-            pending = Isometry3::identity();
-            mass_acc.push((0.0, Vector3::zeros()));
+            let (factor, rating) = moving_joint(j, kind, out.pending).map_err(|m| element(&j.name, m))?;
+            out.factors.push(factor);
+            out.ratings.push(rating);
+            out.pending = Isometry3::identity();
+            out.mass_acc.push((0.0, Vector3::zeros()));
         }
-        if let (Some((m, com)), Some(acc)) = (inertial(&j.child.link), mass_acc.last_mut()) {
+        if let (Some((m, com)), Some(acc)) = (inertial(&j.child.link), out.mass_acc.last_mut()) {
             let c = (world_at_zero * com).translation.vector;
             acc.0 += m;
             acc.1 += c * m;
         }
     }
-    if factors.is_empty() {
-        return Err(structure(format!("no revolute or prismatic joint between `{base}` and `{tip}`")));
+    Ok(out)
+}
+
+/// A moving joint's factor (its axis, limits in mm and radians, the fixed transform `before` it) and its
+/// ratings (velocity in mm/s or rad/s, effort).
+fn moving_joint(
+    j: &urdf_rs::Joint,
+    kind: JointKind,
+    before: Isometry3<f64>,
+) -> Result<(JointFactor, JointRatings), String> {
+    let axis = Vector3::from(j.axis.xyz.0);
+    let n = axis.norm();
+    if !(n.is_finite() && n > 1e-12) {
+        return Err("the axis is zero or not finite".into());
     }
-    let chain = Chain::from_factors(&factors, &pending)
-        .map_err(|e| UrdfError::Chain { source_name: src.clone(), source: e })?;
-    let frames = chain
-        .joint_frames(&vec![0.0; chain.dof()])
-        .map_err(|e| UrdfError::Chain { source_name: src.clone(), source: e })?;
-    let masses = mass_acc
-        .iter()
-        .zip(&frames)
-        .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
-        .collect();
-    let described = |source: ChainError| UrdfError::Chain { source_name: src.clone(), source };
-    let imported = Robot::new(robot.name.clone(), chain)
-        .with_masses(masses)
-        .and_then(|r| r.with_ratings(ratings))
-        .map_err(described)?;
-    Ok(ImportedRobot { robot: imported, base_link: base, tip_link: tip })
+    let lim = &j.limit;
+    let unit = if kind == JointKind::Prismatic { MM_PER_M } else { 1.0 };
+    let limits = if j.joint_type == urdf_rs::JointType::Continuous {
+        None
+    } else if lim.lower.is_finite() && lim.upper.is_finite() && lim.lower < lim.upper {
+        Some(JointLimits { lower: lim.lower * unit, upper: lim.upper * unit })
+    } else {
+        None
+    };
+    let positive = |v: f64| (v.is_finite() && v > 0.0).then_some(v);
+    let rating = JointRatings { velocity: positive(lim.velocity).map(|v| v * unit), effort: positive(lim.effort) };
+    let factor = JointFactor { before, axis: Unit::new_normalize(axis), kind, name: j.name.clone(), limits };
+    Ok((factor, rating))
 }
 
 /// Refuses XML namespace use, which URDF does not have and the parser underneath mishandles (found by

@@ -2,7 +2,8 @@
 //! and the joint; the held-out RMS must shrink at least 5× and end within 1.5× of the noise.
 
 use thermokin_chain::Robot;
-use thermokin_diagnose::{Config, DriftShape, Effect, HiddenEffect, JointIndex, SimulationConfig, diagnose, simulate};
+use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, simulate};
+use thermokin_identify::{DriftShape, Effect, JointIndex};
 use thermokin_testdata::workspace;
 
 fn base() -> Robot {

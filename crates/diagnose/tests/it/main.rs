@@ -3,6 +3,7 @@
 
 mod catalogue;
 mod export;
+mod golden;
 mod hidden;
 mod identified;
 mod payload;
@@ -12,4 +13,5 @@ mod six_d;
 mod temperature;
 mod tracker;
 mod transfer;
+mod wam;
 mod weights;

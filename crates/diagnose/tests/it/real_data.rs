@@ -4,7 +4,8 @@
 use nalgebra::Vector3;
 use thermokin_chain::{Dataset, Measurement, Robot};
 use thermokin_chain::{DhConvention, DhRow, DhTable};
-use thermokin_diagnose::{Config, FrameMode, ToolMode, diagnose};
+use thermokin_diagnose::{Config, diagnose};
+use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::{authors, rokae_robot_b};
 
 /// Rows of numbers of a small comma-separated file with one header line.
@@ -58,6 +59,7 @@ fn rokae_robot_b_additive_table() {
     assert_eq!(data.len(), 30);
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     let report = diagnose(&base, &data, None, &config).unwrap();
+    crate::golden::drift_check("rokae-positions", &base, &report);
     for row in &report.additive {
         eprintln!(
             "{:<40} mean {:.4}  rms {:.4}  max {:.4}",
@@ -100,7 +102,7 @@ fn rokae_robot_b_additive_table() {
     );
     for c in &report.identifiability.correlated {
         eprintln!("nearly unidentifiable: {} ~ {} ({:+.4})", c.a, c.b, c.correlation);
-        assert!(c.correlation.abs() > thermokin_diagnose::NEARLY_DEPENDENT);
+        assert!(c.correlation.abs() > thermokin_identify::NEARLY_DEPENDENT);
     }
     assert!(nested.selected.heldout_mean_mm < nested.nominal.heldout_mean_mm);
     // The independent fit, 5-fold held-out: 2.22 mm nominal (registration and tool fitted) → 0.22 mm with
@@ -141,7 +143,9 @@ fn paper_static_case_gap() {
     let chain = table.apply(robot.chain(), &semantics).unwrap();
     let data = thermokin_io::read_measurements(&path, &[thermokin_chain::JointKind::Revolute; 6]).unwrap();
     assert_eq!(data.len(), 50);
-    let report = diagnose(&robot.with_chain(chain).unwrap(), &data, None, &Config::default()).unwrap();
+    let deformed = robot.with_chain(chain).unwrap();
+    let report = diagnose(&deformed, &data, None, &Config::default()).unwrap();
+    crate::golden::drift_check("paper-static", &deformed, &report);
     for row in &report.additive {
         eprintln!(
             "{:<40} mean {:.4}  rms {:.4}  max {:.4}",
@@ -207,7 +211,9 @@ fn rokae_robot_b_orientations_are_roll_pitch_yaw_and_fit() {
     };
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     let nested = |data: &Dataset| diagnose(&robot, data, None, &config).unwrap().nested.unwrap();
-    let (xyz, rpy, pos) = (nested(&read(Orientation::XyzEuler)), nested(&read(Orientation::Rpy)), nested(&positions));
+    let rpy_report = diagnose(&robot, &read(Orientation::Rpy), None, &config).unwrap();
+    crate::golden::drift_check("rokae-6d-rpy", &robot, &rpy_report);
+    let (xyz, rpy, pos) = (nested(&read(Orientation::XyzEuler)), rpy_report.nested.unwrap(), nested(&positions));
     eprintln!(
         "nested RMS nominal → selected: positions {:.4} → {:.4}; 6-D xyz {:.4} → {:.4}; 6-D rpy {:.4} → {:.4} mm",
         pos.nominal.heldout_rms_mm,

@@ -4,7 +4,8 @@
 
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_chain::{Dataset, Robot};
-use thermokin_diagnose::{Config, FrameMode, Report, Screen, ToolMode, Validation, diagnose};
+use thermokin_diagnose::{Config, Report, Screen, Validation, diagnose};
+use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::{error_mm_deg, workspace};
 
 use crate::tracker::measure;
@@ -32,9 +33,10 @@ fn compare(name: &str, robot: &Robot, data: &Dataset, config: Config) {
     eprintln!("{name}: screened {:?}", a.iter().map(|r| &r.0).collect::<Vec<_>>());
     assert_eq!(a.len(), b.len(), "{name}: screened {a:?}\nexhaustive {b:?}");
     for (x, y) in a.iter().zip(&b) {
-        // The same models fitted the same way: equal figures (a different fit order in parallel
-        // reductions may move the last bits).
-        assert!(x.0 == y.0 && (x.1 - y.1).abs() <= 1e-12 * y.1.max(1.0), "{name}: {x:?} vs {y:?}");
+        // The same models fitted the same way: equal figures, RMS and mean (a different fit order in
+        // parallel reductions may move the last bits).
+        let same = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.max(1.0);
+        assert!(x.0 == y.0 && same(x.1, y.1) && same(x.2, y.2), "{name}: {x:?} vs {y:?}");
     }
 }
 

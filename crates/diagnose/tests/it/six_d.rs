@@ -138,7 +138,7 @@ fn orientations_round_trip_through_the_measurement_file() {
 
 #[test]
 fn an_unknown_6d_probe_in_a_tracker_frame_is_a_nuisance_not_a_cause() {
-    use thermokin_diagnose::{FrameMode, ToolMode};
+    use thermokin_identify::{FrameMode, ToolMode};
     let robot = robot();
     // Joint 3's zero off by 0.04°; the probe as mounted; the tracker 2 m away and turned.
     let offset = |q: &[f64]| {

@@ -83,7 +83,7 @@ fn without_joint_names_the_mean_of_the_sensors_cannot_follow_it() {
 
 #[test]
 fn sensor_names_map_to_joints() {
-    use thermokin_diagnose::sensor_joint;
+    use thermokin_identify::sensor_joint;
     for (name, joint) in [
         ("j3", Some(2)),
         ("Joint_3", Some(2)),

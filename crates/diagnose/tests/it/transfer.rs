@@ -3,7 +3,8 @@
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
 use thermokin_chain::ErrorParams;
-use thermokin_diagnose::{Config, FoldGrouping, FrameMode, ToolMode, Validation, diagnose};
+use thermokin_diagnose::{Config, FoldGrouping, Validation, diagnose};
+use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::workspace;
 
 use crate::tracker::measure;
@@ -34,6 +35,7 @@ fn ur10_series_c_transfers_to_series_b() {
         ..Config::default()
     };
     let report = diagnose(&robot, &train, Some(&b), &config).unwrap();
+    crate::golden::drift_check("ur10-c-holdout-b", &robot, &report);
     let labels: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
     let h = report.holdout.as_ref().unwrap();
     let n = report.nested.as_ref().unwrap();

@@ -1,8 +1,6 @@
 //! 10,000 seeded random reachable targets, nominal and under the case-study deformation; FK∘IK = id;
 //! unreachable, singular and bad inputs; batch determinism.
 
-use std::time::{Duration, Instant};
-
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Chain;
@@ -121,12 +119,11 @@ fn far_target_is_unreachable_quickly() {
     let chain = irb140();
     let target = Goal::Pose(nalgebra::Isometry3::translation(5000.0, 0.0, 0.0));
     let mut ws = Workspace::new(6);
-    let start = Instant::now();
     let s = solve(&chain, &target, &[0.0; 6], &Params::default(), &mut ws, 0).unwrap();
     assert_eq!(s.status, Status::Unreachable);
-    assert_eq!(s.iterations, 0);
-    // "Quickly" is a property of the algorithm (no iterations at all), not a timing: see the benches.
-    assert!(start.elapsed() < Duration::from_secs(1));
+    // "Quickly" is a property of the algorithm — no iteration and no restart at all, decided by the reach
+    // bound before any solve — not a timing (speed lives in the benches).
+    assert_eq!((s.iterations, s.restarts), (0, 0));
     // Inside the reach sphere but outside the joint limits' workspace: reported, not hung.
     let behind_and_low = Goal::Position(nalgebra::Vector3::new(-100.0, 0.0, -400.0));
     let s =

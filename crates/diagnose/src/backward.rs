@@ -1,0 +1,38 @@
+//! Phase 4 of the selection: backward elimination — an effect chosen early as a stand-in for later ones
+//! leaves again.
+
+use rayon::prelude::*;
+use thermokin_identify::Effect;
+
+use crate::config::Config;
+use crate::error::DiagnoseError;
+use crate::scoring::{Scorer, significantly_better};
+use crate::selection::Selection;
+use crate::stats::Stats;
+
+/// Phase 4: backward elimination. While some chosen effect can leave without the gate rejecting the
+/// smaller model (the full one is not significantly better held out), the one whose removal leaves the
+/// lowest held-out error leaves. An effect chosen early as a stand-in for later ones goes here.
+pub(crate) fn backward(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) -> Result<(), DiagnoseError> {
+    loop {
+        let without: Vec<(usize, Stats, Vec<f64>)> = (sel.always..sel.effects.len())
+            .into_par_iter()
+            .map(|k| {
+                let rest: Vec<Effect> =
+                    sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+                let (s, e) = scorer.heldout_errors(&rest, &scorer.folds)?;
+                Ok((k, s, e))
+            })
+            .collect::<Result<_, DiagnoseError>>()?;
+        let removable = without
+            .into_iter()
+            .filter(|(_, _, e)| !significantly_better(e, &sel.errors, config.gate_standard_errors, &scorer.blocks))
+            .min_by(|a, b| a.1.heldout_rms_mm.total_cmp(&b.1.heldout_rms_mm));
+        let Some((k, stats, errors)) = removable else { return Ok(()) };
+        let gone = sel.effects[k];
+        let mut rest = sel.effects.clone();
+        rest.remove(k);
+        let row = format!("− {} (backward: not significantly better with it)", gone.label());
+        sel.replace(rest, stats, errors, row);
+    }
+}

@@ -1,0 +1,137 @@
+//! The diagnosis as a whole: the selection on all data and its tables, the validation of the procedure
+//! on data it never saw (nested, an explicit hold-out set), the warnings and the verdict — assembled
+//! into one [`Report`].
+
+use thermokin_chain::{Dataset, Robot};
+
+use crate::config::{Config, Validation};
+use crate::error::DiagnoseError;
+use crate::report::{HoldoutStats, Report};
+use crate::scoring::Scorer;
+use crate::select::select;
+use crate::tables::tables;
+use crate::validation::{nested, nested_folds, transfer_score};
+use crate::verdict::{honest_end, verdict, warnings};
+
+/// Runs the diagnosis of `data` against `robot`.
+///
+/// The effects are chosen by cross-validation on `data` (the additive and leave-one-out tables: the
+/// selection's scores, optimistic because they chose). The held-out error reported for the procedure
+/// itself comes from nested cross-validation ([`Validation::Nested`], the default: [`Report::nested`]),
+/// and from `holdout` when given ([`Report::holdout`]) — which never influences the selection.
+///
+/// ```
+/// use thermokin_chain::Robot;
+/// use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, simulate};
+/// use thermokin_identify::{Effect, JointIndex};
+///
+/// let robot = Robot::new("IRB 140", thermokin_testdata::irb140_table9());
+/// // A hidden zero offset of +0.05° on joint 2 (index 1), measured with 5 µm noise.
+/// let offset = Effect::JointOffset(JointIndex::of(&robot, 1)?);
+/// let hidden = [HiddenEffect { effect: offset, values: vec![0.05f64.to_radians()] }];
+/// let data = simulate(&robot, &hidden, &SimulationConfig { poses: 120, ..SimulationConfig::default() })?;
+/// let report = diagnose(&robot, &data, None, &Config::default())?;
+/// assert_eq!(report.effects[0].label, "joint_offset[2]");
+/// // On outer folds the selection never saw, the chosen model is at the noise (5 µm per axis).
+/// assert!(report.nested.unwrap().selected.heldout_rms_mm < 0.015);
+/// # Ok::<(), thermokin_diagnose::DiagnoseError>(())
+/// ```
+pub fn diagnose(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+) -> Result<Report, DiagnoseError> {
+    diagnose_with_progress(robot, data, holdout, config, &mut |_| {})
+}
+
+/// One finished stage of a diagnosis, for a progress display: `done` of `total` stages (the selection
+/// on all data, each outer fold of the nested validation, the hold-out set), each costing about the same.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Progress {
+    /// Stages finished.
+    pub done: usize,
+    /// Stages in all.
+    pub total: usize,
+    /// The stage just finished.
+    pub stage: String,
+}
+
+/// Every measurement of the training and hold-out sets has one value per joint of the robot.
+fn check_joint_counts(robot: &Robot, data: &Dataset, holdout: Option<&Dataset>) -> Result<(), DiagnoseError> {
+    let n = robot.chain().dof();
+    let sets = [("training", Some(data)), ("hold-out", holdout)];
+    for (set, d) in sets.iter().filter_map(|(s, d)| d.map(|d| (*s, d))) {
+        if let Some((i, m)) = d.measurements.iter().enumerate().find(|(_, m)| m.q.len() != n) {
+            return Err(DiagnoseError::JointCount { set, measurement: i + 1, got: m.q.len(), expected: n });
+        }
+    }
+    Ok(())
+}
+
+/// [`diagnose`], telling `progress` after each stage.
+pub fn diagnose_with_progress(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+    progress: &mut (dyn FnMut(Progress) + Send),
+) -> Result<Report, DiagnoseError> {
+    config.validate()?;
+    let outer = match config.validation {
+        Validation::Nested { outer } => nested_folds(data, config, outer).len(),
+        Validation::SelectionOnly => 0,
+    };
+    let total = 1 + outer + usize::from(holdout.is_some());
+    let mut done = 0;
+    let mut tell = |stage: String| {
+        done += 1;
+        progress(Progress { done, total, stage });
+    };
+    check_joint_counts(robot, data, holdout)?;
+    let scorer = Scorer::new(robot, data, config);
+    let tables = tables(&scorer, config, select(&scorer, config)?)?;
+    tell("selection on all measurements".into());
+    let nested = match config.validation {
+        Validation::Nested { outer } => Some(nested(robot, data, config, outer, &mut tell)?),
+        Validation::SelectionOnly => None,
+    };
+    let holdout = match holdout {
+        // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
+        // registration or the tool point is always estimated, the hold-out file may be in another tracker
+        // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
+        Some(h) => {
+            let always = config.setup().always_estimated(data);
+            let score = |e: &[thermokin_identify::Effect]| transfer_score(&scorer, h, e, config);
+            let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
+            let stats = HoldoutStats { nominal: score(&always)?, selected: score(&tables.effects)?, refitted };
+            tell("hold-out set".into());
+            Some(stats)
+        }
+        None => None,
+    };
+    let mut all_warnings = tables.warnings.clone();
+    all_warnings.extend(warnings(robot, data, config, &tables));
+    let verdict = verdict(config, &tables, nested.as_ref());
+    let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
+    Ok(Report {
+        nominal: tables.nominal,
+        nested,
+        holdout,
+        calibrated: tables.calibrated,
+        identified: tables.identified,
+        honest_end,
+        validation: tables.validation,
+        orientation_lever_mm: tables.orientation_lever_mm,
+        effects: tables.reports,
+        additive: tables.additive,
+        leave_one_out: tables.leave_one_out,
+        identifiability: tables.identifiability,
+        residuals_before: tables.residuals_before,
+        residuals_after: tables.residuals_after,
+        bic: tables.bic,
+        frames: tables.frames,
+        warnings: all_warnings,
+        verdict,
+    })
+}

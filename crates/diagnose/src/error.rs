@@ -1,0 +1,60 @@
+//! Errors of the diagnosis.
+
+use thermokin_chain::ChainError;
+use thermokin_identify::IdentifyError;
+
+/// Errors of identification and diagnosis.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum DiagnoseError {
+    /// A model could not be built, evaluated or fitted.
+    #[error(transparent)]
+    Identify(#[from] IdentifyError),
+    /// A robot could not be rebuilt (the identified robot on the file's robot).
+    #[error(transparent)]
+    Chain(#[from] ChainError),
+    /// The identified robot could not be built (a correction out of its domain).
+    #[error(transparent)]
+    Deform(#[from] thermokin_deform::DeformError),
+    /// A setting outside its domain ([`crate::Config::validate`], [`crate::SimulationConfig::validate`]):
+    /// `setting` is the field's name, `rule` what it must be.
+    #[error("{setting} {rule} (got {value})")]
+    BadSetting {
+        /// The field of the settings.
+        setting: &'static str,
+        /// The value given.
+        value: f64,
+        /// What the value must be.
+        rule: &'static str,
+    },
+    /// An effect spec (`KIND[:JOINT][=VALUES]`) that cannot be read.
+    #[error("{spec}: {message}")]
+    BadEffectSpec {
+        /// The spec as given.
+        spec: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// Too few measurements for the validation asked for.
+    #[error("{count} measurements are too few for {folds}-fold cross-validation (at least {needed})")]
+    TooFewMeasurements {
+        /// Measurements given.
+        count: usize,
+        /// Folds asked for.
+        folds: usize,
+        /// Measurements needed.
+        needed: usize,
+    },
+    /// A measurement with another number of joint values than the robot has joints.
+    #[error("{set} measurement {measurement}: {got} joint values for {expected} joints")]
+    JointCount {
+        /// `training` or `hold-out`.
+        set: &'static str,
+        /// 1-based measurement number.
+        measurement: usize,
+        /// Values given.
+        got: usize,
+        /// Joints of the robot.
+        expected: usize,
+    },
+}

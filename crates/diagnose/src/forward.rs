@@ -1,0 +1,167 @@
+//! Phase 3 of the selection: forward steps. Each round ranks the remaining candidates by a linearised
+//! step ([`crate::screen`]), scores a shortlist in full (in parallel), and the candidate with the lowest
+//! held-out error joins while it beats the current model by more than the gate — the smallest block
+//! within [`Config::parsimony`] of the best gain preferred, its fitted values within the physical bounds,
+//! its information criterion lower.
+
+use rayon::prelude::*;
+use thermokin_identify::{DriftShape, Effect, JointIndex};
+
+use crate::config::Config;
+use crate::error::DiagnoseError;
+use crate::plausibility::{Judged, implausible};
+use crate::scoring::{Scorer, significantly_better};
+use crate::selection::{Candidate, Scored, Selection, score};
+
+fn is_exponential(c: &Effect) -> bool {
+    matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential))
+}
+
+/// Forward steps until no candidate passes the gate, the pool is empty or [`Config::max_effects`] are
+/// chosen. An exponential drift refines the linear one of its joint and is scored only where the linear
+/// drift already earns half the best gain (it costs a model per measurement and a nonlinear τ).
+pub(crate) fn forward(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    mut pool: Vec<Effect>,
+) -> Result<(), DiagnoseError> {
+    while sel.chosen().len() < config.max_effects && !pool.is_empty() {
+        let results = score_round(scorer, config, sel, &mut pool)?;
+        let Some(best) = results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)) else {
+            break;
+        };
+        if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
+            break;
+        }
+        let Some((c, b, theta)) = choose(scorer, config, sel, &results, best, &mut pool)? else { break };
+        sel.accept(&c, b, theta, format!("+ {}", c.effect.label()));
+        pool.retain(|e| *e != c.effect);
+    }
+    Ok(())
+}
+
+/// One round's scored candidates: the screen's shortlist of the linear candidates, then the exponential
+/// drifts whose linear twin earns half the best gain. Candidates the screen or every fold finds
+/// implausible are refused and leave the pool; those that add nothing identifiable are recorded as
+/// skipped; the pool keeps the others.
+fn score_round(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    pool: &mut Vec<Effect>,
+) -> Result<Vec<Candidate>, DiagnoseError> {
+    let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exponential(c)).collect();
+    let effects = sel.effects.clone();
+    // Score before you fit: the candidates ranked by a linearised step, the shortlist fitted in full.
+    let runs_away = |c: Effect, v: &[f64]| implausible(scorer.robot, v, c, &config.plausibility);
+    let screened = crate::screen::shortlist(scorer, &effects, &sel.theta, &linear, config.screen, &runs_away)?;
+    for (c, why) in screened.runaway {
+        sel.refused.push(why.refusal(c, Judged::LinearisedStep));
+        pool.retain(|p| *p != c);
+    }
+    let first = screened.keep;
+    let score_all = |list: &[Effect]| -> Result<Vec<(Effect, Scored)>, DiagnoseError> {
+        list.par_iter().map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?))).collect()
+    };
+    let mut scored = score_all(&first)?;
+    let gain = |s: &Scored| match s {
+        Scored::Candidate(s) => Some(sel.current.heldout_rms_mm - s.stats.heldout_rms_mm),
+        Scored::AddsNothing(_) => None,
+    };
+    let best_gain = scored.iter().filter_map(|(_, s)| gain(s)).fold(0.0, f64::max);
+    let linear_gain = |j: Option<JointIndex>| {
+        scored
+            .iter()
+            .filter(|(c, _)| matches!(c, Effect::ThermalDrift(_, DriftShape::Linear)) && c.joint() == j)
+            .filter_map(|(_, s)| gain(s))
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let second: Vec<Effect> = pool
+        .iter()
+        .copied()
+        .filter(|c| is_exponential(c) && best_gain > 0.0 && linear_gain(c.joint()) >= 0.5 * best_gain)
+        .collect();
+    scored.extend(score_all(&second)?);
+    let mut still: Vec<Effect> = pool
+        .iter()
+        .copied()
+        .filter(|c| (is_exponential(c) && !second.contains(c)) || (!is_exponential(c) && !first.contains(c)))
+        .collect();
+    let mut results = Vec::new();
+    for (c, s) in scored {
+        match s {
+            Scored::AddsNothing(reason) => sel.skip(c, reason),
+            Scored::Candidate(s) => match &s.runaway {
+                Some(why) => sel.refused.push(why.refusal(c, Judged::FittedOnEveryFold)),
+                None => {
+                    still.push(c);
+                    results.push(s);
+                }
+            },
+        }
+    }
+    *pool = still;
+    Ok(results)
+}
+
+/// The candidate that joins, with its information criterion and its parameters fitted on all data.
+/// Parsimony within the step: the smallest block within `parsimony` of the best gain, itself
+/// significant; ties between blocks of one size go to the conventional one (base_frame, tool_frame,
+/// joint_offset), then the lowest error. A time-dependent candidate must also lower the forward-chained
+/// error; one whose values fitted on all data are implausible is refused (and leaves the pool); the
+/// information criterion must fall.
+fn choose(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    results: &[Candidate],
+    best: &Candidate,
+    pool: &mut Vec<Effect>,
+) -> Result<Option<(Candidate, f64, Vec<f64>)>, DiagnoseError> {
+    let gate = config.gate_standard_errors;
+    let gain = sel.current.heldout_rms_mm - best.stats.heldout_rms_mm;
+    let mut eligible: Vec<&Candidate> = results
+        .iter()
+        .filter(|r| sel.current.heldout_rms_mm - r.stats.heldout_rms_mm >= config.parsimony * gain)
+        .filter(|r| significantly_better(&sel.errors, &r.errors, gate, &scorer.blocks))
+        .collect();
+    let conventional = |e: &Effect| matches!(e, Effect::BaseFrame | Effect::ToolFrame | Effect::JointOffset(_));
+    eligible.sort_by(|a, b| {
+        a.new_free
+            .cmp(&b.new_free)
+            .then(conventional(&b.effect).cmp(&conventional(&a.effect)))
+            .then(a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm))
+    });
+    let mut forward_before: Option<f64> = None;
+    for cand in eligible {
+        let mut with = sel.effects.clone();
+        with.push(cand.effect);
+        if cand.effect.is_time_dependent() {
+            // The current model's forward-chained error, once per step however many drifts are tried.
+            let before = match forward_before {
+                Some(b) => b,
+                None => *forward_before.insert(scorer.heldout(&sel.effects, &scorer.forward)?.heldout_rms_mm),
+            };
+            let after = scorer.heldout(&with, &scorer.forward)?;
+            if after.heldout_rms_mm >= before {
+                continue;
+            }
+        }
+        // One fit on all data serves the plausibility bounds and the information criterion.
+        let (model, full) = scorer.full_fit(&with)?;
+        let o = model.offsets()[model.offsets().len() - 1];
+        let values = &full.theta[o..o + cand.effect.len()];
+        if let Some(why) = implausible(scorer.robot, values, cand.effect, &config.plausibility) {
+            sel.refused.push(why.refusal(cand.effect, Judged::Fitted));
+            pool.retain(|c| *c != cand.effect);
+            continue;
+        }
+        let b = scorer.bic_of(&full);
+        if b >= *sel.bic.last().unwrap_or(&f64::INFINITY) {
+            continue;
+        }
+        return Ok(Some((cand.clone(), b, full.theta)));
+    }
+    Ok(None)
+}

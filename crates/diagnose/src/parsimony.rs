@@ -1,0 +1,140 @@
+//! Phase 5 of the selection: parsimony. An exponential drift not significantly better than its linear
+//! twin becomes the linear one; then each chosen block is replaced by the smallest combination (one or
+//! two) of eligible smaller catalogue blocks its directions contain on the data (rank test) when the
+//! larger is not significantly better held out — the same gate, the other way round. Two offsets of
+//! parallel joints inside one link row come out as the two offsets.
+
+use thermokin_identify::{DriftShape, Effect};
+
+use crate::config::Config;
+use crate::error::DiagnoseError;
+use crate::scoring::{Relation, Scorer, significantly_better};
+use crate::selection::{Selection, Step};
+use crate::stats::Stats;
+
+/// Both rules of the phase, in order.
+pub(crate) fn parsimony(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    eligible: &[Effect],
+) -> Result<(), DiagnoseError> {
+    linear_for_exponential(scorer, config, sel)?;
+    let mut k = sel.always;
+    while k < sel.effects.len() {
+        k += match smaller_replacement(scorer, config, sel, k, eligible)? {
+            Some(r) => {
+                let n = r.blocks.len();
+                r.apply(sel, k);
+                n
+            }
+            None => 1,
+        };
+    }
+    Ok(())
+}
+
+/// An exponential drift not significantly better than its linear twin becomes the linear one.
+fn linear_for_exponential(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) -> Result<(), DiagnoseError> {
+    for k in sel.always..sel.effects.len() {
+        if let Effect::ThermalDrift(j, DriftShape::Exponential) = sel.effects[k] {
+            let mut swapped = sel.effects.clone();
+            swapped[k] = Effect::ThermalDrift(j, DriftShape::Linear);
+            let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
+            if !significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
+                let row = format!("{} replaces the exponential (not significantly worse)", swapped[k].label());
+                sel.replace(swapped, stats, errors, row);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Smaller blocks that replace a larger one, scored.
+struct Replacement {
+    /// The block replaced.
+    big: Effect,
+    /// The smaller blocks, in the order they take its place.
+    blocks: Vec<Effect>,
+    /// Their parameters in all.
+    size: usize,
+    stats: Stats,
+    errors: Vec<f64>,
+}
+
+impl Replacement {
+    /// Puts the smaller blocks in the place of the larger one at `k`, their steps taking its step.
+    fn apply(self, sel: &mut Selection, k: usize) {
+        let mut with: Vec<Effect> = sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+        with.splice(k..k, self.blocks.iter().copied());
+        let names: Vec<String> = self.blocks.iter().map(Effect::label).collect();
+        let row = format!(
+            "{} replaces {} (as good held out with {} parameters instead of {})",
+            names.join(" + "),
+            self.big.label(),
+            self.size,
+            self.big.len()
+        );
+        for (s, &c) in sel.steps.iter_mut().filter(|s| s.effect == self.big).zip(&self.blocks) {
+            s.effect = c;
+        }
+        for &c in self.blocks.iter().skip(1) {
+            sel.steps.push(Step { effect: c, before_mm: f64::NAN, after_mm: self.stats.heldout_rms_mm });
+        }
+        sel.replace(with, self.stats, self.errors, row);
+    }
+}
+
+/// The smallest combination of one or two eligible smaller blocks that the chosen block at `k` contains
+/// on the data, each adding something identifiable without it, and not significantly worse held out;
+/// ties to the lower error.
+fn smaller_replacement(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &Selection,
+    k: usize,
+    eligible: &[Effect],
+) -> Result<Option<Replacement>, DiagnoseError> {
+    let big = sel.effects[k];
+    let mut smaller: Vec<Effect> = Vec::new();
+    for &c in eligible.iter().filter(|c| c.len() < big.len() && !sel.effects.contains(c)) {
+        if scorer.relations(c, &[big])?.iter().any(|(_, r)| *r == Relation::ContainedIn) {
+            smaller.push(c);
+        }
+    }
+    // Combinations of one or two smaller blocks with fewer parameters than the larger.
+    let rest: Vec<Effect> = sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+    let mut combos: Vec<Vec<Effect>> = smaller.iter().map(|&c| vec![c]).collect();
+    for (a, &x) in smaller.iter().enumerate() {
+        for &y in &smaller[a + 1..] {
+            if x.len() + y.len() < big.len() {
+                combos.push(vec![x, y]);
+            }
+        }
+    }
+    let mut best: Option<Replacement> = None;
+    for blocks in combos {
+        let mut with = rest.clone();
+        let mut adds = true;
+        for &c in &blocks {
+            adds &= scorer.new_free(&with, c)?.new_free > 0;
+            with.push(c);
+        }
+        if !adds {
+            continue;
+        }
+        let (stats, errors) = scorer.heldout_errors(&with, &scorer.folds)?;
+        if significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
+            continue; // The larger block is significantly better.
+        }
+        let size: usize = blocks.iter().map(Effect::len).sum();
+        let better = match &best {
+            None => true,
+            Some(b) => (size, stats.heldout_rms_mm) < (b.size, b.stats.heldout_rms_mm),
+        };
+        if better {
+            best = Some(Replacement { big, blocks, size, stats, errors });
+        }
+    }
+    Ok(best)
+}

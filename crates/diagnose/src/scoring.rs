@@ -1,0 +1,283 @@
+//! Held-out scoring of a model of effects on the selection's folds, the gate that accepts a gain only
+//! when it exceeds its own uncertainty over blocks of poses, and how two blocks' parameter directions
+//! relate on the data.
+
+use rayon::prelude::*;
+use thermokin_chain::{Dataset, Robot};
+use thermokin_identify::{
+    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, fit, identifiable, initial_registration, norms,
+    project_out, residuals, residuals_and_jacobian,
+};
+
+use crate::config::Config;
+use crate::error::DiagnoseError;
+use crate::folds::{Folds, folds_for, forward_chained};
+use crate::stats::Stats;
+
+/// What every held-out evaluation of one diagnosis shares: the robot, the data with their per-pose
+/// terms, the selection's folds and the blocks its gate counts.
+pub(crate) struct Scorer<'a> {
+    pub(crate) robot: &'a Robot,
+    pub(crate) data: &'a Dataset,
+    pub(crate) terms: PoseTerms,
+    pub(crate) folds: Folds,
+    /// The block of each held-out error of `folds`, in order (the gate's unit of evidence).
+    pub(crate) blocks: Vec<usize>,
+    pub(crate) forward: Folds,
+}
+
+/// A model scored on folds ([`Scorer::heldout_fits`]).
+pub(crate) struct HeldOut {
+    /// The statistics of the held-out errors.
+    pub(crate) stats: Stats,
+    /// Every held-out error, in fold order.
+    pub(crate) errors: Vec<f64>,
+    /// Each fold's fitted parameters (empty for an empty fold).
+    pub(crate) thetas: Vec<Vec<f64>>,
+}
+
+/// What a candidate adds to a model ([`Scorer::new_free`]).
+pub(crate) struct Addition {
+    /// Its parameters that stay identifiable next to the model.
+    pub(crate) new_free: usize,
+    /// Its parameters that do not, with the reason.
+    pub(crate) fixed: Vec<FixedParameter>,
+}
+
+impl<'a> Scorer<'a> {
+    /// The folds and per-measurement quantities of `data`.
+    pub(crate) fn new(robot: &'a Robot, data: &'a Dataset, config: &Config) -> Self {
+        let partition = folds_for(data, config.folds, config.seed, config.folds_by);
+        let blocks = partition.test_blocks();
+        Self {
+            robot,
+            data,
+            terms: PoseTerms::of(robot, data, config.orientation_lever_mm),
+            folds: partition.folds,
+            blocks,
+            forward: forward_chained(data, config.folds),
+        }
+    }
+
+    /// The model of `effects`, its registration started from the measurements `rows` (Kabsch).
+    pub(crate) fn model(&self, effects: &[Effect], rows: &[usize]) -> Result<Model, DiagnoseError> {
+        let m = Model::new(self.robot, effects.to_vec())?;
+        Ok(if m.has_registration() {
+            let registration = initial_registration(self.robot, self.data, rows)?;
+            m.with_registration(registration)
+        } else {
+            m
+        })
+    }
+
+    /// Held-out statistics of a model by cross-validation on `folds`.
+    pub(crate) fn heldout(&self, effects: &[Effect], folds: &Folds) -> Result<Stats, DiagnoseError> {
+        Ok(self.heldout_errors(effects, folds)?.0)
+    }
+
+    /// Held-out statistics and every held-out error (3-D norm, mm, in fold order: the same order for any
+    /// model on the same folds, so that two models' errors pair up measurement by measurement).
+    pub(crate) fn heldout_errors(&self, effects: &[Effect], folds: &Folds) -> Result<(Stats, Vec<f64>), DiagnoseError> {
+        let h = self.heldout_fits(effects, folds)?;
+        Ok((h.stats, h.errors))
+    }
+
+    /// [`Scorer::heldout_errors`] with each fold's fitted parameters.
+    pub(crate) fn heldout_fits(&self, effects: &[Effect], folds: &Folds) -> Result<HeldOut, DiagnoseError> {
+        // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
+        let per_fold: Vec<(Vec<f64>, Vec<f64>)> = folds
+            .par_iter()
+            .map(|(train, test)| {
+                if train.is_empty() || test.is_empty() {
+                    return Ok((Vec::new(), Vec::new()));
+                }
+                let model = self.model(effects, train)?;
+                let f = fit(self.robot, &model, self.data, train, &self.terms)?;
+                let r = residuals(self.robot, &model, &f.theta, self.data, test, &self.terms)?;
+                Ok((norms(&r, self.terms.stride()), f.theta))
+            })
+            .collect::<Result<_, DiagnoseError>>()?;
+        let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _)| e.iter().copied()).collect();
+        let thetas = per_fold.into_iter().map(|(_, t)| t).collect();
+        Ok(HeldOut { stats: Stats::of(&errors), errors, thetas })
+    }
+
+    /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
+    pub(crate) fn new_free(&self, effects: &[Effect], candidate: Effect) -> Result<Addition, DiagnoseError> {
+        let mut all_effects = effects.to_vec();
+        all_effects.push(candidate);
+        let model = self.model(&all_effects, &self.all())?;
+        let jac = self.jacobian_at_start(&model)?;
+        let decided = identifiable(&jac, &vec![true; model.len()]);
+        let start = model.offsets()[model.offsets().len() - 1];
+        let new_free = (start..model.len()).filter(|&c| decided.free[c]).count();
+        let fixed = model
+            .fixed_parameters(&decided.fixed)
+            .into_iter()
+            .filter(|f| candidate.parameter_names().contains(&f.parameter))
+            .collect();
+        Ok(Addition { new_free, fixed })
+    }
+
+    /// Every measurement's index.
+    pub(crate) fn all(&self) -> Vec<usize> {
+        (0..self.data.len()).collect()
+    }
+
+    /// The Jacobian of `model` at its initial values on all measurements (where a candidate's
+    /// identifiability and relations are judged).
+    pub(crate) fn jacobian_at_start(&self, model: &Model) -> Result<faer::Mat<f64>, DiagnoseError> {
+        let all = self.all();
+        Ok(residuals_and_jacobian(self.robot, model, &model.initial(), self.data, &all, &self.terms)?.1)
+    }
+
+    /// The model of `effects` fitted on all measurements.
+    pub(crate) fn full_fit(&self, effects: &[Effect]) -> Result<(Model, Fit), DiagnoseError> {
+        let all = self.all();
+        let model = self.model(effects, &all)?;
+        let f = fit(self.robot, &model, self.data, &all, &self.terms)?;
+        Ok((model, f))
+    }
+
+    /// The Bayesian information criterion of a fit on all of the data.
+    pub(crate) fn bic_of(&self, f: &Fit) -> f64 {
+        let m = (self.data.len() * self.terms.stride()) as f64;
+        let k = f.free.iter().filter(|&&x| x).count() as f64;
+        m * (f.ssr / m).max(1e-300).ln() + k * m.ln()
+    }
+}
+
+/// Whether model `b` has a lower held-out mean squared error than model `a`, by more than `z` standard
+/// errors of the paired difference (errors `a[i]`, `b[i]` of the same measurement): the acceptance rule
+/// of the ladder. With `z = 1` this is the one-standard-error rule: an improvement smaller than its own
+/// uncertainty is not taken. The standard error is taken over blocks (`blocks[i]`, the block of error
+/// `i`: a cluster-robust standard error of the mean, `√(B/(B−1) · Σ_b (D_b − n_b·d̄)²) / n`, `D_b` the
+/// block's summed difference): neighbouring poses share their systematic residuals, so a gain that
+/// holds in a few neighbourhoods only is not counted once per pose. With one measurement per block this
+/// is the ordinary paired standard error.
+pub(crate) fn significantly_better(a: &[f64], b: &[f64], z: f64, blocks: &[usize]) -> bool {
+    let n = a.len().min(b.len());
+    if n < 2 {
+        return false;
+    }
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x * x - y * y).collect();
+    let mean = d.iter().sum::<f64>() / n as f64;
+    let mut sums: std::collections::BTreeMap<usize, (f64, f64)> = std::collections::BTreeMap::new();
+    for (i, v) in d.iter().enumerate() {
+        let e = sums.entry(blocks.get(i).copied().unwrap_or(usize::MAX - i)).or_insert((0.0, 0.0));
+        e.0 += v;
+        e.1 += 1.0;
+    }
+    let count = sums.len();
+    if count < 2 {
+        return false;
+    }
+    let ss: f64 = sums.values().map(|(s, m)| (s - m * mean) * (s - m * mean)).sum();
+    let var_of_mean = ss * count as f64 / (count - 1) as f64 / (n as f64 * n as f64);
+    mean > z * var_of_mean.sqrt()
+}
+
+impl Scorer<'_> {
+    /// How effect `e`'s parameter directions relate to each of `others` on these data: `Equivalent` when
+    /// the two blocks' Jacobian columns span the same space, `ContainedIn` when `e`'s lie in the other's
+    /// span (the other block can do all `e` does, and more), `Contains` the other way round, decided by rank with the identifiability
+    /// tolerance: a direction within 1e-6 (relative) of a span belongs to it. Linearised at the nominal
+    /// model (every parameter zero) over all measurements.
+    pub(crate) fn relations(&self, e: Effect, others: &[Effect]) -> Result<Vec<(Effect, Relation)>, DiagnoseError> {
+        let all = self.all();
+        let mut out = Vec::new();
+        for &b in others {
+            if b == e || b.is_reported() != e.is_reported() {
+                continue;
+            }
+            let model = self.model(&[e, b], &all)?;
+            let jac = self.jacobian_at_start(&model)?;
+            let cols = |range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
+                range.map(|c| (0..jac.nrows()).map(|r| jac[(r, c)]).collect()).collect()
+            };
+            let (ce, cb) = (cols(0..e.len()), cols(e.len()..e.len() + b.len()));
+            // A block that moves nothing on these data (gravity about a vertical axis) relates to nothing.
+            let moves = |c: &[Vec<f64>]| c.iter().any(|v| v.iter().any(|x| x.abs() > 1e-12));
+            if !moves(&ce) || !moves(&cb) {
+                continue;
+            }
+            let e_in_b = within_span(&ce, &cb);
+            let b_in_e = within_span(&cb, &ce);
+            match (e_in_b, b_in_e) {
+                (true, true) => out.push((b, Relation::Equivalent)),
+                (true, false) => out.push((b, Relation::ContainedIn)),
+                (false, true) => out.push((b, Relation::Contains)),
+                _ => {}
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// How one block's parameter directions relate to another's on the data.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Relation {
+    /// The same column space.
+    Equivalent,
+    /// Inside the other's column space.
+    ContainedIn,
+    /// The other's column space is inside this one's.
+    Contains,
+}
+
+/// Whether every non-zero column of `a` lies in the span of `b` (Gram–Schmidt, twice, on unit columns).
+fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
+    let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    for col in b {
+        let n0 = norm(col);
+        if n0 < 1e-12 {
+            continue;
+        }
+        let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
+        let n = project_out(&basis, &mut v);
+        if n >= DEPENDENT {
+            basis.push(v.iter().map(|x| x / n).collect());
+        }
+    }
+    a.iter().all(|col| {
+        let n0 = norm(col);
+        if n0 < 1e-12 {
+            return true;
+        }
+        let mut v: Vec<f64> = col.iter().map(|x| x / n0).collect();
+        project_out(&basis, &mut v) < DEPENDENT
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn single_pose_blocks_give_the_paired_standard_error() {
+        // a² − b² = 1 + (−1)^i · 0.5: mean 1, sample sd 0.5·√(n/(n−1)); 1 > z·SE for z up to ~ 2√n.
+        let n = 16;
+        let a: Vec<f64> = (0..n).map(|i| (2.0f64 + if i % 2 == 0 { 0.5 } else { -0.5 }).sqrt()).collect();
+        let b = vec![1.0; n];
+        let blocks: Vec<usize> = (0..n).collect();
+        let se = 0.5 * (n as f64 / (n - 1) as f64).sqrt() / (n as f64).sqrt();
+        assert!(significantly_better(&a, &b, 0.99 / se, &blocks));
+        assert!(!significantly_better(&a, &b, 1.01 / se, &blocks));
+    }
+
+    #[test]
+    fn a_gain_held_by_one_block_is_not_significant_over_blocks() {
+        // Every pose of block 0 gains a lot, the others nothing: per pose the gain looks consistent
+        // (one SE passes), over four blocks it is one block's luck (it does not).
+        let a: Vec<f64> = (0..40).map(|i| if i < 10 { 2.0 } else { 1.0 }).collect();
+        let b = vec![1.0; 40];
+        let per_pose: Vec<usize> = (0..40).collect();
+        let per_block: Vec<usize> = (0..40).map(|i| i / 10).collect();
+        assert!(significantly_better(&a, &b, 1.0, &per_pose));
+        assert!(!significantly_better(&a, &b, 2.0, &per_block));
+        // Equal gains in every block stay significant.
+        let even: Vec<f64> = (0..40).map(|i| if i % 10 < 5 { 2.0 } else { 1.5 }).collect();
+        assert!(significantly_better(&even, &b, 2.0, &per_block));
+    }
+}

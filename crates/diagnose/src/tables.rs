@@ -1,0 +1,186 @@
+//! Phase 6 of the selection: the final model on all data and what the report says of it — the
+//! leave-one-out table, each effect with its parameters and relations, the fitted frames, the
+//! identifiability of the final model and where its residuals lie (the selection's own, optimistic
+//! scores).
+
+use rayon::prelude::*;
+use thermokin_chain::{Chain, units, xyz_angles_for_output};
+use thermokin_identify::{Effect, Fit, MAX_ITERATIONS, Model, fit, observability, residuals_and_jacobian};
+
+use crate::config::Config;
+use crate::error::DiagnoseError;
+use crate::folds::describe;
+use crate::report::{
+    Breakdown, EffectReport, FittedFrames, Identifiability, ParameterValue, PoseReport, TableRow, breakdown,
+};
+use crate::scoring::{Relation, Scorer};
+use crate::select::Selected;
+use crate::selection::Selection;
+use crate::stats::Stats;
+
+/// What the selection reports of its choice: everything in a report but the validation of the whole
+/// procedure (nested, hold-out) and the verdict.
+pub(crate) struct Tables {
+    /// The effects of the final model (the always-estimated blocks first).
+    pub(crate) effects: Vec<Effect>,
+    /// The reported effects, main cause first (the order of `reports`).
+    pub(crate) main_first: Vec<Effect>,
+    pub(crate) nominal: Stats,
+    pub(crate) validation: String,
+    pub(crate) orientation_lever_mm: Option<f64>,
+    pub(crate) reports: Vec<EffectReport>,
+    pub(crate) additive: Vec<TableRow>,
+    pub(crate) leave_one_out: Vec<TableRow>,
+    pub(crate) identifiability: Identifiability,
+    pub(crate) residuals_before: Breakdown,
+    pub(crate) residuals_after: Breakdown,
+    pub(crate) bic: Vec<f64>,
+    pub(crate) frames: FittedFrames,
+    pub(crate) calibrated: Chain,
+    pub(crate) identified: thermokin_deform::RobotModel,
+    /// What the final fit says of itself (a fit stopped by its iteration limit).
+    pub(crate) warnings: Vec<String>,
+}
+
+/// The tables of `selected` on the scorer's data.
+pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -> Result<Tables, DiagnoseError> {
+    let (robot, data) = (scorer.robot, scorer.data);
+    let Selected { selection: sel, catalogue } = selected;
+    let effects = sel.effects.clone();
+    let (model, final_fit) = scorer.full_fit(&effects)?;
+    let all = scorer.all();
+    let (_, jac) = residuals_and_jacobian(robot, &model, &final_fit.theta, data, &all, &scorer.terms)?;
+    let observability = observability(&jac, &final_fit.free);
+    let without = leave_one_out(scorer, &effects, sel.always)?;
+    let leave_one_out =
+        without.iter().map(|(k, s)| TableRow { model: format!("all − {}", effects[*k].label()), stats: *s }).collect();
+    let mut reports: Vec<(Effect, EffectReport)> = without
+        .iter()
+        .map(|(k, _)| effects[*k])
+        .zip(effect_reports(scorer, &model, &final_fit, &sel, &without, &catalogue)?)
+        .collect();
+    // Main cause first: the effect whose removal hurts most.
+    reports.sort_by(|(_, a), (_, b)| (b.heldout_rms_without_mm).total_cmp(&a.heldout_rms_without_mm));
+    let (main_first, reports): (Vec<Effect>, Vec<EffectReport>) = reports.into_iter().unzip();
+    let nominal_model = scorer.model(&effects[..sel.always], &all)?;
+    let nominal_fit = fit(robot, &nominal_model, data, &all, &scorer.terms)?;
+    let (calibrated, left_out) = model.calibrated_chain(robot, &final_fit.theta)?;
+    let frames = fitted_frames(&model, &calibrated, &effects);
+    // The identified robot carries every chosen effect: the model written is the model scored.
+    let identified = model.robot_model(robot, &final_fit.theta, data)?;
+    debug_assert!(left_out.iter().all(|e| !e.is_static()));
+    // A claim checked, not assumed: the parameters reported and exported are a least-squares minimum only
+    // if the final fit ended by its own test.
+    let warnings = if final_fit.converged {
+        Vec::new()
+    } else {
+        vec![format!(
+            "the final model's fit stopped at its {MAX_ITERATIONS}-iteration limit before converging: its parameters (and an exported robot) are not at the least-squares minimum"
+        )]
+    };
+    Ok(Tables {
+        nominal: sel.additive[0].stats,
+        validation: describe(data, config),
+        orientation_lever_mm: scorer.terms.lever_mm,
+        reports,
+        leave_one_out,
+        identifiability: Identifiability {
+            observability,
+            fixed: final_fit.fixed.clone(),
+            skipped_candidates: sel.skipped,
+            not_identifiable: sel.refused,
+            correlated: final_fit.correlated.clone(),
+        },
+        residuals_before: breakdown(robot, data, &nominal_model, &nominal_fit.theta, &scorer.terms)?,
+        residuals_after: breakdown(robot, data, &model, &final_fit.theta, &scorer.terms)?,
+        additive: sel.additive,
+        bic: sel.bic,
+        frames,
+        calibrated,
+        identified,
+        warnings,
+        effects,
+        main_first,
+    })
+}
+
+/// The held-out statistics of the final model without each reported effect (index into `effects`).
+fn leave_one_out(scorer: &Scorer<'_>, effects: &[Effect], always: usize) -> Result<Vec<(usize, Stats)>, DiagnoseError> {
+    (always..effects.len())
+        .into_par_iter()
+        .map(|k| {
+            let rest: Vec<Effect> = effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+            Ok((k, scorer.heldout(&rest, &scorer.folds)?))
+        })
+        .collect()
+}
+
+/// Each reported effect of the final model: its parameters in report units (or why fixed), its steps,
+/// its leave-one-out error, and how it relates to the catalogue's blocks on the data.
+fn effect_reports(
+    scorer: &Scorer<'_>,
+    model: &Model,
+    final_fit: &Fit,
+    sel: &Selection,
+    without: &[(usize, Stats)],
+    catalogue: &[Effect],
+) -> Result<Vec<EffectReport>, DiagnoseError> {
+    let names = model.parameter_names();
+    without
+        .iter()
+        .map(|(k, w)| {
+            let e = model.effects()[*k];
+            let o = model.offsets()[*k];
+            let parameters = (0..e.len())
+                .map(|p| {
+                    let v = final_fit.theta[o + p];
+                    let s = final_fit.std[o + p];
+                    let fixed = final_fit.fixed.iter().find(|f| f.parameter == names[o + p]).map(|f| f.reason.clone());
+                    let std = (fixed.is_none() && s.is_finite()).then(|| e.to_report_units(p, s).abs());
+                    (names[o + p].clone(), ParameterValue { value: e.to_report_units(p, v), std, fixed })
+                })
+                .collect();
+            let relations = scorer.relations(e, catalogue)?;
+            let of = |kind: Relation| -> Vec<String> {
+                relations.iter().filter(|(_, r)| *r == kind).map(|(b, _)| b.label()).collect()
+            };
+            let step = sel.steps.iter().find(|s| s.effect == e);
+            Ok(EffectReport {
+                effect: e.kind_name().to_string(),
+                label: e.label(),
+                joints: e.joint().map(|j| vec![j.number()]).unwrap_or_default(),
+                heldout_rms_before_mm: step.map_or(f64::NAN, |s| s.before_mm),
+                heldout_rms_after_mm: step.map_or(f64::NAN, |s| s.after_mm),
+                heldout_rms_without_mm: w.heldout_rms_mm,
+                parameters,
+                equivalent: of(Relation::Equivalent),
+                contained_in: of(Relation::ContainedIn),
+                contains: of(Relation::Contains),
+            })
+        })
+        .collect()
+}
+
+/// The always-estimated frames as fitted: the registration (the measurement frame's pose of the base),
+/// the tool point and the probe's rotation, where estimated.
+fn fitted_frames(model: &Model, calibrated: &Chain, effects: &[Effect]) -> FittedFrames {
+    FittedFrames {
+        registration: model.has_registration().then(|| {
+            let world_from_base = calibrated.base().pose();
+            let t = world_from_base.translation.vector;
+            let r = xyz_angles_for_output(world_from_base.rotation.to_rotation_matrix().matrix());
+            PoseReport {
+                position_mm: [t.x, t.y, t.z],
+                xyz_euler_deg: [units::degrees(r.x), units::degrees(r.y), units::degrees(r.z)],
+            }
+        }),
+        tool_point_mm: effects.contains(&Effect::ToolPoint).then(|| {
+            let t = calibrated.tool().translation + calibrated.tool().error.translation;
+            [t.x, t.y, t.z]
+        }),
+        tool_rotation_deg: effects.contains(&Effect::ToolRotation).then(|| {
+            let r = calibrated.tool().error.rotation;
+            [units::degrees(r.x), units::degrees(r.y), units::degrees(r.z)]
+        }),
+    }
+}

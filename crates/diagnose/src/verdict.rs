@@ -1,0 +1,161 @@
+//! What a report says first: the warnings (data read with the wrong units or frame, effects identified
+//! over a short arc, a fit that did not converge), whether the diagnosis transfers at all, and the
+//! verdict against the stated noise.
+
+use thermokin_chain::{Dataset, JointKind, Robot, units};
+use thermokin_identify::{Effect, FrameMode};
+
+use crate::config::Config;
+use crate::eligibility::{arc, needed_arc, travel};
+use crate::report::{HoldoutStats, Nested};
+use crate::tables::Tables;
+
+/// Signs that the data were read with the wrong units or frame: the diagnosis would otherwise absorb a
+/// radians-for-degrees mix-up or an unregistered tracker frame into hundreds of millimetres of "error".
+pub(crate) fn warnings(robot: &Robot, data: &Dataset, config: &Config, tables: &Tables) -> Vec<String> {
+    let mut out = Vec::new();
+    let revolute: Vec<usize> = robot
+        .chain()
+        .joints()
+        .iter()
+        .enumerate()
+        .filter(|(_, j)| j.kind == JointKind::Revolute)
+        .map(|(i, _)| i)
+        .collect();
+    let largest = data.measurements.iter().flat_map(|m| revolute.iter().map(|&i| m.q[i].abs())).fold(0.0, f64::max);
+    // 2π read as degrees is 0.11 rad: joint values that never leave ±6.3° over a calibration set were
+    // most likely written in radians.
+    if data.len() >= 10 && !revolute.is_empty() && largest < units::radians(std::f64::consts::TAU) {
+        out.push(format!(
+            "every revolute joint value is within ±{:.2}°: were they written in radians? (files are read in degrees)",
+            units::degrees(largest)
+        ));
+    }
+    // Coverage: an effect of a joint identified over a small part of the joint's travel is an
+    // extrapolation elsewhere — the arc eligibility asks of a scale or cyclic error (`eligibility`),
+    // said here of every chosen joint effect.
+    for e in &tables.main_first {
+        let Some(joint) = e.joint() else { continue };
+        let (j, number) = (joint.index(), joint.number());
+        let (lo, hi) = arc(data, j);
+        let travel = travel(robot, j);
+        let need = needed_arc(travel, matches!(e, Effect::Periodic(_)), &config.eligibility);
+        if robot.chain().joints()[j].kind == JointKind::Revolute && hi - lo < need {
+            out.push(format!(
+                "{} was identified with joint {number} between {:.1}° and {:.1}° only ({:.0}% of its travel): it may not hold outside that range — measure poses across the joint's travel",
+                e.label(),
+                units::degrees(lo),
+                units::degrees(hi),
+                100.0 * (hi - lo) / travel
+            ));
+        }
+    }
+    // A nominal model off by more than 50 mm RMS in the base frame: the robot cannot be that wrong; the
+    // measurements are in another frame.
+    if config.frame == FrameMode::Base && tables.nominal.heldout_rms_mm > 50.0 {
+        out.push(format!(
+            "the nominal model misses by {:.0} mm RMS in the base frame: are the measurements in a tracker frame? (--frame tracker estimates the registration)",
+            tables.nominal.heldout_rms_mm
+        ));
+    }
+    out
+}
+
+/// The sentence said first when the diagnosis does not beat the nominal model where it was not fitted:
+/// the nested validation's mean error, any of its outer folds (also when the selection on all data
+/// chose nothing: the procedure itself is then not to be trusted on these data), or the hold-out set's.
+pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Option<&HoldoutStats>) -> Option<String> {
+    let chose = !tables.reports.is_empty();
+    let mut out = Vec::new();
+    if let Some(n) = nested {
+        if n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
+            || (chose && n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm)
+        {
+            out.push(format!(
+                "on outer folds the selection never saw, its choices' mean error {:.4} mm does not beat the nominal model's {:.4} mm",
+                n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm
+            ));
+        }
+        if !n.worse_than_nominal.is_empty() {
+            let list: Vec<String> = n.worse_than_nominal.iter().map(ToString::to_string).collect();
+            out.push(format!(
+                "in outer fold{} {} the model chosen there predicts worse than the nominal one",
+                if list.len() > 1 { "s" } else { "" },
+                list.join(", ")
+            ));
+        }
+    }
+    if let Some(h) = holdout
+        && chose
+        && h.selected.heldout_mean_mm >= h.nominal.heldout_mean_mm
+    {
+        out.push(format!(
+            "on the hold-out set the chosen model's mean error {:.4} mm does not beat the nominal model's {:.4} mm",
+            h.selected.heldout_mean_mm, h.nominal.heldout_mean_mm
+        ));
+    }
+    (!out.is_empty()).then(|| format!("the diagnosis does not transfer: {}", out.join("; ")))
+}
+
+/// Whether what the effects leave is the noise: the nested held-out RMS (or the selection's own CV
+/// without nesting) against `√3 · σ` of the stated per-axis noise (`√(3σ² + 3(lever · σ_rot)²)` with
+/// orientations fitted), with a factor 1.5 of margin (the 3-D RMS of Gaussian noise scatters by ~10 %
+/// over 100 poses; a model error shows as more). With nested validation the median and 95th percentile
+/// follow, robust to a few wild poses, and an outer fold holding most of the squared error is named.
+pub(crate) fn verdict(config: &Config, tables: &Tables, nested: Option<&Nested>) -> String {
+    let robust = match nested {
+        Some(n) => {
+            let mut t = format!(
+                " (nested held-out median {:.4} mm, 95th percentile {:.4} mm",
+                n.selected.heldout_median_mm, n.selected.heldout_p95_mm
+            );
+            if let Some(k) = n.dominated_by {
+                t +=
+                    &format!("; outer fold {k} holds more than half of the squared error: the RMS is mostly that fold");
+            }
+            t + ")"
+        }
+        None => String::new(),
+    };
+    verdict_sentence(config, tables, nested) + &robust
+}
+
+/// The verdict's sentence, on the RMS.
+fn verdict_sentence(config: &Config, tables: &Tables, nested: Option<&Nested>) -> String {
+    let (held, how) = match nested {
+        Some(n) => (n.selected.heldout_rms_mm, "nested held-out"),
+        None => (
+            tables.additive.last().map_or(tables.nominal.heldout_rms_mm, |r| r.stats.heldout_rms_mm),
+            "cross-validated",
+        ),
+    };
+    let floor = match (config.noise_mm, tables.orientation_lever_mm, config.orientation_noise_rad) {
+        (None, ..) => None,
+        (Some(sigma), None, _) => Some((sigma * 3f64.sqrt(), format!("σ = {sigma} mm per axis"))),
+        (Some(sigma), Some(lever), Some(rot)) => Some((
+            (3.0 * sigma * sigma + 3.0 * (lever * rot).powi(2)).sqrt(),
+            // Degrees as the user gave them: the round trip through radians rounded off at 1e-9°.
+            format!("σ = {sigma} mm and {}° per axis, lever {lever} mm", (units::degrees(rot) * 1e9).round() / 1e9),
+        )),
+        (Some(_), Some(_), None) => {
+            return format!(
+                "{held:.4} mm RMS {how} remains (position and orientation combined); the orientation noise is not stated (--orientation-noise), so whether that is noise cannot be said"
+            );
+        }
+    };
+    match floor {
+        None => format!(
+            "{held:.4} mm RMS {how} remains; the measurement noise is not stated (--noise), so whether that is noise or an unexplained effect cannot be said"
+        ),
+        Some((floor, stated)) => {
+            if held <= 1.5 * floor {
+                format!("explained: {held:.4} mm RMS {how} is at the stated noise ({floor:.4} mm RMS for {stated})")
+            } else {
+                format!(
+                    "not explained: {held:.4} mm RMS {how} remains, {:.1}× the stated noise ({floor:.4} mm RMS): an effect outside the catalogue, or more noise than stated",
+                    held / floor
+                )
+            }
+        }
+    }
+}

@@ -1,0 +1,34 @@
+//! The drift check of the diagnosis's outputs on the real and paper cases: each report's text and the
+//! robot its export writes, compared byte for byte with `fixtures/golden/diagnosis/<case>.txt` — our own
+//! earlier output, a drift check, never evidence of correctness (the bounds in each case's test are
+//! that). A change that moves any figure fails here first; when the change is meant, rerun the cases
+//! with `THERMOKIN_BLESS=1` to rewrite the files, and say in the commit what moved and why.
+
+use thermokin_chain::Robot;
+use thermokin_diagnose::Report;
+use thermokin_testdata::workspace;
+
+/// Compares (or, with `THERMOKIN_BLESS` set, writes) the golden output of `case`: the report's text, then
+/// the exported robot (on `robot`, the file's robot, as `diagnose --export` writes it).
+pub fn drift_check(case: &str, robot: &Robot, report: &Report) {
+    let export = report.export_model(robot, None, case).unwrap();
+    let text = format!("{}\n--- exported robot ---\n{}", report.text(), thermokin_io::robot_model_to_toml(&export));
+    let path = workspace(&format!("fixtures/golden/diagnosis/{case}.txt"));
+    if std::env::var_os("THERMOKIN_BLESS").is_some() {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        std::fs::write(&path, &text).unwrap();
+        return;
+    }
+    let golden = std::fs::read_to_string(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (write it with THERMOKIN_BLESS=1)", path.display()));
+    if golden != text {
+        let line = golden.lines().zip(text.lines()).position(|(a, b)| a != b).unwrap_or(0);
+        panic!(
+            "{case}: the diagnosis's output drifted from {} at line {}:\n  golden: {}\n  now:    {}\n(if the change is meant, rerun with THERMOKIN_BLESS=1 and say why in the commit)",
+            path.display(),
+            line + 1,
+            golden.lines().nth(line).unwrap_or("<end>"),
+            text.lines().nth(line).unwrap_or("<end>")
+        );
+    }
+}

@@ -1,0 +1,99 @@
+//! The catalogue of effects for a robot and a data set, and the blocks every model of a measurement setup
+//! estimates without reporting them (the tracker registration, an unknown tool).
+
+use serde::Serialize;
+use thermokin_chain::{Dataset, JointKind, Robot};
+
+use crate::effect::{DriftShape, Effect, JointIndex};
+use crate::error::IdentifyError;
+
+/// In which frame the measurements are.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum FrameMode {
+    /// The robot's base frame: a base misalignment is a candidate effect.
+    Base,
+    /// A tracker frame: an unknown registration is always estimated and never reported.
+    Tracker,
+}
+
+/// Whether the tool point is known.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ToolMode {
+    /// The robot description's tool: a tool error is a candidate effect.
+    Known,
+    /// Unknown: the tool point is always estimated and never reported.
+    Unknown,
+}
+
+/// The settings of a measurement setup that decide which blocks are always estimated: the frame of the
+/// measurements, whether the tool is known, and the weight of measured orientations.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Setup {
+    /// The measurement frame.
+    pub frame: FrameMode,
+    /// The tool point.
+    pub tool: ToolMode,
+    /// The orientation lever, mm (0: orientations ignored).
+    pub orientation_lever_mm: f64,
+}
+
+impl Setup {
+    /// The blocks every model estimates (never reported as causes): the tracker registration and an
+    /// unknown tool point — with its rotation when the data carry orientations that are fitted.
+    pub fn always_estimated(&self, data: &Dataset) -> Vec<Effect> {
+        let mut effects = Vec::new();
+        if self.frame == FrameMode::Tracker {
+            effects.push(Effect::Registration);
+        }
+        if self.tool == ToolMode::Unknown {
+            effects.push(Effect::ToolPoint);
+            // An unknown 6-D probe: its rotation is as unknown as its point.
+            if data.has_orientation() && self.orientation_lever_mm > 0.0 {
+                effects.push(Effect::ToolRotation);
+            }
+        }
+        effects
+    }
+
+    /// The catalogue's candidates for `robot` and `data`, in catalogue order: the base and tool frames
+    /// where they are not always estimated; per joint its offset and link deviation, a gravity compliance
+    /// where the joint carries mass, a gear-ratio scale and a cyclic error of a revolute joint; a thermal
+    /// drift (linear and exponential) when the data span time, one per kelvin when they carry
+    /// temperatures.
+    pub fn candidates(&self, robot: &Robot, data: &Dataset) -> Result<Vec<Effect>, IdentifyError> {
+        let joints =
+            (0..robot.chain().dof()).map(|j| JointIndex::of(robot, j)).collect::<Result<Vec<_>, IdentifyError>>()?;
+        let mut c = Vec::new();
+        if self.frame == FrameMode::Base {
+            c.push(Effect::BaseFrame);
+        }
+        if self.tool == ToolMode::Known {
+            c.push(Effect::ToolFrame);
+        }
+        c.extend(joints.iter().map(|&j| Effect::JointOffset(j)));
+        c.extend(joints.iter().map(|&j| Effect::LinkDeviation(j)));
+        for &j in &joints {
+            let carries_mass = robot.masses().iter().skip(j.index()).any(Option::is_some);
+            if carries_mass {
+                c.push(Effect::JointCompliance(j));
+            }
+        }
+        // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity).
+        for &j in &joints {
+            if robot.chain().joints()[j.index()].kind == JointKind::Revolute {
+                c.push(Effect::JointScale(j));
+                c.push(Effect::Periodic(j));
+            }
+        }
+        if data.time_span() > 0.0 {
+            for &j in &joints {
+                c.push(Effect::ThermalDrift(j, DriftShape::Linear));
+                c.push(Effect::ThermalDrift(j, DriftShape::Exponential));
+            }
+        }
+        if !data.temperature_names.is_empty() {
+            c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
+        }
+        Ok(c)
+    }
+}

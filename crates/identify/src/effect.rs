@@ -1,0 +1,325 @@
+//! Effects: the blocks of parameters a model is built from, each carrying its joint, and their
+//! parameters' names and units.
+
+use serde::Serialize;
+use thermokin_chain::{ErrorParams, Robot, units};
+use thermokin_deform::{AfterStabilization, TimeProfile};
+
+use crate::error::IdentifyError;
+
+/// Reference time of the linear drift: the parameters are the deviation at 180 minutes (section 4).
+pub const LINEAR_DRIFT_REFERENCE_MIN: f64 = 180.0;
+/// Largest time constant considered, minutes: beyond it the exponential is indistinguishable from the
+/// linear drift over any warm-up a user measures.
+const MAX_TAU_MIN: f64 = 1e4;
+/// The time constants an exponential drift is evaluated and fitted in, minutes: from a thousandth of a
+/// minute (a step) to [`MAX_TAU_MIN`].
+pub const TAU_RANGE_MIN: (f64, f64) = (1e-3, MAX_TAU_MIN);
+/// Initial time constant of an exponential drift, minutes.
+pub(crate) const INITIAL_TAU_MIN: f64 = 60.0;
+
+/// How a thermal drift grows with time — a family of [`TimeProfile`]s of `thermokin-deform`, whose law
+/// ([`TimeProfile::time_factor`]) the fit evaluates. The six amplitudes of a drift are its deviation at
+/// the reference time [`LINEAR_DRIFT_REFERENCE_MIN`] for every shape: `δ · f(t) / f(180)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+pub enum DriftShape {
+    /// [`TimeProfile::Linear`] without a plateau: `δ · t / 180 min`.
+    Linear,
+    /// [`TimeProfile::Exponential`] with τ fitted: `δ · (1 − e^(−t/τ)) / (1 − e^(−180/τ))`. The
+    /// normalisation at 180 minutes lets a very slow exponential tend to the linear drift instead of
+    /// trading a huge amplitude against a huge τ.
+    Exponential,
+    /// The law of [`TimeProfile::Temperature`]: `δ · (T(t) − T(0))` per kelvin of the joint's own logged
+    /// temperature rise when a column names the joint ([`sensor_joint`]), of the mean rise otherwise.
+    Temperature,
+}
+
+impl DriftShape {
+    /// The deform profile of this shape (for a use of the identified drift outside the diagnosis: it
+    /// scales a table of the deviation at 180 minutes to `(t / 180)` or `(1 − e^(−t/τ)) / (1 − e^(−180/τ))`
+    /// only after that table is divided by `f(180)`; see [`DriftShape::reference_factor`]). `None` for the
+    /// temperature shape, whose factor is the logged rise and needs the log.
+    pub fn profile(self, tau_min: f64) -> Option<TimeProfile> {
+        match self {
+            DriftShape::Linear => Some(TimeProfile::Linear {
+                stabilization_min: LINEAR_DRIFT_REFERENCE_MIN,
+                after: AfterStabilization::KeepGrowing,
+            }),
+            DriftShape::Exponential => Some(TimeProfile::Exponential { tau_min }),
+            DriftShape::Temperature => None,
+        }
+    }
+
+    /// `f(180)` of the profile: the amplitudes a fitted drift reports (the deviation at 180 minutes)
+    /// divided by this are the table that [`DriftShape::profile`] scales.
+    pub fn reference_factor(self, tau_min: f64) -> f64 {
+        self.profile(tau_min).and_then(|p| p.time_factor(LINEAR_DRIFT_REFERENCE_MIN)).unwrap_or(1.0)
+    }
+}
+
+/// A joint an effect acts on: a 0-based index checked against the robot — [`JointIndex::of`] is the only
+/// way to make one, so that an effect cannot name a joint the robot lacks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
+pub struct JointIndex(usize);
+
+impl JointIndex {
+    /// Joint `index` (0-based) of `robot`.
+    pub fn of(robot: &Robot, index: usize) -> Result<Self, IdentifyError> {
+        let dof = robot.chain().dof();
+        if index < dof { Ok(Self(index)) } else { Err(IdentifyError::NoSuchJoint { joint: index + 1, dof }) }
+    }
+
+    /// The 0-based index.
+    pub fn index(self) -> usize {
+        self.0
+    }
+
+    /// The 1-based joint number of reports and flags.
+    pub fn number(self) -> usize {
+        self.0 + 1
+    }
+}
+
+/// An effect: a block of parameters that can be added to the model, carrying its joint where it has one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Effect {
+    /// The tracker registration (tracker frame): always estimated, never reported as an effect (6).
+    Registration,
+    /// An unknown tool point: always estimated, never reported as an effect (3).
+    ToolPoint,
+    /// An unknown probe's rotation, when orientations are measured: always estimated with
+    /// [`Effect::ToolPoint`], never reported as an effect (3).
+    ToolRotation,
+    /// A base misalignment (6).
+    BaseFrame,
+    /// A tool-frame error: the tool point (3) and the tool's rotation (3). The rotation moves no
+    /// measured point; it is identified from measured orientations (6-D probes) and fixed otherwise.
+    ToolFrame,
+    /// A joint's zero offset (1).
+    JointOffset(JointIndex),
+    /// The paper's six error parameters of a joint (6).
+    LinkDeviation(JointIndex),
+    /// Gravity compliance of a joint: Δq = k · τ_gravity(q) (1).
+    JointCompliance(JointIndex),
+    /// A gear-ratio (scale) error of a revolute joint: Δq = s · q (1, dimensionless).
+    JointScale(JointIndex),
+    /// A cyclic encoder error of a revolute joint, once and twice per revolution:
+    /// Δq = a₁ sin q + b₁ cos q + a₂ sin 2q + b₂ cos 2q (4).
+    Periodic(JointIndex),
+    /// A link deviation growing with operating time or temperature (6, +1 for τ).
+    ThermalDrift(JointIndex, DriftShape),
+}
+
+/// The effect names of reports and flags, in catalogue order.
+pub const EFFECT_NAMES: [&str; 9] = [
+    "base_frame",
+    "tool_frame",
+    "joint_offset",
+    "link_deviation",
+    "joint_compliance",
+    "joint_scale",
+    "periodic",
+    "thermal_drift",
+    "thermal_drift_exp",
+];
+
+impl Effect {
+    /// The effect named `name` (one of [`EFFECT_NAMES`]) on joint `joint` (0-based) of `robot`, where it
+    /// takes one: `Effect::named(&robot, "joint_offset", Some(1))`.
+    pub fn named(robot: &Robot, name: &str, joint: Option<usize>) -> Result<Self, IdentifyError> {
+        let on = |j: Option<usize>| -> Result<JointIndex, IdentifyError> {
+            JointIndex::of(robot, j.ok_or(IdentifyError::JointNeeded { effect: name.to_string() })?)
+        };
+        let global = |e: Effect| match joint {
+            None => Ok(e),
+            Some(_) => Err(IdentifyError::NoJointTaken { effect: name.to_string() }),
+        };
+        match name {
+            "base_frame" => global(Effect::BaseFrame),
+            "tool_frame" => global(Effect::ToolFrame),
+            "joint_offset" => Ok(Effect::JointOffset(on(joint)?)),
+            "link_deviation" => Ok(Effect::LinkDeviation(on(joint)?)),
+            "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
+            "joint_scale" => Ok(Effect::JointScale(on(joint)?)),
+            "periodic" => Ok(Effect::Periodic(on(joint)?)),
+            "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
+            "thermal_drift_exp" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Exponential)),
+            _ => Err(IdentifyError::UnknownEffect { name: name.to_string(), known: EFFECT_NAMES.join(", ") }),
+        }
+    }
+
+    /// The joint the effect acts on, if it acts on one.
+    pub fn joint(&self) -> Option<JointIndex> {
+        match *self {
+            Effect::JointOffset(j)
+            | Effect::LinkDeviation(j)
+            | Effect::JointCompliance(j)
+            | Effect::JointScale(j)
+            | Effect::Periodic(j)
+            | Effect::ThermalDrift(j, _) => Some(j),
+            Effect::Registration | Effect::ToolPoint | Effect::ToolRotation | Effect::BaseFrame | Effect::ToolFrame => {
+                None
+            }
+        }
+    }
+
+    /// Checks the effect against a robot of `dof` joints (a [`JointIndex`] of another robot would index
+    /// past this one's chain).
+    pub fn validate(&self, dof: usize) -> Result<(), IdentifyError> {
+        match self.joint() {
+            Some(j) if j.index() >= dof => Err(IdentifyError::NoSuchJoint { joint: j.number(), dof }),
+            _ => Ok(()),
+        }
+    }
+
+    /// Number of parameters.
+    pub fn len(&self) -> usize {
+        match self {
+            Effect::Registration | Effect::BaseFrame | Effect::ToolFrame | Effect::LinkDeviation(_) => 6,
+            Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
+            Effect::ThermalDrift(..) => 6,
+            Effect::ToolPoint | Effect::ToolRotation => 3,
+            Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::JointScale(_) => 1,
+            Effect::Periodic(_) => 4,
+        }
+    }
+
+    /// Never empty.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// The name used in reports: `joint_offset` etc.
+    pub fn kind_name(&self) -> &'static str {
+        match self {
+            Effect::Registration => "registration",
+            Effect::ToolPoint => "tool_point",
+            Effect::ToolRotation => "tool_rotation",
+            Effect::BaseFrame => "base_frame",
+            Effect::ToolFrame => "tool_frame",
+            Effect::JointOffset(_) => "joint_offset",
+            Effect::LinkDeviation(_) => "link_deviation",
+            Effect::JointCompliance(_) => "joint_compliance",
+            Effect::JointScale(_) => "joint_scale",
+            Effect::Periodic(_) => "periodic",
+            Effect::ThermalDrift(..) => "thermal_drift",
+        }
+    }
+
+    /// `joint_offset[3]`, `thermal_drift[2] (exponential)`, `base_frame`.
+    pub fn label(&self) -> String {
+        let shape = match self {
+            Effect::ThermalDrift(_, DriftShape::Linear) => " (linear)",
+            Effect::ThermalDrift(_, DriftShape::Exponential) => " (exponential)",
+            Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
+            _ => "",
+        };
+        match self.joint() {
+            Some(j) => format!("{}[{}]{shape}", self.kind_name(), j.number()),
+            None => format!("{}{shape}", self.kind_name()),
+        }
+    }
+
+    /// The names of this effect's parameters, with their report units.
+    pub fn parameter_names(&self) -> Vec<String> {
+        let six = ["dx_mm", "dy_mm", "dz_mm", "rx_deg", "ry_deg", "rz_deg"];
+        let prefix = self.label();
+        match self {
+            Effect::ToolPoint => six[..3].iter().map(|n| format!("{prefix}.{n}")).collect(),
+            Effect::ToolRotation => six[3..].iter().map(|n| format!("{prefix}.{n}")).collect(),
+            Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
+            Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
+            Effect::JointScale(_) => vec![format!("{prefix}.scale")],
+            Effect::Periodic(_) => {
+                ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
+            }
+            Effect::ThermalDrift(_, DriftShape::Exponential) => {
+                let mut v: Vec<String> = six.iter().map(|n| format!("{prefix}.{n}")).collect();
+                v.push(format!("{prefix}.tau_min"));
+                v
+            }
+            _ => six.iter().map(|n| format!("{prefix}.{n}")).collect(),
+        }
+    }
+
+    /// The functions of the commanded joint value whose weighted sum is the joint error Δq, for the
+    /// effects that act on the joint variable itself: `q` for a scale error, `sin q, cos q, sin 2q,
+    /// cos 2q` for a cyclic one. Empty for the others.
+    pub fn joint_basis(&self, q: f64) -> JointBasis {
+        match self {
+            Effect::JointScale(_) => JointBasis { values: [q, 0.0, 0.0, 0.0], len: 1 },
+            Effect::Periodic(_) => {
+                let (s1, c1) = q.sin_cos();
+                // sin 2q = 2 sin q cos q, cos 2q = cos²q − sin²q: one sincos per joint.
+                JointBasis { values: [s1, c1, 2.0 * s1 * c1, c1 * c1 - s1 * s1], len: 4 }
+            }
+            _ => JointBasis { values: [0.0; 4], len: 0 },
+        }
+    }
+
+    /// Whether a robot file can hold the effect: the same for every pose and time (frames, offsets, link
+    /// deviations), unlike compliance, joint-level errors and drift.
+    pub fn is_static(&self) -> bool {
+        !matches!(
+            self,
+            Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..)
+        )
+    }
+
+    /// Time-dependent effects are judged with forward-chained cross-validation too.
+    pub fn is_time_dependent(&self) -> bool {
+        matches!(self, Effect::ThermalDrift(..))
+    }
+
+    /// Reported to the user as a cause (not a nuisance block).
+    pub fn is_reported(&self) -> bool {
+        !matches!(self, Effect::Registration | Effect::ToolPoint | Effect::ToolRotation)
+    }
+
+    /// Whether parameter `k` is an angle: radians inside, degrees in reports and flags (a compliance is
+    /// radians per N·m inside, degrees per N·m outside). Lengths are millimetres and τ minutes on both
+    /// sides.
+    pub fn is_angle(&self, k: usize) -> bool {
+        match (self, k) {
+            (Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::Periodic(_) | Effect::ToolRotation, _) => {
+                true
+            }
+            (Effect::JointScale(_), _) => false,
+            (Effect::ToolPoint, _) => false,
+            (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,
+            (_, 3..=5) => true,
+            _ => false,
+        }
+    }
+
+    /// Parameter `k` from internal units (mm, radians, minutes, radians per N·m) to report units (mm,
+    /// degrees, minutes, degrees per N·m).
+    pub fn to_report_units(&self, k: usize, v: f64) -> f64 {
+        if self.is_angle(k) { units::degrees(v) } else { v }
+    }
+
+    /// Parameter `k` from report units to internal units (the inverse of [`Effect::to_report_units`]).
+    pub fn from_report_units(&self, k: usize, v: f64) -> f64 {
+        if self.is_angle(k) { units::radians(v) } else { v }
+    }
+}
+
+/// The functions of a joint value an effect's parameters weigh ([`Effect::joint_basis`]): at most four,
+/// without allocating (it is evaluated at every measurement).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointBasis {
+    values: [f64; 4],
+    len: usize,
+}
+
+impl JointBasis {
+    /// The values, in parameter order.
+    pub fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
+    }
+}
+
+/// The six error parameters of a row block starting at `theta[o]`.
+pub(crate) fn six_at(theta: &[f64], o: usize) -> ErrorParams {
+    ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
+}

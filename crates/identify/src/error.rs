@@ -1,0 +1,59 @@
+//! Errors of identification.
+
+use thermokin_chain::ChainError;
+
+/// Errors of a model, its evaluation and its fit.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum IdentifyError {
+    /// The model could not be evaluated.
+    #[error(transparent)]
+    Chain(#[from] ChainError),
+    /// The identified robot could not be built (a correction out of its domain).
+    #[error(transparent)]
+    Deform(#[from] thermokin_deform::DeformError),
+    /// A temperature drift identified from data that hold no temperature readings.
+    #[error("{effect} needs temperature readings in the data")]
+    NoTemperatures {
+        /// The effect's label.
+        effect: String,
+    },
+    /// An effect names a joint the robot does not have.
+    #[error("joint {joint} is not in 1..={dof}")]
+    NoSuchJoint {
+        /// 1-based joint number.
+        joint: usize,
+        /// Joints of the robot.
+        dof: usize,
+    },
+    /// A per-joint effect given without its joint.
+    #[error("{effect} needs a joint")]
+    JointNeeded {
+        /// The effect's name.
+        effect: String,
+    },
+    /// A whole-robot effect given a joint.
+    #[error("{effect} acts on the whole robot and takes no joint")]
+    NoJointTaken {
+        /// The effect's name.
+        effect: String,
+    },
+    /// A name that is not in the catalogue.
+    #[error("unknown effect `{name}` (known: {known})")]
+    UnknownEffect {
+        /// The name given.
+        name: String,
+        /// The catalogue's names, comma separated.
+        known: String,
+    },
+    /// An effect given the wrong number of parameter values.
+    #[error("{effect}: {got} values for {expected} parameters")]
+    ParameterCount {
+        /// The effect's label.
+        effect: String,
+        /// Its number of parameters.
+        expected: usize,
+        /// Values given.
+        got: usize,
+    },
+}

@@ -1,0 +1,41 @@
+//! `thermokin-identify`: identification of a robot's errors from measured poses — the layer the
+//! diagnosis and the measurement planner share.
+//!
+//! Effects are parameter blocks on top of a robot ([`Effect`], each carrying its joint), assembled into a
+//! [`Model`] whose prediction of a measured pose and its analytic Jacobian come from the chain's
+//! parameter Jacobian ([`residuals_and_jacobian`]). [`fit`] is Levenberg–Marquardt on faer with column
+//! scaling; the parameters the data cannot identify are found first ([`identifiable`]: ordered
+//! Gram–Schmidt on the column-scaled Jacobian, by an orthogonal factorisation) and fixed with a reason;
+//! [`observability`] gives the indices of the rest. [`Setup`] says which blocks a measurement setup always
+//! estimates (a tracker registration, an unknown tool) and which effects are candidates.
+//!
+//! Units inside are millimetres, radians, minutes and newton-metres; [`Effect::to_report_units`] converts
+//! a parameter for reports.
+
+mod catalogue;
+mod effect;
+mod error;
+mod fit;
+mod identifiability;
+mod lm;
+mod model;
+mod predict;
+mod registration;
+mod residuals;
+mod sampling;
+mod terms;
+
+pub use catalogue::{FrameMode, Setup, ToolMode};
+pub use effect::{DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN};
+pub use error::IdentifyError;
+pub use fit::{CorrelatedPair, Fit, MAX_ITERATIONS, NEARLY_DEPENDENT, Start, fit, fit_from};
+pub use identifiability::{
+    DEPENDENT, Dependence, DependsOn, FixedParameter, Identifiable, Observability, identifiable, observability,
+    project_out,
+};
+pub use model::Model;
+pub use predict::{ChainCache, PoseInputs};
+pub use registration::{initial_registration, kabsch};
+pub use residuals::{norms, residuals, residuals_and_jacobian};
+pub use sampling::{normal, random_configuration};
+pub use terms::{PoseTerms, gravity_torques, max_gravity_torque, sensor_joint};

@@ -1,0 +1,175 @@
+//! One Levenberg–Marquardt pass's state: the column-scaled normal matrix, its damping, and the time
+//! constants moved as rates.
+
+use faer::linalg::matmul::matmul;
+use faer::linalg::solvers::Solve;
+use faer::{Accum, Mat, Par};
+
+use crate::effect::TAU_RANGE_MIN;
+
+/// Relative cost gain below which a Levenberg–Marquardt step counts as converged (predicted from the
+/// linearised model, before the step is evaluated).
+pub(crate) const CONVERGED: f64 = 1e-9;
+
+/// Relative cost gain below which the step's Jacobian is reused for the next (chord) step. Near the
+/// minimum a gain `g` of the cost `m·σ²` (m rows) is a move of `√(g·m)` standard deviations of the
+/// parameters — at 1e-4 about one σ on 10,000 rows, thousandths of a millimetre and millionths of a
+/// radian for a calibrated arm — over which the Jacobian (smooth in angles of that size) changes by a
+/// few millionths of itself. The chord step's fixed point is still the zero of the gradient, so it
+/// converges to the same minimum; a chord step that fails refreshes the Jacobian first.
+pub(crate) const REUSE_JACOBIAN: f64 = 1e-4;
+
+/// The state of one Levenberg–Marquardt pass: the column-scaled normal matrix of the current Jacobian
+/// (unit columns, so that mm, radians and minutes weigh alike), its scales and the damping. The scaled
+/// Jacobian `A = J·D` is never formed: `AᵀA = D·JᵀJ·D` and `Aᵀr = D·Jᵀr` from the Jacobian itself (one
+/// pass over its `m × p` entries per product, no copy of them).
+pub(crate) struct Lm {
+    /// The free columns of the Jacobian.
+    pub(crate) cols: Vec<usize>,
+    pub(crate) ata: Mat<f64>,
+    /// `JᵀJ` of every column, reused for the scales.
+    pub(crate) gram: Mat<f64>,
+    pub(crate) scale: Vec<f64>,
+    /// `∂θ/∂u` of each free column at the Jacobian's parameters: 1, or `−τ²` for a time constant moved
+    /// as its rate `u = 1/τ`.
+    pub(crate) chain: Vec<f64>,
+    pub(crate) lambda: f64,
+    /// The Jacobian is not the current parameters' (a chord step reused it).
+    pub(crate) stale: bool,
+    /// The Jacobian was refreshed after a failed chord step: the iteration is retried with it.
+    pub(crate) refreshed: bool,
+    /// The damping was raised after a failed step since the last accepted one.
+    pub(crate) raised: bool,
+}
+
+impl Lm {
+    pub(crate) fn new(cols: &[usize]) -> Self {
+        let p = cols.len();
+        Self {
+            cols: cols.to_vec(),
+            ata: Mat::zeros(p, p),
+            gram: Mat::zeros(0, 0),
+            scale: vec![1.0; p],
+            chain: vec![1.0; p],
+            lambda: 1e-3,
+            stale: false,
+            refreshed: false,
+            raised: false,
+        }
+    }
+
+    /// Takes `jac`'s free columns (at `theta`), in the coordinates moved ([`Rates`]) and scaled to unit
+    /// norm, and forms their normal matrix.
+    pub(crate) fn refresh(&mut self, jac: &Mat<f64>, theta: &[f64], rates: &Rates) {
+        let n = jac.ncols();
+        if self.gram.nrows() != n {
+            self.gram = Mat::zeros(n, n);
+        }
+        matmul(self.gram.as_mut(), Accum::Replace, jac.as_ref().transpose(), jac.as_ref(), 1.0, Par::Seq);
+        for (k, &c) in self.cols.iter().enumerate() {
+            self.chain[k] = rates.dtheta_du(c, theta[c]);
+            // A column that moves nothing here (a time constant held at its bound) keeps scale 1: its
+            // row of the normal matrix is zero and the damping alone keeps it where it is.
+            let norm = self.gram[(c, c)].max(0.0).sqrt() * self.chain[k].abs();
+            self.scale[k] = if norm > 0.0 && norm.is_finite() { norm } else { 1.0 };
+        }
+        let weight = |k: usize| self.chain[k] / self.scale[k];
+        for (k, &c) in self.cols.iter().enumerate() {
+            for (l, &d) in self.cols.iter().enumerate() {
+                self.ata[(k, l)] = self.gram[(c, d)] * weight(k) * weight(l);
+            }
+        }
+        self.refreshed = self.stale;
+        self.stale = false;
+    }
+
+    /// `AᵀA` from the scaled columns themselves (one copy of them): the matrix the uncertainties invert.
+    /// Near-singular normal matrices (nearly dependent parameters, condition numbers of 1e15) are
+    /// factorised more reliably from unit columns than from `D·JᵀJ·D`, whose entries carry the rounding
+    /// of columns of very different sizes.
+    pub(crate) fn scaled_normal_matrix(&self, jac: &Mat<f64>) -> Mat<f64> {
+        let mut a = Mat::<f64>::zeros(jac.nrows(), self.cols.len());
+        for (k, &c) in self.cols.iter().enumerate() {
+            a.col_mut(k).copy_from(jac.col(c) * (self.chain[k] / self.scale[k]));
+        }
+        let mut ata = Mat::<f64>::zeros(self.cols.len(), self.cols.len());
+        matmul(ata.as_mut(), Accum::Replace, a.as_ref().transpose(), a.as_ref(), 1.0, Par::Seq);
+        ata
+    }
+
+    /// `Aᵀ r` on the scaled columns of `jac` (the Jacobian of the last refresh).
+    pub(crate) fn gradient(&self, jac: &Mat<f64>, r: &[f64]) -> Mat<f64> {
+        let mut full = Mat::<f64>::zeros(jac.ncols(), 1);
+        let rv = faer::ColRef::from_slice(r);
+        matmul(full.as_mut(), Accum::Replace, jac.as_ref().transpose(), rv.as_mat(), 1.0, Par::Seq);
+        Mat::from_fn(self.cols.len(), 1, |k, _| full[(self.cols[k], 0)] * self.chain[k] / self.scale[k])
+    }
+
+    /// The damped step `(AᵀA + λ·diag) δ = Aᵀr` and the cost gain the linearised model predicts for it,
+    /// `2 δᵀAᵀr − δᵀAᵀAδ`; `None` when the damped matrix is not positive definite.
+    pub(crate) fn step(&self, g: &Mat<f64>) -> Option<(Vec<f64>, f64)> {
+        let p = self.ata.nrows();
+        let mut damped = self.ata.clone();
+        for i in 0..p {
+            damped[(i, i)] += self.lambda * (self.ata[(i, i)] + 1e-12);
+        }
+        let llt = damped.llt(faer::Side::Lower).ok()?;
+        let step = llt.solve(g);
+        let delta: Vec<f64> = (0..p).map(|k| step[(k, 0)]).collect();
+        let mut quad = 0.0;
+        for i in 0..p {
+            let row: f64 = (0..p).map(|j| self.ata[(i, j)] * delta[j]).sum();
+            quad += delta[i] * row;
+        }
+        let lin: f64 = (0..p).map(|k| delta[k] * g[(k, 0)]).sum();
+        Some((delta, 2.0 * lin - quad))
+    }
+
+    /// The damping after an accepted step, from how well the linearised model predicted its gain (`ρ`,
+    /// the trust-region rule): less damping when it did (ρ > 3/4) — unless this damping was just reached
+    /// from a failed step, when the smaller one is known to fail (a curved valley of nearly dependent
+    /// parameters, where alternating would waste every other evaluation) — more when the step gained
+    /// under a quarter of the prediction.
+    pub(crate) fn adapt(&mut self, rho: f64) {
+        let raised = std::mem::take(&mut self.raised);
+        if rho > 0.75 && !raised {
+            self.lambda = (self.lambda * 0.1).max(1e-12);
+        } else if rho < 0.25 {
+            self.lambda *= 10.0;
+        }
+    }
+
+    /// Whether the iteration is to be repeated: the Jacobian was just refreshed after a failed chord
+    /// step (the damping then stays where it was).
+    pub(crate) fn retry(&mut self) -> bool {
+        std::mem::take(&mut self.refreshed)
+    }
+}
+
+/// The time constants of a model (an exponential drift's τ), which the fit moves as rates `u = 1/τ`:
+/// the drift's departure from the linear one is about proportional to `1/τ`, so that in τ the cost is a
+/// long curved valley towards τ → ∞ (a drift the data see as linear) that Gauss–Newton creeps along
+/// step by step, while in `1/τ` it is nearly quadratic and the linear limit is the point `u = 1/τ_max`.
+/// τ stays in [`TAU_RANGE_MIN`]; the reported τ and its standard deviation are in minutes (the
+/// deviation by the delta method, `σ_τ = τ² σ_u`).
+pub(crate) struct Rates {
+    pub(crate) columns: Vec<usize>,
+}
+
+impl Rates {
+    /// `∂θ_c/∂u_c` at `θ_c`.
+    pub(crate) fn dtheta_du(&self, c: usize, theta: f64) -> f64 {
+        if self.columns.contains(&c) { -theta * theta } else { 1.0 }
+    }
+
+    /// `θ_c` after the step `du` in column `c`'s moved coordinate.
+    pub(crate) fn moved(&self, c: usize, theta: f64, du: f64) -> f64 {
+        if self.columns.contains(&c) {
+            let (lo, hi) = TAU_RANGE_MIN;
+            let rate = (1.0 / theta + du).clamp(1.0 / hi, 1.0 / lo);
+            (1.0 / rate).clamp(lo, hi)
+        } else {
+            theta + du
+        }
+    }
+}

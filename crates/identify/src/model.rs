@@ -1,0 +1,265 @@
+//! The parameterised model: effects as parameter blocks on top of a robot, the parameter vector's
+//! layout, and the robot they identify ([`Model::robot_model`]). Its prediction of a measured pose and
+//! the Jacobian of it are in `predict`.
+
+use nalgebra::{Isometry3, Vector3};
+use thermokin_chain::{Chain, Dataset, ErrorParams, Measurement, ParameterRows, Robot};
+use thermokin_deform::{DriftLaw, DriftRow, JointCorrection, RobotModel, Row};
+
+use crate::effect::{DriftShape, Effect, INITIAL_TAU_MIN, TAU_RANGE_MIN, six_at};
+use crate::error::IdentifyError;
+use crate::identifiability::{Dependence, DependsOn, FixedParameter};
+use crate::terms::sensor_joint;
+
+/// A model: a list of effects on top of a robot (its chain, known deviations included, and its link
+/// masses), and the parameter vector's layout. Built by [`Model::new`], which checks every effect against
+/// the robot; the layout is derived from the effects and cannot drift from them.
+#[derive(Clone, Debug)]
+pub struct Model {
+    effects: Vec<Effect>,
+    offsets: Vec<usize>,
+    len: usize,
+    registration: Isometry3<f64>,
+}
+
+impl Model {
+    /// A model of `robot` with these effects (in parameter order).
+    pub fn new(robot: &Robot, effects: Vec<Effect>) -> Result<Self, IdentifyError> {
+        let dof = robot.chain().dof();
+        let mut offsets = Vec::with_capacity(effects.len());
+        let mut len = 0;
+        for e in &effects {
+            e.validate(dof)?;
+            offsets.push(len);
+            len += e.len();
+        }
+        Ok(Self { effects, offsets, len, registration: Isometry3::identity() })
+    }
+
+    /// The same model with the tracker registration starting at `registration` (identity: the base frame).
+    pub fn with_registration(mut self, registration: Isometry3<f64>) -> Self {
+        self.registration = registration;
+        self
+    }
+
+    /// The effects, in parameter order.
+    pub fn effects(&self) -> &[Effect] {
+        &self.effects
+    }
+
+    /// The first parameter of each effect.
+    pub fn offsets(&self) -> &[usize] {
+        &self.offsets
+    }
+
+    /// The number of parameters.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// `true` when the model has no parameter.
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// Whether the model estimates a tracker registration.
+    pub fn has_registration(&self) -> bool {
+        self.effects.contains(&Effect::Registration)
+    }
+
+    /// The initial parameter vector (zeros, τ at its starting value).
+    pub fn initial(&self) -> Vec<f64> {
+        let mut theta = vec![0.0; self.len];
+        for (e, &o) in self.effects.iter().zip(&self.offsets) {
+            if let Effect::ThermalDrift(_, DriftShape::Exponential) = e {
+                theta[o + 6] = INITIAL_TAU_MIN;
+            }
+        }
+        theta
+    }
+
+    /// The columns that are time constants (an exponential drift's τ, minutes), with the range a fit
+    /// keeps them in: the identification moves their rate `1/τ` rather than τ ([`crate::fit`]).
+    pub fn time_constants(&self) -> Vec<usize> {
+        self.effects
+            .iter()
+            .zip(&self.offsets)
+            .filter(|(e, _)| matches!(e, Effect::ThermalDrift(_, DriftShape::Exponential)))
+            .map(|(_, &o)| o + 6)
+            .collect()
+    }
+
+    /// Names of all parameters.
+    pub fn parameter_names(&self) -> Vec<String> {
+        self.effects.iter().flat_map(Effect::parameter_names).collect()
+    }
+
+    /// The effect parameter `column` belongs to, and its place in that effect's block.
+    pub fn parameter(&self, column: usize) -> Option<(Effect, usize)> {
+        let k = self.offsets.iter().rposition(|&o| o <= column)?;
+        let e = self.effects[k];
+        (column - self.offsets[k] < e.len()).then_some((e, column - self.offsets[k]))
+    }
+
+    /// The columns [`identifiable`](crate::identifiable) fixed, named, each with its reason in words.
+    pub fn fixed_parameters(&self, fixed: &[Dependence]) -> Vec<FixedParameter> {
+        let names = self.parameter_names();
+        fixed
+            .iter()
+            .map(|d| {
+                let reason = match d.on {
+                    // A tool's rotation moves no point: it is seen in measured orientations only.
+                    DependsOn::Nothing if matches!(self.parameter(d.column), Some((Effect::ToolFrame, 3..))) => {
+                        "moves no measured point: a tool's rotation is identified from measured orientations (rx, ry, rz)".to_string()
+                    }
+                    DependsOn::Nothing => "no effect on the measurements".to_string(),
+                    DependsOn::Column { column, cos } => format!("equivalent to {} (|cos| = {cos:.3})", names[column]),
+                    DependsOn::Combination => "a combination of the parameters already identified".to_string(),
+                };
+                FixedParameter { parameter: names[d.column].clone(), reason }
+            })
+            .collect()
+    }
+
+    /// The drift factor `s = f(t) / f(180)` of a shape at one measurement (`f` the law of the deform
+    /// profile, [`DriftShape::profile`]) and `ds/dτ` for the exponential — zero where τ is held at a
+    /// (gravity compliance, thermal drift), which are left out.
+    pub fn calibrated_chain(&self, robot: &Robot, theta: &[f64]) -> Result<(Chain, Vec<Effect>), IdentifyError> {
+        let (chain, _) = self.static_chain(robot, theta)?;
+        let left_out = self.effects.iter().filter(|e| !e.is_static()).copied().collect();
+        Ok((chain, left_out))
+    }
+
+    /// The identified robot with every effect of this model at `theta` — what a robot file carries and
+    /// every command evaluates ([`RobotModel`]): the static effects in the chain
+    /// ([`Model::calibrated_chain`]); gear-ratio, cyclic and compliance terms as joint corrections; each
+    /// thermal drift as a drift row with its own law — linear and exponential as the deform profile whose
+    /// factor at 180 minutes is 1 after dividing by `f(180)` ([`DriftShape::reference_factor`]), a
+    /// temperature drift per kelvin of the joint's own sensor (or of the mean of all, as fitted), each
+    /// against its reading at the earliest measurement of `data` (the fit's reference). Gravity keeps its
+    /// direction in the robot's base frame while the registration turns the base row into the tracker's.
+    ///
+    /// Its forward model equals [`Model::predict`]'s at every measurement (a test checks it to 1e-9 mm).
+    pub fn robot_model(&self, robot: &Robot, theta: &[f64], data: &Dataset) -> Result<RobotModel, IdentifyError> {
+        let (chain, _) = self.static_chain(robot, theta)?;
+        let down = {
+            let world_from_base_fitted = chain.base().pose().rotation;
+            let world_from_base_given = robot.chain().base().pose().rotation;
+            world_from_base_fitted * world_from_base_given.inverse() * -Vector3::z_axis()
+        };
+        let dof = robot.chain().dof();
+        let mut joints = vec![JointCorrection::NONE; dof];
+        let mut drift = Vec::new();
+        let first = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min));
+        for (e, &o) in self.effects.iter().zip(&self.offsets) {
+            match *e {
+                Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
+                Effect::JointScale(j) => joints[j.index()].scale += theta[o],
+                Effect::Periodic(j) => {
+                    for (c, t) in joints[j.index()].cyclic_rad.iter_mut().zip(&theta[o..o + 4]) {
+                        *c += t;
+                    }
+                }
+                Effect::ThermalDrift(j, shape) => {
+                    let tau = theta.get(o + 6).copied().unwrap_or(0.0).clamp(TAU_RANGE_MIN.0, TAU_RANGE_MIN.1);
+                    let at_reference = six_at(theta, o);
+                    let law = match shape.profile(tau) {
+                        Some(profile) => DriftLaw::Time(profile),
+                        None => DriftLaw::PerKelvin { sensors: self.sensors_of(j.index(), data, first)? },
+                    };
+                    let deviation = at_reference.scaled(1.0 / shape.reference_factor(tau));
+                    drift.push(DriftRow { row: Row::Joint(j.index()), deviation, law });
+                }
+                _ => {}
+            }
+        }
+        let base = robot.with_chain(chain)?;
+        Ok(RobotModel::new(base).with_gravity(down).with_joint_corrections(joints)?.with_drift(drift)?)
+    }
+
+    /// The sensors a temperature drift of joint `j` follows (its own, or all), named as in files
+    /// (`temp_j2`), each with its reading at the earliest measurement.
+    fn sensors_of(
+        &self,
+        j: usize,
+        data: &Dataset,
+        first: Option<&Measurement>,
+    ) -> Result<Vec<(String, f64)>, IdentifyError> {
+        let dof = data.measurements.first().map_or(0, |m| m.q.len());
+        let reading = |c: usize| first.and_then(|m| m.temps.get(c).copied());
+        let own = data.temperature_names.iter().position(|n| sensor_joint(n, dof) == Some(j));
+        let columns: Vec<usize> = match own {
+            Some(c) => vec![c],
+            None => (0..data.temperature_names.len()).collect(),
+        };
+        columns
+            .into_iter()
+            .map(|c| {
+                let name = format!("temp_{}", data.temperature_names[c]);
+                reading(c)
+                    .map(|t| (name.clone(), t))
+                    .ok_or(IdentifyError::NoTemperatures { effect: format!("thermal_drift[{}] (temperature)", j + 1) })
+            })
+            .collect()
+    }
+
+    /// The chain with the static effects at `theta` (registered), and its joint rows' errors: the part
+    /// of a prediction that is the same for every measurement.
+    pub(crate) fn static_chain(
+        &self,
+        robot: &Robot,
+        theta: &[f64],
+    ) -> Result<(Chain, Vec<ErrorParams>), IdentifyError> {
+        let chain = robot.chain();
+        let mut base_err = chain.base().error;
+        let mut tool_err = chain.tool().error;
+        let mut joint_err: Vec<ErrorParams> = chain.joints().iter().map(|j| j.error).collect();
+        let mut zeros: Vec<f64> = chain.joints().iter().map(|j| j.zero).collect();
+        let six = |o: usize| six_at(theta, o);
+        for (e, &o) in self.effects.iter().zip(&self.offsets) {
+            match *e {
+                Effect::Registration | Effect::BaseFrame => base_err = base_err.add(&six(o)),
+                Effect::ToolPoint => tool_err.translation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolRotation => tool_err.rotation += Vector3::new(theta[o], theta[o + 1], theta[o + 2]),
+                Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
+                Effect::JointOffset(j) => zeros[j.index()] += theta[o],
+                Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
+                Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..) => {
+                }
+            }
+        }
+        let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
+        Ok((built, joint_err))
+    }
+
+    /// `chain` with the registration's starting pose in its base row's nominal pose (its parameters are
+    /// small corrections on top, in the row's error).
+    fn registered(&self, chain: Chain) -> Result<Chain, IdentifyError> {
+        if self.registration == Isometry3::identity() {
+            return Ok(chain);
+        }
+        let mut row = chain.base().clone();
+        let nominal = self.registration * row.nominal();
+        row.translation = nominal.translation.vector;
+        row.rotation = nominal.rotation;
+        Ok(chain.with_base(row)?)
+    }
+
+    /// The rows of the chain's parameter Jacobian this model's columns are read from in [`Model::predict`]:
+    /// the base row for a registration or base frame, the tool row for the tool, a joint's error row for
+    /// its link deviation or drift, its zero column for the joint-level effects.
+    pub(crate) fn parameter_rows(&self, dof: usize) -> ParameterRows {
+        let mut rows = ParameterRows::none(dof);
+        for e in &self.effects {
+            match *e {
+                Effect::Registration | Effect::BaseFrame => rows.base = true,
+                Effect::ToolPoint | Effect::ToolRotation | Effect::ToolFrame => rows.tool = true,
+                Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => rows.joints[j.index()] = true,
+                Effect::JointOffset(j) | Effect::JointCompliance(j) | Effect::JointScale(j) | Effect::Periodic(j) => {
+                    rows.zeros[j.index()] = true
+                }
+            }
+        }
+        rows
+    }
+}

@@ -1,0 +1,262 @@
+//! A model's prediction of one measured pose and the Jacobian of it — the identification's
+//! per-measurement hot path (from [`thermokin_chain::Chain::parameter_jacobian`]'s rows).
+
+use nalgebra::{Matrix3, Matrix6xX, Vector3};
+use thermokin_chain::{Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
+
+use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at};
+use crate::error::IdentifyError;
+use crate::model::Model;
+
+/// The chain of one parameter vector, kept across the measurements of one evaluation, with its joint
+/// rows' errors before any drift (a drift row is rewritten from them per measurement).
+pub struct ChainCache {
+    chain: Chain,
+    joint_err: Vec<ErrorParams>,
+    /// Buffers reused across measurements: the joint values the chain sees, the chain's parameter
+    /// Jacobian.
+    q: Vec<f64>,
+    pj: Matrix6xX<f64>,
+    /// The chain rows this model's Jacobian reads ([`Model::parameter_rows`]).
+    rows: ParameterRows,
+    /// Per measurement: each drift's factor and each drifting row's deviation.
+    drift_scale: Vec<DriftFactor>,
+    drift_rows: Vec<(usize, ErrorParams)>,
+    /// `(sin, cos)` of the joint values the chain sees.
+    sin_cos: Vec<(f64, f64)>,
+}
+
+/// A drift's factor at one measurement: `s = f(t) / f(180)` and `∂s/∂τ`, for the effect at `effect` in
+/// the model's list.
+#[derive(Clone, Copy, Debug)]
+struct DriftFactor {
+    effect: usize,
+    s: f64,
+    ds_dtau: f64,
+}
+
+/// What one measurement's pose depends on besides the parameters: its gravity torques and temperature
+/// rise per joint ([`crate::PoseTerms`]), and the sines of its measured joints when they are known.
+#[derive(Clone, Copy, Debug)]
+pub struct PoseInputs<'a> {
+    /// Gravity torque about each joint, N·m.
+    pub torques: &'a [f64],
+    /// The temperature rise each joint's drift follows, K.
+    pub temp_rise: &'a [f64],
+    /// `(sin q_i, cos q_i)` of the measured joints, when computed once beforehand.
+    pub sin_cos: Option<&'a [(f64, f64)]>,
+}
+
+impl Model {
+    /// The drift factor `s = f(t) / f(180)` of a shape at one measurement (`f` the law of the deform
+    /// profile, [`DriftShape::profile`]) and `ds/dτ` for the exponential — zero where τ is held at a
+    /// bound of [`TAU_RANGE_MIN`], as `s` is.
+    fn drift_factor(shape: DriftShape, m: &Measurement, temp_rise: f64, tau: f64) -> (f64, f64) {
+        let held = !(TAU_RANGE_MIN.0 < tau && tau < TAU_RANGE_MIN.1);
+        let tau = tau.clamp(TAU_RANGE_MIN.0, TAU_RANGE_MIN.1);
+        let Some(profile) = shape.profile(tau) else { return (temp_rise, 0.0) };
+        let f = |t: f64| profile.time_factor(t).unwrap_or(0.0);
+        let (ft, fr) = (f(m.time_min), f(LINEAR_DRIFT_REFERENCE_MIN));
+        let ds = match shape {
+            DriftShape::Exponential => {
+                let df = |t: f64| profile.time_factor_dtau(t).unwrap_or(0.0);
+                if held { 0.0 } else { (df(m.time_min) * fr - ft * df(LINEAR_DRIFT_REFERENCE_MIN)) / (fr * fr) }
+            }
+            _ => 0.0,
+        };
+        (ft / fr, ds)
+    }
+
+    /// The cache of `theta`'s static chain, built on the first measurement of an evaluation.
+    fn cache<'c>(
+        &self,
+        robot: &Robot,
+        theta: &[f64],
+        dof: usize,
+        cache: &'c mut Option<ChainCache>,
+    ) -> Result<&'c mut ChainCache, IdentifyError> {
+        Ok(match cache {
+            Some(c) => c,
+            None => {
+                let (chain, joint_err) = self.static_chain(robot, theta)?;
+                let pj = Matrix6xX::zeros(chain.parameter_layout().len());
+                let rows = self.parameter_rows(chain.dof());
+                cache.insert(ChainCache {
+                    chain,
+                    joint_err,
+                    q: Vec::with_capacity(dof),
+                    pj,
+                    rows,
+                    drift_scale: Vec::new(),
+                    drift_rows: Vec::new(),
+                    sin_cos: Vec::with_capacity(dof),
+                })
+            }
+        })
+    }
+
+    /// Per measurement: the joint values the joint-level effects move (into `q`), each drift's factor and
+    /// each drifting row's deviation, the drifting rows written into the cached chain.
+    #[inline]
+    fn move_joints_and_drift(
+        &self,
+        theta: &[f64],
+        m: &Measurement,
+        inputs: &PoseInputs<'_>,
+        cached: &mut ChainCache,
+        q: &mut Vec<f64>,
+    ) -> Result<(), IdentifyError> {
+        q.clear();
+        q.extend_from_slice(&m.q);
+        let mut drift_rows = std::mem::take(&mut cached.drift_rows);
+        cached.drift_scale.clear();
+        drift_rows.clear();
+        for (k, (e, &o)) in self.effects().iter().zip(self.offsets()).enumerate() {
+            match *e {
+                Effect::JointCompliance(j) => {
+                    let j = j.index();
+                    q[j] += theta[o] * inputs.torques[j];
+                }
+                Effect::JointScale(j) | Effect::Periodic(j) => {
+                    let j = j.index();
+                    q[j] += e.joint_basis(m.q[j]).as_slice().iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
+                }
+                Effect::ThermalDrift(j, shape) => {
+                    let j = j.index();
+                    let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
+                    let (s, ds_dtau) = Self::drift_factor(shape, m, inputs.temp_rise[j], tau);
+                    match drift_rows.iter_mut().find(|(row, _)| *row == j) {
+                        Some((_, d)) => *d = d.add(&six_at(theta, o).scaled(s)),
+                        None => drift_rows.push((j, six_at(theta, o).scaled(s))),
+                    }
+                    cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau });
+                }
+                _ => {}
+            }
+        }
+        for &(j, d) in &drift_rows {
+            let row = cached.joint_err[j].add(&d);
+            cached.chain.set_joint_error(j, row)?;
+        }
+        cached.drift_rows = drift_rows;
+        Ok(())
+    }
+
+    /// Predicted TCP position and rotation of one measurement and, if asked, the 6 × len Jacobian of the
+    /// pose as twists in the measurement frame (rows 0–2 the position, 3–5 the rotation: a small turn
+    /// `δφ` of the predicted rotation, `R ↦ exp(δφ)·R`).
+    ///
+    /// `cache` holds the chain of one parameter vector across the measurements of one evaluation: the
+    /// static effects are built once; a thermal drift, which differs per measurement, rewrites only its
+    /// own rows ([`Chain::set_joint_error`]).
+    pub fn predict(
+        &self,
+        robot: &Robot,
+        theta: &[f64],
+        m: &Measurement,
+        inputs: &PoseInputs<'_>,
+        jacobian: Option<&mut Matrix6xX<f64>>,
+        cache: &mut Option<ChainCache>,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), IdentifyError> {
+        let cached = self.cache(robot, theta, m.q.len(), cache)?;
+        let mut q = std::mem::take(&mut cached.q);
+        let moved = self.move_joints_and_drift(theta, m, inputs, cached, &mut q);
+        if let Err(e) = moved {
+            cached.q = q;
+            return Err(e);
+        }
+        // The measured joints' sines, moved by angle addition where a joint-level effect moved the joint
+        // (by a small angle: [`thermokin_chain::sin_cos`] takes it without a library sine).
+        let sc = inputs.sin_cos.map(|given| {
+            cached.sin_cos.clear();
+            cached.sin_cos.extend(given.iter().zip(&q).zip(&m.q).map(|((&(s, c), &moved), &measured)| {
+                let d = moved - measured;
+                if d == 0.0 {
+                    (s, c)
+                } else {
+                    let (sd, cd) = thermokin_chain::sin_cos(d);
+                    (s * cd + c * sd, c * cd - s * sd)
+                }
+            }));
+            &cached.sin_cos[..]
+        });
+        let registered = &cached.chain;
+        let Some(jac) = jacobian else {
+            let pose = match sc {
+                Some(sc) => registered.tool_position_rotation_sin_cos(&q, sc),
+                None => registered.tool_position_rotation(&q),
+            };
+            cached.q = q;
+            return Ok(pose?);
+        };
+        let pose = match sc {
+            Some(sc) => registered.pose_and_parameter_jacobian_rows_sin_cos(&q, sc, &mut cached.pj, &cached.rows),
+            None => registered.pose_and_parameter_jacobian_rows(&q, &mut cached.pj, &cached.rows),
+        };
+        cached.q = q;
+        let pose = pose?;
+        self.fill_jacobian(robot.chain(), theta, m, inputs, cached, jac);
+        Ok(pose)
+    }
+
+    /// The model's 6 × len Jacobian from the chain's parameter Jacobian `cached.pj`: each effect's
+    /// columns are its rows' columns, scaled by what moves them (a torque, a joint basis, a drift
+    /// factor); an exponential drift's τ column is its row's columns times the amplitudes and `∂s/∂τ`.
+    #[inline]
+    fn fill_jacobian(
+        &self,
+        chain: &Chain,
+        theta: &[f64],
+        m: &Measurement,
+        inputs: &PoseInputs<'_>,
+        cached: &ChainCache,
+        jac: &mut Matrix6xX<f64>,
+    ) {
+        let pj = &cached.pj;
+        let layout: ParameterLayout = cached.chain.parameter_layout();
+        jac.fill(0.0);
+        let mut drift = cached.drift_scale.iter();
+        for (k, (e, &o)) in self.effects().iter().zip(self.offsets()).enumerate() {
+            let mut copy = |dst: usize, src: usize, scale: f64| {
+                for r in 0..6 {
+                    jac[(r, dst)] = pj[(r, src)] * scale;
+                }
+            };
+            match *e {
+                Effect::Registration | Effect::BaseFrame => (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0)),
+                Effect::ToolPoint => (0..3).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                Effect::ToolRotation => (0..3).for_each(|c| copy(o + c, layout.tool() + 3 + c, 1.0)),
+                Effect::ToolFrame => (0..6).for_each(|c| copy(o + c, layout.tool() + c, 1.0)),
+                Effect::JointOffset(j) => copy(o, layout.zero(j.index()), 1.0),
+                Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
+                Effect::JointCompliance(j) => {
+                    let j = j.index();
+                    let scale = if chain.joints()[j].kind == JointKind::Revolute { inputs.torques[j] } else { 0.0 };
+                    copy(o, layout.zero(j), scale);
+                }
+                Effect::JointScale(j) | Effect::Periodic(j) => {
+                    // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
+                    let j = j.index();
+                    for (k, b) in e.joint_basis(m.q[j]).as_slice().iter().enumerate() {
+                        copy(o + k, layout.zero(j), *b);
+                    }
+                }
+                Effect::ThermalDrift(j, shape) => {
+                    let j = j.index();
+                    let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };
+                    let f = drift.next().filter(|d| d.effect == k).copied().unwrap_or(none);
+                    (0..6).for_each(|c| copy(o + c, layout.joint(j) + c, f.s));
+                    if shape == DriftShape::Exponential {
+                        for r in 0..6 {
+                            let mut v = 0.0;
+                            for c in 0..6 {
+                                v += pj[(r, layout.joint(j) + c)] * theta[o + c] * f.ds_dtau;
+                            }
+                            jac[(r, o + 6)] = v;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}

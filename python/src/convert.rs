@@ -1,0 +1,45 @@
+//! Python arguments into library values shared by the classes and functions: a table semantics' name, a
+//! profile spec, an operating state.
+
+use std::collections::HashMap;
+
+use pyo3::prelude::*;
+use thermokin_chain::OperatingState;
+use thermokin_deform::{TableSemantics, TimeProfile};
+
+use crate::errors::{input, io};
+
+/// `"canonical"` or `"coppeliasim"` (the authors' scene: joint objects edited at home).
+pub fn semantics_of(name: &str, dof: usize) -> PyResult<TableSemantics> {
+    match name {
+        "canonical" => Ok(TableSemantics::Canonical),
+        "coppeliasim" => Ok(TableSemantics::coppeliasim_at_home(dof)),
+        other => Err(input(format!("semantics: `{other}` is not \"canonical\" or \"coppeliasim\""))),
+    }
+}
+
+/// A profile spec (`static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`,
+/// `temperature:LOG.csv`, `FILE.toml`), its file read and checked against `dof` joints.
+pub fn profile_of(spec: &str, dof: usize) -> PyResult<TimeProfile> {
+    let spec = TimeProfile::parse_spec(spec).map_err(|e| input(format!("profile: {e}")))?;
+    thermokin_io::read_profile_spec(&spec, dof).map_err(io)
+}
+
+/// The operating state of `time_min` (minutes of the warm-up) and `temps` (°C by sensor name; the
+/// `temp_` prefix added when left out).
+pub fn state(time_min: Option<f64>, temps: Option<HashMap<String, f64>>) -> PyResult<OperatingState> {
+    if let Some(t) = time_min
+        && !t.is_finite()
+    {
+        return Err(input(format!("time_min: {t} is not a time in minutes")));
+    }
+    let mut temperatures_c: Vec<(String, f64)> = Vec::new();
+    for (name, value) in temps.unwrap_or_default() {
+        if !value.is_finite() {
+            return Err(input(format!("temps[{name}]: {value} is not a temperature in °C")));
+        }
+        temperatures_c.push((thermokin_io::sensor_name(&name), value));
+    }
+    temperatures_c.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(OperatingState { time_min, temperatures_c, payload: None })
+}
