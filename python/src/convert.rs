@@ -5,17 +5,26 @@ use std::collections::HashMap;
 
 use pyo3::prelude::*;
 use thermokin_chain::OperatingState;
-use thermokin_deform::{TableSemantics, TimeProfile};
+use thermokin_deform::{SemanticsKind, TableSemantics, TimeProfile};
 
 use crate::errors::{input, io};
 
-/// `"canonical"` or `"coppeliasim"` (the authors' scene: joint objects edited at home).
-pub fn semantics_of(name: &str, dof: usize) -> PyResult<TableSemantics> {
-    match name {
-        "canonical" => Ok(TableSemantics::Canonical),
-        "coppeliasim" => Ok(TableSemantics::coppeliasim_at_home(dof)),
-        other => Err(input(format!("semantics: `{other}` is not \"canonical\" or \"coppeliasim\""))),
+/// A setting with named values (the library's `CHOICES`), given as the keyword argument `what`: the
+/// library's default when `None`.
+pub fn choice<T: std::str::FromStr<Err = thermokin_chain::UnknownChoice>>(
+    what: &str,
+    given: Option<&str>,
+    default: T,
+) -> PyResult<T> {
+    match given {
+        None => Ok(default),
+        Some(name) => name.parse().map_err(|e| input(format!("{what}: {e}"))),
     }
+}
+
+/// A table semantics by name (`"canonical"`, `"coppeliasim"`: the authors' scene, edited at home).
+pub fn semantics_of(name: Option<&str>, dof: usize) -> PyResult<TableSemantics> {
+    Ok(choice("semantics", name, SemanticsKind::default())?.at_home(dof))
 }
 
 /// A profile spec (`static`, `linear:180`, `linear-grow:180`, `exp:45`, `cubic:c1,c2,c3`,

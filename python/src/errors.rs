@@ -16,6 +16,9 @@ pub enum Kind {
     Input,
     /// A file that is not there (`MissingFileError`, a `FileNotFoundError`).
     Missing,
+    /// A result the library refuses to hand over as asked: a diagnosis that does not transfer
+    /// (`RefusedError`).
+    Refused,
     /// Anything else the library refuses (`ThermokinError`).
     Other,
 }
@@ -25,6 +28,7 @@ pub fn raise(kind: Kind, message: impl Display) -> PyErr {
     let name = match kind {
         Kind::Input => "InputError",
         Kind::Missing => "MissingFileError",
+        Kind::Refused => "RefusedError",
         Kind::Other => "ThermokinError",
     };
     let message = message.to_string();

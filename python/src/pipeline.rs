@@ -11,12 +11,11 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use thermokin_chain::{Dataset, JointKind, Measurement, OperatingState, Target};
 use thermokin_compensate::{Plan, PlanError, Request, RunOutput, RunSettings, SummaryOut};
-use thermokin_diagnose::{Config, FoldGrouping, HiddenEffect, Report, SimulationConfig};
-use thermokin_identify::{FrameMode, ToolMode};
+use thermokin_diagnose::{Config, HiddenEffect, Report, SimulationConfig};
 use thermokin_io::units::{joints_to_internal, xyz_euler_deg, xyz_rotation_deg};
 
 use crate::arrays::{Rows, output};
-use crate::convert::{profile_of, semantics_of, state};
+use crate::convert::{choice, profile_of, semantics_of, state};
 use crate::errors::{Kind, input, io, must_exist, raise};
 use crate::robot::PyRobot;
 
@@ -35,20 +34,49 @@ fn kinds(robot: &PyRobot) -> Vec<JointKind> {
     robot.chain().joints().iter().map(|j| j.kind).collect()
 }
 
+/// The units keyword arguments of a measurement set.
+fn units(joint_units: Option<&str>, position_units: Option<&str>) -> PyResult<thermokin_io::MeasurementFormat> {
+    let parse_joint = |n: &str| n.parse().map_err(|e| input(format!("joint_units: {e}")));
+    let parse_position = |n: &str| n.parse().map_err(|e| input(format!("position_units: {e}")));
+    Ok(thermokin_io::MeasurementFormat {
+        joint_units: joint_units.map(parse_joint).transpose()?,
+        position_units: position_units.map(parse_position).transpose()?,
+        ..thermokin_io::MeasurementFormat::default()
+    })
+}
+
+/// A unit the numbers contradict, in the words of the keyword arguments.
+fn units_error(e: thermokin_io::IoError) -> PyErr {
+    let thermokin_io::IoError::UnitsUnclear { unclear, .. } = &e else { return io(e) };
+    let say = match unclear {
+        thermokin_io::UnitsUnclear::JointsLookLikeRadians { .. } => {
+            "give joint_units=\"rad\" (or joint_units=\"deg\" to read them as degrees)"
+        }
+        thermokin_io::UnitsUnclear::PositionsLookLikeMetres { .. } => {
+            "give position_units=\"m\" (or position_units=\"mm\" to read them as millimetres)"
+        }
+    };
+    input(format!("{e}: {say}"))
+}
+
 #[pymethods]
 impl PyMeasurements {
     /// Measurements from arrays: `q` `(N, n)` joint values in degrees (mm for prismatic joints), `xyz`
     /// `(N, 3)` measured tool positions in mm, `time_min` `(N,)` minutes since the cold start, `temps`
     /// a dict of `(N,)` readings in °C by sensor name (`temp_j2` or `j2`).
     #[new]
-    #[pyo3(signature = (robot, q, xyz, *, time_min=None, temps=None))]
+    #[pyo3(signature = (robot, q, xyz, *, time_min=None, temps=None, joint_units=None, position_units=None))]
     fn new(
         robot: &PyRobot,
         q: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
         xyz: PyArrayLikeDyn<'_, f64, AllowTypeChange>,
         time_min: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
         temps: Option<HashMap<String, PyArrayLikeDyn<'_, f64, AllowTypeChange>>>,
+        joint_units: Option<&str>,
+        position_units: Option<&str>,
     ) -> PyResult<Self> {
+        let format = units(joint_units, position_units)?;
+        let radians = format.joint_units == Some(thermokin_io::JointUnits::Radians);
         let chain = robot.chain();
         let q = Rows::read(&q, chain.dof(), "q")?;
         let xyz = Rows::read(&xyz, 3, "xyz")?;
@@ -80,7 +108,11 @@ impl PyMeasurements {
         let measurements = (0..n)
             .map(|i| {
                 let row = &q.data[i * chain.dof()..(i + 1) * chain.dof()];
-                let q = joints_to_internal(chain, row).ok_or_else(|| input("q: wrong row length"))?;
+                let q = if radians {
+                    row.to_vec()
+                } else {
+                    joints_to_internal(chain, row).ok_or_else(|| input("q: wrong row length"))?
+                };
                 Ok(Measurement {
                     time_min: times[i],
                     q,
@@ -91,27 +123,29 @@ impl PyMeasurements {
                 })
             })
             .collect::<PyResult<Vec<_>>>()?;
-        Ok(Self {
-            data: Dataset { measurements, temperature_names: names },
-            kinds: kinds(robot),
-            source: "arrays".to_string(),
-        })
+        let kinds = kinds(robot);
+        let data = Dataset { measurements, temperature_names: names };
+        let data =
+            thermokin_io::settle_units(std::path::Path::new("arrays"), data, &kinds, format).map_err(units_error)?;
+        Ok(Self { data, kinds, source: "arrays".to_string() })
     }
 
     /// Reads a measurements CSV (`time_min` optional, `q1..qn`, `x,y,z` mm, optional `rx,ry,rz`,
-    /// `temp_*`; the authors' results files too) for `robot`'s joints; `joint_units` `"deg"` or `"rad"`.
+    /// `temp_*`; the authors' results files too) for `robot`'s joints; `joint_units` `"deg"` or `"rad"`,
+    /// `position_units` `"mm"` or `"m"` (unstated: degrees and millimetres, refused when the numbers look
+    /// like radians or metres).
     #[staticmethod]
-    #[pyo3(signature = (path, robot, *, joint_units="deg"))]
-    fn from_csv(path: PathBuf, robot: &PyRobot, joint_units: &str) -> PyResult<Self> {
+    #[pyo3(signature = (path, robot, *, joint_units=None, position_units=None))]
+    fn from_csv(
+        path: PathBuf,
+        robot: &PyRobot,
+        joint_units: Option<&str>,
+        position_units: Option<&str>,
+    ) -> PyResult<Self> {
         must_exist(&path)?;
-        let joint_units = match joint_units {
-            "deg" => thermokin_io::JointUnits::Degrees,
-            "rad" => thermokin_io::JointUnits::Radians,
-            other => return Err(input(format!("joint_units: `{other}` is not \"deg\" or \"rad\""))),
-        };
         let kinds = kinds(robot);
-        let format = thermokin_io::MeasurementFormat { joint_units, ..thermokin_io::MeasurementFormat::default() };
-        let data = thermokin_io::read_measurements_with(&path, &kinds, format).map_err(io)?;
+        let format = units(joint_units, position_units)?;
+        let data = thermokin_io::read_measurements_with(&path, &kinds, format).map_err(units_error)?;
         Ok(Self { data, kinds, source: path.display().to_string() })
     }
 
@@ -178,12 +212,7 @@ pub fn simulate(
     orientation_noise_deg: Option<f64>,
     seed: Option<u64>,
 ) -> PyResult<PyMeasurements> {
-    if !robot.model.is_plain() {
-        return Err(input(format!(
-            "robot carries identified corrections ({}): simulate hides effects on a plain robot",
-            robot.model.beyond_urdf().join("; ")
-        )));
-    }
+    robot.model.require_plain().map_err(|e| input(format!("robot: {e}: simulate hides effects on a plain robot")))?;
     let effects = effects.unwrap_or_default();
     let defaults = SimulationConfig::default();
     let config = SimulationConfig {
@@ -285,8 +314,11 @@ impl PyReport {
     /// command line does, when the diagnosis did not beat the nominal model held out, unless `force`.
     #[pyo3(signature = (path, *, force=false))]
     fn export(&self, path: PathBuf, force: bool) -> PyResult<()> {
-        if let (Some(why), false) = (&self.report.honest_end, force) {
-            return Err(input(format!("not writing {}: {why} (force=True writes it anyway)", path.display())));
+        if let Err(e) = self.report.check_export(force) {
+            return Err(raise(
+                Kind::Refused,
+                format!("not writing {}: {e} (force=True writes it anyway)", path.display()),
+            ));
         }
         self.calibrated()?.save_to(&path)
     }
@@ -335,7 +367,7 @@ impl PyReport {
 /// (`"base"` or `"tracker"`: estimate the measurement frame), `tool` (`"known"` or `"unknown"`:
 /// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by="neighbourhood", frame="base", tool="known", orientation_lever_mm=None, orientation_noise_deg=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -346,9 +378,9 @@ pub fn diagnose(
     holdout: Option<&PyMeasurements>,
     noise_mm: Option<f64>,
     folds: Option<usize>,
-    folds_by: &str,
-    frame: &str,
-    tool: &str,
+    folds_by: Option<&str>,
+    frame: Option<&str>,
+    tool: Option<&str>,
     orientation_lever_mm: Option<f64>,
     orientation_noise_deg: Option<f64>,
 ) -> PyResult<PyReport> {
@@ -362,7 +394,7 @@ pub fn diagnose(
         (Ok(_), Some(_)) => {
             return Err(input("xyz: a Measurements carries its positions; give q and xyz, or a Measurements"));
         }
-        (Err(_), Some(xyz)) => PyMeasurements::new(robot, data.extract()?, xyz, time_min, temps)?,
+        (Err(_), Some(xyz)) => PyMeasurements::new(robot, data.extract()?, xyz, time_min, temps, None, None)?,
         (Err(_), None) => {
             return Err(input(
                 "xyz: the measured positions (N, 3) in mm go with joint values (or give a Measurements)",
@@ -372,40 +404,19 @@ pub fn diagnose(
     let measurements = &measurements;
     let defaults = Config::default();
     let config = Config {
-        folds_by: match folds_by {
-            "neighbourhood" => FoldGrouping::Neighbourhood,
-            "time" => FoldGrouping::Time,
-            "region" => FoldGrouping::WorkspaceRegion,
-            "configuration" => FoldGrouping::JointConfiguration,
-            other => {
-                return Err(input(format!(
-                    "folds_by: `{other}` is not \"neighbourhood\", \"time\", \"region\" or \"configuration\""
-                )));
-            }
-        },
+        folds_by: choice("folds_by", folds_by, defaults.folds_by)?,
         noise_mm,
         orientation_lever_mm: orientation_lever_mm.unwrap_or(defaults.orientation_lever_mm),
         orientation_noise_rad: orientation_noise_deg.map(thermokin_chain::units::radians),
         folds: folds.unwrap_or(defaults.folds),
-        frame: match frame {
-            "base" => FrameMode::Base,
-            "tracker" => FrameMode::Tracker,
-            other => return Err(input(format!("frame: `{other}` is not \"base\" or \"tracker\""))),
-        },
-        tool: match tool {
-            "known" => ToolMode::Known,
-            "unknown" => ToolMode::Unknown,
-            other => return Err(input(format!("tool: `{other}` is not \"known\" or \"unknown\""))),
-        },
+        frame: choice("frame", frame, defaults.frame)?,
+        tool: choice("tool", tool, defaults.tool)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;
-    if !robot.model.is_plain() {
-        return Err(input(format!(
-            "robot carries identified corrections ({}): diagnose the robot they were identified on, or the calibrated geometry alone",
-            robot.model.beyond_urdf().join("; ")
-        )));
-    }
+    robot.model.require_plain().map_err(|e| {
+        input(format!("robot: {e}: diagnose the robot they were identified on, or the calibrated geometry alone"))
+    })?;
     let file_robot = robot.model.robot().clone();
     let (data, held) = (&measurements.data, holdout.map(|h| &h.data));
     let report = py.detach(|| thermokin_diagnose::diagnose(&file_robot, data, held, &config)).map_err(input)?;
@@ -489,7 +500,7 @@ impl PyCompensation {
     /// CSV), `"long"`, `"json"` or `"joints"`; atomically.
     #[pyo3(signature = (path, *, format="authors"))]
     fn write(&self, path: PathBuf, format: &str) -> PyResult<()> {
-        let transient = self.run.rows.iter().any(|r| r.time_min != 0.0);
+        let transient = self.run.timed;
         let run = &self.run;
         let written = match format {
             "authors" => {
@@ -566,26 +577,23 @@ fn targets_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<Target>> {
 /// `accumulate="increments"` replays the authors' minute-by-minute CoppeliaSim updates of a plain robot's
 /// growing table (the command line's `--accumulate increments`).
 #[pyfunction]
-#[pyo3(signature = (robot, targets, *, deformation=None, semantics="canonical", profile=None, time_min=None, temps=None, duration_min=None, step_min=1.0, seed=None, accumulate="nominal"))]
+#[pyo3(signature = (robot, targets, *, deformation=None, semantics=None, profile=None, time_min=None, temps=None, duration_min=None, step_min=None, seed=None, accumulate=None))]
 pub fn compensate(
     py: Python<'_>,
     robot: &PyRobot,
     targets: &Bound<'_, PyAny>,
     deformation: Option<PathBuf>,
-    semantics: &str,
+    semantics: Option<&str>,
     profile: Option<String>,
     time_min: Option<f64>,
     temps: Option<HashMap<String, f64>>,
     duration_min: Option<f64>,
-    step_min: f64,
+    step_min: Option<f64>,
     seed: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
-    accumulate: &str,
+    accumulate: Option<&str>,
 ) -> PyResult<PyCompensation> {
-    let accumulation = match accumulate {
-        "nominal" => thermokin_compensate::Accumulation::FromNominal,
-        "increments" => thermokin_compensate::Accumulation::Increments,
-        other => return Err(input(format!("accumulate: `{other}` is not \"nominal\" or \"increments\""))),
-    };
+    let accumulation = choice("accumulate", accumulate, thermokin_compensate::Accumulation::default())?;
+    let step_min = step_min.unwrap_or(thermokin_compensate::Cycle::PAPER.step_min);
     let chain = robot.chain();
     let dof = chain.dof();
     let program = targets_of(targets)?;

@@ -34,8 +34,7 @@ impl PyRobot {
     /// Writes the robot: URDF when the path ends in `.urdf` (what URDF cannot hold named in its header),
     /// the complete TOML otherwise; atomically. `save` and a report's `export`.
     pub fn save_to(&self, path: &std::path::Path) -> PyResult<()> {
-        let urdf = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf"));
-        let text = if urdf { self.to_urdf() } else { self.to_toml() };
+        let (text, _) = thermokin_io::robot_file_text(&self.model, path);
         thermokin_io::write_atomic(path, text.as_bytes()).map_err(io)
     }
 
@@ -211,6 +210,7 @@ impl PyRobot {
         temps: Option<HashMap<String, f64>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let state = state(time_min, temps)?;
+        self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();
         let rows = Rows::read(&q, n, "q")?;
@@ -263,6 +263,7 @@ impl PyRobot {
         temps: Option<HashMap<String, f64>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let state = state(time_min, temps)?;
+        self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.model.chain_at(&state).map_err(input)?;
         let (rows, batch) = self.joint_rows(q, "q")?;
         let n = chain.dof();
@@ -300,6 +301,7 @@ impl PyRobot {
         restarts: Option<usize>,
     ) -> PyResult<IkResult> {
         let state = state(time_min, temps)?;
+        self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();
         let (goals, batch) = if position_only {
@@ -357,22 +359,21 @@ impl PyRobot {
     /// A copy deformed by a deviation table (`deformation`: a TOML or CSV file, paper Table 7's layout)
     /// under `semantics` (`"canonical"`, or `"coppeliasim"` for the authors' scene), at `time_min` of a
     /// `profile` (e.g. `"linear-grow:180"`, a law or a TOML file) when one is given.
-    #[pyo3(signature = (deformation, *, semantics="canonical", profile=None, time_min=None))]
+    #[pyo3(signature = (deformation, *, semantics=None, profile=None, time_min=None))]
     fn deformed(
         &self,
         deformation: PathBuf,
-        semantics: &str,
+        semantics: Option<&str>,
         profile: Option<String>,
         time_min: Option<f64>,
     ) -> PyResult<Self> {
         let dof = self.chain().dof();
         must_exist(&deformation)?;
         let table = thermokin_io::read_deviation_table_for(&deformation, dof).map_err(io)?;
-        let table = match (profile, time_min) {
-            (Some(p), Some(t)) => profile_of(&p, dof)?.table_at(&table, t).map_err(input)?,
-            (Some(_), None) => return Err(input("profile needs time_min (minutes)")),
-            (None, _) => table,
-        };
+        let profile = profile.map(|p| profile_of(&p, dof)).transpose()?;
+        // The table in force: the command line's rule (a time needs a profile, a profile a time).
+        let drifts = self.model.needs().0;
+        let table = thermokin_deform::table_in_force(&table, profile.as_ref(), time_min, drifts).map_err(input)?;
         let chain = table.apply(self.chain(), &semantics_of(semantics, dof)?).map_err(input)?;
         let robot = self.model.robot().with_chain(chain).map_err(input)?;
         Ok(Self { model: self.model.clone().with_robot(robot).map_err(input)? })

@@ -252,7 +252,7 @@ def test_dataframes_when_pandas_is_installed(irb140, root):
         (lambda r: thermokin.simulate(r, ["no_such_effect"]), InputError, "unknown effect `no_such_effect`"),
         (lambda r: thermokin.simulate(r, poses=0), InputError, "poses must be at least 1"),
         (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), folds=1), InputError, "folds"),
-        (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), frame="world"), InputError, "frame: `world`"),
+        (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), frame="world"), InputError, "frame: unknown measurement frame `world` (use base, tracker)"),
         (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]]), InputError, "nothing to compensate"),
         (lambda r: thermokin.compensate(r, [[600, 0, 400, 0, 90, 0]], deformation="nope.toml"), MissingFileError, "nope.toml"),
         (lambda r: r.deformed("fixtures/paper/deformations-case-study.toml", semantics="blender"), InputError, "semantics"),

@@ -22,7 +22,7 @@ from thermokin._native import (
     pose_to_xyz_euler,
     simulate,
 )
-from thermokin.errors import InputError, MissingFileError, ThermokinError
+from thermokin.errors import InputError, MissingFileError, RefusedError, ThermokinError
 
 __all__ = [
     "Compensation",
@@ -30,6 +30,7 @@ __all__ = [
     "InputError",
     "Measurements",
     "MissingFileError",
+    "RefusedError",
     "Report",
     "Robot",
     "ThermokinError",

@@ -68,7 +68,7 @@ class Robot:
         self,
         deformation: _Path,
         *,
-        semantics: str = "canonical",
+        semantics: str | None = None,
         profile: str | None = None,
         time_min: float | None = None,
     ) -> Robot: ...
@@ -105,9 +105,13 @@ class Measurements:
         *,
         time_min: _Array | None = None,
         temps: dict[str, _Array] | None = None,
+        joint_units: str | None = None,
+        position_units: str | None = None,
     ) -> Measurements: ...
     @staticmethod
-    def from_csv(path: _Path, robot: Robot, *, joint_units: str = "deg") -> Measurements: ...
+    def from_csv(
+        path: _Path, robot: Robot, *, joint_units: str | None = None, position_units: str | None = None
+    ) -> Measurements: ...
     def to_csv(self, path: _Path) -> None: ...
     def __len__(self) -> int: ...
     @property
@@ -184,9 +188,9 @@ def diagnose(
     holdout: Measurements | None = None,
     noise_mm: float | None = None,
     folds: int | None = None,
-    folds_by: str = "neighbourhood",
-    frame: str = "base",
-    tool: str = "known",
+    folds_by: str | None = None,
+    frame: str | None = None,
+    tool: str | None = None,
     orientation_lever_mm: float | None = None,
     orientation_noise_deg: float | None = None,
 ) -> Report: ...
@@ -195,13 +199,13 @@ def compensate(
     targets: _Path | _Array,
     *,
     deformation: _Path | None = None,
-    semantics: str = "canonical",
+    semantics: str | None = None,
     profile: str | None = None,
     time_min: float | None = None,
     temps: dict[str, float] | None = None,
     duration_min: float | None = None,
-    step_min: float = 1.0,
+    step_min: float | None = None,
     seed: _Array | None = None,
-    accumulate: str = "nominal",
+    accumulate: str | None = None,
 ) -> Compensation: ...
 def pose_to_xyz_euler(pose: _Array) -> _F64: ...

@@ -15,4 +15,9 @@ class MissingFileError(ThermokinError, FileNotFoundError):
     """A file that is not there."""
 
 
-__all__ = ["ThermokinError", "InputError", "MissingFileError"]
+class RefusedError(ThermokinError):
+    """A result refused as asked: the diagnosis does not beat the nominal model on data it never saw, so its
+    robot is not exported unless forced (the command line's exit status 5)."""
+
+
+__all__ = ["ThermokinError", "InputError", "MissingFileError", "RefusedError"]

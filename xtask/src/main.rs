@@ -342,6 +342,20 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-compensate",
         ],
     ),
+    // Plots of a compensation run and of a diagnosis: drawn in memory, written by the front end.
+    (
+        "thermokin-plot",
+        &[
+            "thermokin-chain",
+            "thermokin-deform",
+            "thermokin-io",
+            "thermokin-urdf",
+            "thermokin-ik",
+            "thermokin-compensate",
+            "thermokin-identify",
+            "thermokin-diagnose",
+        ],
+    ),
     // The Python front end calls the libraries the CLI calls, never the CLI (nor the paper crate).
     (
         "thermokin-python",
@@ -361,8 +375,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
 /// File-format and CLI crates, allowed only where named.
 /// (`thermokin-paper`, `thermokin-compensate` and `thermokin-diagnose` see them only through `thermokin-io`.)
 const FORMAT_CRATES: &[(&str, &[&str])] = &[
-    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-python"]),
-    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-python"]),
+    ("toml", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-plot", "thermokin-python"]),
+    ("csv", &["thermokin-io", "thermokin-compensate", "thermokin-paper", "thermokin-plot", "thermokin-python"]),
     ("clap", &[]),
 ];
 

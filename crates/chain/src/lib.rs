@@ -5,6 +5,7 @@
 //! This crate does no I/O.
 
 mod chain;
+mod choices;
 mod dh;
 mod error_params;
 mod factors;
@@ -18,6 +19,7 @@ pub mod units;
 pub use chain::{
     Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,
 };
+pub use choices::UnknownChoice;
 pub use dh::{DhConvention, DhRow, DhTable};
 pub use error_params::{ErrorGrouping, ErrorParams, xyz_angles, xyz_angles_for_output, xyz_rotation};
 pub use factors::JointFactor;

@@ -2,8 +2,26 @@
 
 use std::path::PathBuf;
 
-use clap::{Args, Parser, Subcommand, ValueEnum};
-use thermokin_deform::TimeProfile;
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, Parser, Subcommand};
+use thermokin_compensate::{Accumulation, Controller, Cycle, ResultsFormat};
+use thermokin_deform::{SemanticsKind, TimeProfile};
+use thermokin_diagnose::{Config, FoldGrouping, SimulationConfig};
+use thermokin_identify::{FrameMode, ToolMode};
+use thermokin_io::{JointUnits, PositionUnits};
+
+/// A value parser for a library setting with named values (its `CHOICES`): `--help` lists each name with
+/// its help, and the name parses into the library's own value.
+fn choice<T: Clone + Send + Sync + 'static>(
+    choices: &'static [(&'static str, &'static str, T)],
+) -> impl TypedValueParser<Value = T> {
+    let names = choices.iter().map(|(name, help, _)| PossibleValue::new(*name).help(*help));
+    PossibleValuesParser::new(names).map(move |name| {
+        // Only the listed names get here; the first value stands in for an impossible other.
+        let found = choices.iter().find(|(n, _, _)| *n == name).unwrap_or(&choices[0]);
+        found.2.clone()
+    })
+}
 
 const AFTER_HELP: &str = "\
 Units: millimetres and degrees everywhere on the command line and in files.
@@ -123,7 +141,7 @@ pub struct RobotArgs {
     /// orientation columns: xyz (X-Y-Z Euler degrees, R = Rx·Ry·Rz, the paper's; columns rx,ry,rz), rpy
     /// (ROS roll,pitch,yaw degrees, R = Rz·Ry·Rx; columns rx,ry,rz = roll, pitch, yaw) or quat (w,x,y,z;
     /// columns qw,qx,qy,qz).
-    #[arg(long, value_name = "CONVENTION", default_value = "xyz", value_parser = parse_orientation)]
+    #[arg(long, value_name = "CONVENTION", default_value_t = thermokin_io::Orientation::default(), value_parser = |s: &str| s.parse::<thermokin_io::Orientation>())]
     pub orientation: thermokin_io::Orientation,
     /// Deviation table (the authors' CSV `Dx,Dy,Dz,Dox,Doy,Doz`, or TOML), mm and degrees.
     #[arg(long, value_name = "FILE")]
@@ -133,7 +151,7 @@ pub struct RobotArgs {
     /// then holds values per kelvin, scaled by the mean rise of the logged temperatures over their first
     /// row; LOG.csv is `time_min,<sensor>,<sensor>,…` in minutes and °C, one row per reading, linearly
     /// interpolated), or a profile TOML file.
-    #[arg(long, value_name = "PROFILE", value_parser = parse_profile)]
+    #[arg(long, value_name = "PROFILE", value_parser = |s: &str| TimeProfile::parse_spec(s).map_err(|e| e.to_string()))]
     pub profile: Option<thermokin_deform::ProfileSpec>,
     /// Operating time, minutes since the cold start of a warm-up: for a robot file whose rows drift with
     /// time (a calibrated robot, `[[drift]]`), and for fk/ik with --profile. A targets file's `time_min`
@@ -150,37 +168,9 @@ pub struct RobotArgs {
     /// the payload the robot file was calibrated with); the diagnosis merges it with the last link's mass.
     #[arg(long, value_name = "KG@X,Y,Z")]
     pub payload: Option<String>,
-    /// How the table acts on the robot: canonical (Table 7: Trans·Rx·Ry·Rz at each joint) or
-    /// coppeliasim (the authors' scene: world shift and Euler-angle addition of each joint object, at home).
-    #[arg(long, value_enum, default_value_t = Semantics::Canonical)]
-    pub semantics: Semantics,
-}
-
-/// How a transient run moves from one update to the next (`thermokin_compensate::Accumulation`).
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum AccumulateArg {
-    /// The profile's share of the table, applied to the undeformed robot at every update.
-    FromNominal,
-    /// The change of the share since the previous update, applied to the deformed robot.
-    Increments,
-}
-
-impl From<AccumulateArg> for thermokin_compensate::Accumulation {
-    fn from(a: AccumulateArg) -> Self {
-        match a {
-            AccumulateArg::FromNominal => Self::FromNominal,
-            AccumulateArg::Increments => Self::Increments,
-        }
-    }
-}
-
-/// Deviation-table semantics.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Semantics {
-    /// Table 7's reading (this library's model).
-    Canonical,
-    /// The authors' CoppeliaSim edits, applied at the home configuration.
-    Coppeliasim,
+    /// How the table acts on the robot.
+    #[arg(long, value_parser = choice(SemanticsKind::CHOICES), default_value_t = SemanticsKind::default())]
+    pub semantics: SemanticsKind,
 }
 
 /// `fk` arguments.
@@ -189,8 +179,14 @@ pub struct FkArgs {
     #[command(flatten)]
     pub robot: RobotArgs,
     /// Joint values, degrees (mm for prismatic joints), comma separated.
-    #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
-    pub joints: String,
+    #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true, required_unless_present = "joints_file")]
+    pub joints: Option<String>,
+    /// A file of joint values instead (`q1..qn` columns, degrees; optional `time_min`, `temp_*` for each
+    /// row's state): one output row per input row on standard output — `line,x_mm,y_mm,z_mm,rx_deg,
+    /// ry_deg,rz_deg,error` (X-Y-Z Euler), or a JSON object per line with --json — a bad row is its
+    /// error, the others are computed (exit 3 when any row failed).
+    #[arg(long, value_name = "FILE", conflicts_with = "joints")]
+    pub joints_file: Option<PathBuf>,
     /// Print JSON: position_mm, rotation (3×3), xyz_euler_deg (the paper's R = Rx·Ry·Rz), ros_rpy_deg
     /// (R = Rz·Ry·Rx), quaternion_wxyz, and outside_limits (joints beyond their limits, named).
     #[arg(long)]
@@ -203,8 +199,14 @@ pub struct IkArgs {
     #[command(flatten)]
     pub robot: RobotArgs,
     /// Target pose x,y,z (mm),rx,ry,rz (degrees, X-Y-Z Euler); or x,y,z alone with --position-only.
-    #[arg(long, value_name = "X,Y,Z,RX,RY,RZ", allow_hyphen_values = true)]
-    pub pose: String,
+    #[arg(long, value_name = "X,Y,Z,RX,RY,RZ", allow_hyphen_values = true, required_unless_present = "poses_file")]
+    pub pose: Option<String>,
+    /// A file of poses instead (a targets CSV: `X,Y,Z` and `RX,RY,RZ`, `ROLL,PITCH,YAW` or `QW,QX,QY,QZ`,
+    /// optional label, `time_min`, `temp_*`), each solved from --seed: one output row per input row on
+    /// standard output — `line,label,q1..qn,status,position_error_mm,orientation_error_deg,error`, or a
+    /// JSON object per line with --json (exit 3 when any row was not reached or could not be read).
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["pose", "branches", "position_only"])]
+    pub poses_file: Option<PathBuf>,
     /// Solve for the position only (orientation free).
     #[arg(long)]
     pub position_only: bool,
@@ -212,7 +214,7 @@ pub struct IkArgs {
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub seed: Option<String>,
     /// Random restarts when a solve stalls.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = thermokin_ik::Params::default().restarts)]
     pub restarts: usize,
     /// List every arm configuration that reaches the pose instead of one solution: for arms with a
     /// closed form (axes 2 and 3 parallel and a spherical wrist — the IRB 140, most ABB/KUKA/Fanuc arms —
@@ -237,25 +239,23 @@ pub struct CompensateArgs {
     /// The results (written atomically), in --format.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,
-    /// Layout of --out: authors (their CSV layout, two header rows, diffs against their files), long
-    /// (one row per target, time and value: time_min,label,status,quantity,component,value,unit — for
-    /// pandas and SQL), json ({"summary": …, "rows": […]}) or joints (time_min,label,A1..An,status).
-    #[arg(long, value_enum, default_value_t = ResultsFormat::Authors)]
+    /// Layout of --out.
+    #[arg(long, value_parser = choice(ResultsFormat::CHOICES), default_value_t = ResultsFormat::default())]
     pub format: ResultsFormat,
     /// Transient cycle length, minutes: with --profile (default 200), or to run a calibrated robot's
     /// warm-up (every target at every step).
     #[arg(long, value_name = "MIN")]
     pub duration: Option<f64>,
     /// Model update interval, minutes (transient runs).
-    #[arg(long, value_name = "MIN", default_value_t = 1.0)]
+    #[arg(long, value_name = "MIN", default_value_t = Cycle::PAPER.step_min)]
     pub step: f64,
     /// How each update brings the table into force (with --profile): from-nominal (the profile's share
     /// applied to the undeformed robot; the state at t depends on t alone) or increments (only the change
     /// since the previous update, applied to the robot as already deformed — what the authors' script
     /// did every minute, paper section 4 and Appendix A, Figure A5; with --semantics coppeliasim the
     /// state then depends on the path, see docs/paper-reproduction.md).
-    #[arg(long, value_enum, value_name = "HOW", default_value_t = AccumulateArg::FromNominal)]
-    pub accumulate: AccumulateArg,
+    #[arg(long, value_name = "HOW", value_parser = choice(Accumulation::CHOICES), default_value_t = Accumulation::default())]
+    pub accumulate: Accumulation,
     /// Seed of the first solve, degrees (default: all zero).
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub seed: Option<String>,
@@ -267,18 +267,18 @@ pub struct CompensateArgs {
     /// program per time step, FILE's stem + `_t<minutes>`.
     #[arg(long, value_name = "FILE", alias = "rapid")]
     pub program: Option<PathBuf>,
-    /// Controller language of --program: abb, kuka or ur (default: from the file extension).
-    #[arg(long, value_enum)]
-    pub controller: Option<ControllerArg>,
+    /// Controller language of --program (default: from the file extension).
+    #[arg(long, value_parser = choice(Controller::CHOICES))]
+    pub controller: Option<Controller>,
     /// Motion speed in the controller's terms: ABB speeddata (v100), KUKA axis % (30), UR rad/s (1.05).
     #[arg(long, value_name = "SPEED")]
     pub speed: Option<String>,
     /// Zone in the controller's terms: ABB zonedata (fine, z10), KUKA fine or C_PTP, UR blend radius m (0).
     #[arg(long, value_name = "ZONE")]
     pub zone: Option<String>,
-    /// ABB tooldata of the motion instructions.
-    #[arg(long, value_name = "NAME", default_value = "tool0")]
-    pub tooldata: String,
+    /// ABB tooldata of the motion instructions (default: tool0, the flange).
+    #[arg(long, value_name = "NAME")]
+    pub tooldata: Option<String>,
     /// ABB: MoveJ to robtargets (the nominal robot's pose at the compensated joints, with confdata, so
     /// the controller's own IK lands on them) instead of MoveAbsJ to jointtargets.
     #[arg(long)]
@@ -316,15 +316,14 @@ pub struct DiagnoseArgs {
     /// refitted on it when they are estimated); it never influences the selection.
     #[arg(long, value_name = "FILE")]
     pub holdout: Option<PathBuf>,
-    /// Frame of the measurements: base (a base misalignment is a candidate) or tracker (an unknown
-    /// registration, always estimated).
-    #[arg(long, value_enum, default_value_t = FrameArg::Base)]
-    pub frame: FrameArg,
-    /// Tool point: known (a tool error is a candidate) or unknown (always estimated).
-    #[arg(long, value_enum, default_value_t = ToolArg::Known)]
-    pub tool: ToolArg,
+    /// Frame of the measurements.
+    #[arg(long, value_parser = choice(FrameMode::CHOICES), default_value_t = Config::default().frame)]
+    pub frame: FrameMode,
+    /// Tool point.
+    #[arg(long, value_parser = choice(ToolMode::CHOICES), default_value_t = Config::default().tool)]
+    pub tool: ToolMode,
     /// Cross-validation folds.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = Config::default().folds)]
     pub folds: usize,
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE")]
@@ -332,16 +331,18 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
-    /// How poses are grouped into validation folds. neighbourhood (default): time-grouped when the data
-    /// span time; otherwise blocks of neighbouring arm configurations (4 per fold, k-means in joint
-    /// space; single poses below 10 per block), so that an effect is scored on poses unlike those it was
-    /// fitted on and the gate counts blocks, not poses. time: time-grouped, or single poses shuffled.
-    /// region: leave one workspace quadrant out. configuration: leave one arm branch out.
-    #[arg(long, value_enum, default_value_t = FoldsByArg::Neighbourhood)]
-    pub folds_by: FoldsByArg,
-    /// Unit of the measurement files' revolute joint columns: deg (default) or rad (ROS, robot SDKs).
-    #[arg(long, value_enum, default_value_t = JointUnitsArg::Deg)]
-    pub joint_units: JointUnitsArg,
+    /// How poses are grouped into validation folds, so that an effect is scored on poses unlike those it
+    /// was fitted on and the gate counts blocks, not poses.
+    #[arg(long, value_parser = choice(FoldGrouping::CHOICES), default_value_t = Config::default().folds_by)]
+    pub folds_by: FoldGrouping,
+    /// Unit of the measurement files' revolute joint columns (default: degrees, refused when every value
+    /// lies within ±2π — joints written in radians; give deg to read them as degrees anyway).
+    #[arg(long, value_parser = choice(JointUnits::CHOICES))]
+    pub joint_units: Option<JointUnits>,
+    /// Unit of the measured positions (default: millimetres, refused when every coordinate lies within
+    /// ±5 — a workspace in metres; give mm to read them as millimetres anyway).
+    #[arg(long, value_parser = choice(PositionUnits::CHOICES))]
+    pub position_units: Option<PositionUnits>,
     /// The measurement noise per axis (one standard deviation, mm) — your tracker's specification, e.g.
     /// 0.01. The verdict then says whether what remains is that noise or an effect the catalogue lacks.
     #[arg(long, value_name = "MM")]
@@ -349,7 +350,7 @@ pub struct DiagnoseArgs {
     /// Weight of measured orientations (rx, ry, rz columns: a 6-D probe) as a lever in mm: a rotation
     /// error of δφ counts as the displacement lever·δφ it causes that far from the tool point. 0 fits
     /// positions only. Ignored when the files carry no orientation.
-    #[arg(long, value_name = "MM", default_value_t = 100.0)]
+    #[arg(long, value_name = "MM", default_value_t = Config::default().orientation_lever_mm)]
     pub orientation_lever: f64,
     /// The orientation noise per axis of a 6-D probe (one standard deviation, degrees), e.g. 0.01: with
     /// --noise, the verdict's noise floor then includes the orientations.
@@ -373,70 +374,6 @@ pub struct DiagnoseArgs {
     pub quiet: bool,
 }
 
-/// `--folds-by`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FoldsByArg {
-    /// Time-grouped folds, or blocks of neighbouring arm configurations.
-    Neighbourhood,
-    /// Time-grouped folds (or a seeded shuffle of single poses).
-    Time,
-    /// Leave one workspace region out.
-    Region,
-    /// Leave one arm configuration out.
-    Configuration,
-}
-
-/// `--joint-units` of measurement files.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum JointUnitsArg {
-    /// Degrees.
-    Deg,
-    /// Radians.
-    Rad,
-}
-
-/// `--format` of the results.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ResultsFormat {
-    /// The authors' results layout.
-    Authors,
-    /// Long (tidy) CSV.
-    Long,
-    /// JSON.
-    Json,
-    /// The compensated joints only: time_min,label,A1..An,status (degrees; mm for prismatic joints).
-    Joints,
-}
-
-/// `--controller`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ControllerArg {
-    /// ABB RAPID (MoveAbsJ to jointtargets).
-    Abb,
-    /// KUKA KRL (PTP to E6AXIS).
-    Kuka,
-    /// Universal Robots URScript (movej).
-    Ur,
-}
-
-/// `--frame`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FrameArg {
-    /// Robot base frame.
-    Base,
-    /// Laser-tracker frame.
-    Tracker,
-}
-
-/// `--tool`.
-#[derive(ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ToolArg {
-    /// The robot description's tool.
-    Known,
-    /// Estimated.
-    Unknown,
-}
-
 /// `simulate` arguments.
 #[derive(Args, Debug)]
 pub struct SimulateArgs {
@@ -446,20 +383,20 @@ pub struct SimulateArgs {
     #[arg(long = "effect", value_name = "SPEC", required = true)]
     pub effects: Vec<String>,
     /// Measurement noise per axis, mm (standard deviation).
-    #[arg(long, default_value_t = 0.005)]
+    #[arg(long, default_value_t = SimulationConfig::default().noise_mm)]
     pub noise: f64,
     /// Number of poses.
-    #[arg(long, default_value_t = 240)]
+    #[arg(long, default_value_t = SimulationConfig::default().poses)]
     pub poses: usize,
     /// Time span of the measurements, minutes.
-    #[arg(long, default_value_t = 240.0)]
+    #[arg(long, default_value_t = SimulationConfig::default().minutes)]
     pub minutes: f64,
     /// Also measure the tool's orientation (a 6-D probe: rx, ry, rz columns), with this noise per axis
     /// in degrees (standard deviation of a small random turn).
     #[arg(long, value_name = "DEG")]
     pub orientation_noise: Option<f64>,
     /// Seed.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = SimulationConfig::default().seed)]
     pub seed: u64,
     /// Output measurement CSV (written atomically).
     #[arg(short, long, value_name = "FILE")]
@@ -496,27 +433,8 @@ pub struct ReproduceArgs {
     pub check: Option<PathBuf>,
 }
 
-/// Parses `--profile` ([`TimeProfile::parse_spec`]): an inline law, or the file to read later.
-pub fn parse_profile(s: &str) -> Result<thermokin_deform::ProfileSpec, String> {
-    TimeProfile::parse_spec(s).map_err(|e| e.to_string())
-}
-
-/// Parses `--orientation`.
-pub fn parse_orientation(s: &str) -> Result<thermokin_io::Orientation, String> {
-    s.parse()
-}
-
-/// Parses a comma-separated list of finite numbers, naming the flag in errors.
+/// Parses a comma-separated list of finite numbers ([`thermokin_io::parse_list`]), naming the flag in
+/// errors.
 pub fn parse_list(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
-    s.split(',')
-        .enumerate()
-        .map(|(i, v)| {
-            let x: f64 = v
-                .trim()
-                .parse()
-                .map_err(|_| anyhow::anyhow!("--{flag}: value {} `{}` is not a number", i + 1, v.trim()))?;
-            anyhow::ensure!(x.is_finite(), "--{flag}: value {} is not finite", i + 1);
-            Ok(x)
-        })
-        .collect()
+    thermokin_io::parse_list(s).map_err(|m| anyhow::anyhow!("--{flag}: {m}"))
 }

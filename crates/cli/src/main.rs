@@ -1,12 +1,22 @@
-//! The `thermokin` command line: forward and inverse kinematics, thermal compensation runs, and the
-//! reproduction of the paper's case studies.
+//! The `thermokin` command line: forward and inverse kinematics, thermal compensation runs, the
+//! sim-to-real diagnosis, and the reproduction of the paper's case studies. It parses, calls the
+//! libraries and prints: every default, rule and refusal is a library's.
+
+/// Prints one line of a command's results on standard output ([`out::line`]); a closed pipe ends the
+/// command quietly.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::out::line(format_args!($($arg)*))?
+    };
+}
 
 mod args;
 mod bundled;
 mod commands;
+mod compensation;
 mod diagnosis;
 mod input;
-mod plots;
+mod out;
 mod reproduce;
 
 use std::process::ExitCode;
@@ -25,6 +35,11 @@ pub mod exit {
     pub const PARTIAL: u8 = 3;
     /// `reproduce-paper --check` found drift from the golden outputs.
     pub const DRIFT: u8 = 4;
+    /// The diagnosis does not transfer: the export was refused (the report says why).
+    pub const REFUSED: u8 = 5;
+    /// Standard output was closed before the results were written (`… | head -1`): as a process ended by
+    /// SIGPIPE reports it, and nothing is said.
+    pub const CLOSED_PIPE: u8 = 141;
 }
 
 /// An error with the exit status it maps to.
@@ -47,7 +62,7 @@ impl Failure {
 }
 
 fn main() -> ExitCode {
-    let mut cli = match args::Cli::try_parse() {
+    let cli = match args::Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
             let code = if e.use_stderr() { exit::BAD_INPUT } else { exit::OK };
@@ -55,9 +70,18 @@ fn main() -> ExitCode {
             return ExitCode::from(code);
         }
     };
-    bundled::resolve_inputs(&mut cli);
+    if let Err(f) = bundled::check_inputs(&cli) {
+        eprintln!("error: {:#}", f.error);
+        return ExitCode::from(f.code);
+    }
+    // A run interrupted (Ctrl-C, SIGTERM, SIGHUP) leaves no temporary file beside its outputs.
+    let _ = ctrlc::set_handler(|| {
+        thermokin_io::remove_temporaries();
+        std::process::exit(130);
+    });
     match commands::run(cli) {
         Ok(code) => ExitCode::from(code),
+        Err(f) if f.code == exit::CLOSED_PIPE => ExitCode::from(f.code),
         Err(f) => {
             eprintln!("error: {:#}", f.error);
             ExitCode::from(f.code)

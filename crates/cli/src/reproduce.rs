@@ -9,7 +9,7 @@ use thermokin_paper::{Inputs, check, reproduce};
 
 use crate::args::ReproduceArgs;
 use crate::input::progress_bar;
-use crate::{Failure, exit, plots};
+use crate::{Failure, exit};
 
 fn paper(e: thermokin_paper::PaperError) -> Failure {
     match e {
@@ -27,14 +27,15 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
         authors: a.authors.clone(),
     };
     let bar = progress_bar(201, "transient case");
-    let r = reproduce(&inputs, |done, _| bar.set_position(done as u64)).map_err(paper)?;
+    let r = reproduce(&inputs, |done, total| bar.set_position(done as u64, total as u64)).map_err(paper)?;
     bar.finish();
 
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
-        plots::deviation_vs_time(&dir.join("transient-deviation.svg"), &r.transient_run).map_err(Failure::internal)?;
-        plots::structure(&dir.join("figure15-structure.svg"), &r.scene, &r.deformed, 10.0)
-            .map_err(Failure::internal)?;
+        let deviation = thermokin_plot::deviation_vs_time(&r.transient_run).map_err(Failure::internal)?;
+        write_atomic(&dir.join("transient-deviation.svg"), deviation.as_bytes()).map_err(Failure::internal)?;
+        let structure = thermokin_plot::structure(&r.scene, &r.deformed, 10.0).map_err(Failure::internal)?;
+        write_atomic(&dir.join("figure15-structure.svg"), structure.as_bytes()).map_err(Failure::internal)?;
     }
     if let Some(p) = &a.report {
         write_atomic(p, r.report.as_bytes()).map_err(Failure::internal)?;
@@ -43,8 +44,8 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
         let text = serde_json::to_string_pretty(&r.measurements.golden_json()).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
     }
-    println!("{}", r.headline.text());
-    println!("({:.2} s)", started.elapsed().as_secs_f64());
+    say!("{}", r.headline.text());
+    say!("({:.2} s)", started.elapsed().as_secs_f64());
     let mut code = exit::OK;
     if let Some(golden) = &a.check {
         let text = std::fs::read_to_string(golden)
@@ -54,7 +55,7 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
             serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
         let drift = check(&g, &r.measurements.golden_json());
         if drift.is_empty() {
-            println!("check: no drift against {}", golden.display());
+            say!("check: no drift against {}", golden.display());
         } else {
             for d in &drift {
                 eprintln!("drift: {d}");

@@ -10,6 +10,51 @@ use thermokin_io::units::{degrees, degrees3, joint_value_out, rounded};
 
 use crate::run::{Axes, RunOutput, Summary, TargetResult};
 
+/// The layouts a run's results are written in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ResultsFormat {
+    /// The authors' results layout ([`write_results_csv`]).
+    #[default]
+    Authors,
+    /// Long (tidy) CSV ([`write_long_csv`]).
+    Long,
+    /// JSON ([`write_results_json`]).
+    Json,
+    /// The compensated joints only ([`write_joint_csv`]).
+    Joints,
+}
+
+thermokin_chain::choices!(
+    ResultsFormat,
+    "results format",
+    [
+        ("authors", "the authors' CSV layout (two header rows; diffs against their files)", ResultsFormat::Authors),
+        (
+            "long",
+            "one row per target and value: time_min,label,status,quantity,component,value,unit (pandas, SQL)",
+            ResultsFormat::Long
+        ),
+        ("json", "{\"summary\": …, \"rows\": […]}", ResultsFormat::Json),
+        (
+            "joints",
+            "the compensated joints: time_min,label,A1..An,status (degrees; mm for prismatic joints)",
+            ResultsFormat::Joints
+        ),
+    ]
+);
+
+impl ResultsFormat {
+    /// Writes `run` in this layout; `with_time` adds the time column of the authors' layout.
+    pub fn write(self, out: &mut impl Write, run: &RunOutput, with_time: bool) -> io::Result<()> {
+        match self {
+            ResultsFormat::Authors => write_results_csv(out, run, with_time),
+            ResultsFormat::Long => write_long_csv(out, run),
+            ResultsFormat::Json => write_results_json(out, run),
+            ResultsFormat::Joints => write_joint_csv(out, run),
+        }
+    }
+}
+
 /// Decimals written for millimetres and degrees: 1e-9, the solver's tolerance. Below it a number is
 /// binary noise (`640.9999999999994` is written `641`, `5.68e-13` is written `0`).
 const DECIMALS: i32 = 9;
@@ -57,6 +102,36 @@ pub struct SummaryOut {
     pub max_orientation_error_deg: f64,
     /// Largest position error of the uncompensated program over the reached targets, mm.
     pub max_uncompensated_error_mm: f64,
+}
+
+impl std::fmt::Display for SummaryOut {
+    /// The summary as `compensate` prints it: solves and failures (the failed targets named, twenty at
+    /// most), the position and orientation deviations' ranges, the largest errors.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        writeln!(f, "solves {}  failed {}", self.solves, self.failures)?;
+        if !self.failed.is_empty() {
+            let shown: Vec<&str> = self.failed.iter().take(20).map(String::as_str).collect();
+            let more = if self.failed.len() > 20 {
+                format!(" … and {} more (status column of the results)", self.failed.len() - 20)
+            } else {
+                String::new()
+            };
+            writeln!(f, "not reached (left out of the statistics below): {}{more}", shown.join(", "))?;
+        }
+        let ranges = |a: &Axes| {
+            format!(
+                "min {:+.3e} {:+.3e} {:+.3e}   max {:+.3e} {:+.3e} {:+.3e}",
+                a.min[0], a.min[1], a.min[2], a.max[0], a.max[1], a.max[2]
+            )
+        };
+        writeln!(f, "position deviation (programmed − reached), mm:  {}", ranges(&self.position_mm))?;
+        writeln!(f, "orientation deviation (rotation vector), deg:   {}", ranges(&self.orientation_deg))?;
+        writeln!(
+            f,
+            "largest error: compensated {:.3e} mm, {:.3e}°; uncompensated program {:.3} mm",
+            self.max_position_error_mm, self.max_orientation_error_deg, self.max_uncompensated_error_mm
+        )
+    }
 }
 
 impl SummaryOut {

@@ -19,14 +19,14 @@ mod program;
 mod run;
 mod stream;
 
-pub use export::{SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
+pub use export::{ResultsFormat, SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use model_run::{
     command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, state_or,
 };
 pub use plan::{Plan, PlanError, Request};
 pub use program::{
-    AbbTargets, ArmConfiguration, Controller, Program, ProgramError, ProgramSettings, arm_configuration, confdata,
-    kuka_status, kuka_turn, programs,
+    AbbTargets, ArmConfiguration, BranchOut, Controller, Program, ProgramError, ProgramSettings, SolutionRow,
+    arm_configuration, confdata, kuka_status, kuka_turn, program_files, programs,
 };
 pub use run::{
     Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

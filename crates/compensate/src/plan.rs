@@ -153,7 +153,9 @@ impl Plan {
         match self {
             Plan::Static { table } => compensate_static(chain, table, program, settings),
             Plan::Transient { table, profile, cycle } => {
+                // A transient run has its time column even when every step is minute 0.
                 compensate_transient(chain, table, profile, *cycle, program, settings, progress)
+                    .map(|run| RunOutput { timed: true, ..run })
             }
             Plan::InStates { model } => compensate_model(model, program, request.state, settings),
             Plan::Warmup { model, cycle } => {

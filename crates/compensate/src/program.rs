@@ -26,7 +26,28 @@ pub enum Controller {
     UniversalRobots,
 }
 
+thermokin_chain::choices!(
+    Controller,
+    "controller",
+    [
+        ("abb", "ABB RAPID (.mod: MoveAbsJ to jointtargets)", Controller::Abb),
+        ("kuka", "KUKA KRL (.src: PTP to E6AXIS)", Controller::Kuka),
+        ("ur", "Universal Robots URScript (.script: movej)", Controller::UniversalRobots),
+    ]
+);
+
 impl Controller {
+    /// The controller whose programs use this file extension (any case): `.mod`, `.modx` or `.prg` for
+    /// ABB, `.src` for KUKA, `.script` or `.urscript` for Universal Robots.
+    pub fn from_extension(extension: &str) -> Option<Self> {
+        match extension.to_ascii_lowercase().as_str() {
+            "mod" | "modx" | "prg" => Some(Controller::Abb),
+            "src" => Some(Controller::Kuka),
+            "script" | "urscript" => Some(Controller::UniversalRobots),
+            _ => None,
+        }
+    }
+
     /// The file extension programs of this controller use.
     pub fn extension(self) -> &'static str {
         match self {
@@ -118,6 +139,23 @@ pub enum ProgramError {
     /// that is what `confdata`'s definition assumes.
     #[error("robtargets need a six-joint robot with a spherical wrist (joint axes 4, 5, 6 meeting at one point)")]
     NotSphericalWrist,
+}
+
+/// The program files of a run written to `path` — one, or one per time step of a transient run, named
+/// `<stem><suffix>.<extension>` beside it — with `settings`, its name the file's stem.
+pub fn program_files(
+    path: &std::path::Path,
+    run: &RunOutput,
+    nominal: &Chain,
+    settings: &ProgramSettings,
+) -> Result<Vec<(std::path::PathBuf, String)>, ProgramError> {
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("program");
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or(settings.controller.extension());
+    let named = ProgramSettings { name: stem.to_string(), ..settings.clone() };
+    Ok(programs(run, nominal, &named)?
+        .into_iter()
+        .map(|p| (path.with_file_name(format!("{stem}{}.{ext}", p.suffix)), p.text))
+        .collect())
 }
 
 /// The programs of a run: one for a static run, one per time step for a transient one. `nominal` is the
@@ -343,4 +381,133 @@ fn ur(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pro
     }
     out.push_str("end\n");
     out
+}
+
+/// One arm configuration that reaches a pose, for output (`ik --branches`): where the wrist centre is,
+/// the sign of axis 5, the solve's status, the joints (degrees; mm for prismatic joints, to 1e-12) and
+/// the controllers' names of the configuration.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct BranchOut {
+    /// `in front` of axis 1 or `behind` it.
+    pub wrist_centre_vs_axis1: &'static str,
+    /// `in front` of the lower arm or `behind` it.
+    pub wrist_centre_vs_lower_arm: &'static str,
+    /// `positive` or `negative`.
+    pub axis5: &'static str,
+    /// The solve's status (`Converged` only as checked by an independent FK).
+    pub status: String,
+    /// The joint values.
+    pub joints_deg: Vec<f64>,
+    /// ABB `confdata` [cf1, cf4, cf6, cfx].
+    pub abb_confdata: [i64; 4],
+    /// KUKA Status.
+    pub kuka_status: u8,
+    /// KUKA Turn.
+    pub kuka_turn: u8,
+    /// The position error of the solution, mm (independent FK).
+    pub position_error_mm: f64,
+}
+
+impl BranchOut {
+    /// The branch of `solution` on `chain`.
+    pub fn of(chain: &Chain, solution: &thermokin_ik::Solution) -> Self {
+        let conf = arm_configuration(chain, &solution.q);
+        let side = |behind: bool| if behind { "behind" } else { "in front" };
+        let joints = thermokin_io::units::joints_to_external(chain, &solution.q);
+        Self {
+            wrist_centre_vs_axis1: side(conf.wrist_centre_behind_axis1),
+            wrist_centre_vs_lower_arm: side(conf.wrist_centre_behind_lower_arm),
+            axis5: if conf.axis5_negative { "negative" } else { "positive" },
+            status: format!("{:?}", solution.status),
+            joints_deg: joints.iter().map(|&d| thermokin_io::units::rounded(d, 12)).collect(),
+            abb_confdata: conf.abb_confdata,
+            kuka_status: conf.kuka_status,
+            kuka_turn: conf.kuka_turn,
+            position_error_mm: solution.position_error_mm,
+        }
+    }
+
+    /// The branches as a table, a header and one line each.
+    pub fn table(rows: &[BranchOut]) -> String {
+        let mut out = format!(
+            "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} S  T\n",
+            "vs axis 1", "vs arm", "axis 5", "status", "joints_deg", "confdata"
+        );
+        for r in rows {
+            let joints: Vec<String> = r.joints_deg.iter().map(|v| format!("{v:.4}")).collect();
+            let confdata = format!("[{}]", r.abb_confdata.map(|c| c.to_string()).join(","));
+            out += &format!(
+                "{:<10} {:<10} {:<8} {:<12} {:<66} {:<14} {:<2} {}\n",
+                r.wrist_centre_vs_axis1,
+                r.wrist_centre_vs_lower_arm,
+                r.axis5,
+                r.status,
+                joints.join(","),
+                confdata,
+                r.kuka_status,
+                r.kuka_turn
+            );
+        }
+        out
+    }
+}
+
+/// One row of a batch of inverse kinematics (`ik --poses-file`): the input's line and label, and the
+/// joints to command with the status checked by FK — or why the row has none.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct SolutionRow {
+    /// The input row's line.
+    pub line: Option<usize>,
+    /// The target's label.
+    pub label: String,
+    /// The joints (degrees; mm for prismatic joints, to 1e-12), when solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub joints_deg: Option<Vec<f64>>,
+    /// The status (`Converged` only as checked by an independent FK).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub status: Option<String>,
+    /// The position error, mm, and orientation error, degrees (independent FK).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub errors: Option<(f64, f64)>,
+    /// Why the row has no solution.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+impl SolutionRow {
+    /// The row of a solve on `chain`.
+    pub fn solved(chain: &Chain, line: Option<usize>, label: String, s: &thermokin_ik::Solution) -> Self {
+        let joints = thermokin_io::units::joints_to_external(chain, &s.q);
+        Self {
+            line,
+            label,
+            joints_deg: Some(joints.iter().map(|&d| thermokin_io::units::rounded(d, 12)).collect()),
+            status: Some(format!("{:?}", s.status)),
+            errors: Some((s.position_error_mm, thermokin_io::units::degrees(s.orientation_error_rad))),
+            error: None,
+        }
+    }
+
+    /// The header of [`SolutionRow::csv`] for `dof` joints.
+    pub fn csv_header(dof: usize) -> String {
+        let q: Vec<String> = (1..=dof).map(|i| format!("q{i}")).collect();
+        format!("line,label,{},status,position_error_mm,orientation_error_deg,error", q.join(","))
+    }
+
+    /// The row as CSV, for `dof` joints.
+    pub fn csv(&self, dof: usize) -> String {
+        let line = self.line.map_or(String::new(), |l| l.to_string());
+        let label = thermokin_io::csv_cell(&self.label);
+        match (&self.joints_deg, &self.status, self.errors) {
+            (Some(q), Some(status), Some((pe, oe))) => {
+                let q: Vec<String> = q.iter().map(f64::to_string).collect();
+                format!("{line},{label},{},{status},{pe:e},{oe:e},", q.join(","))
+            }
+            _ => format!(
+                "{line},{label}{}{}",
+                ",".repeat(dof + 4),
+                thermokin_io::csv_cell(self.error.as_deref().unwrap_or(""))
+            ),
+        }
+    }
 }

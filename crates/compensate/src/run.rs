@@ -64,6 +64,23 @@ pub enum Accumulation {
     Increments,
 }
 
+thermokin_chain::choices!(
+    Accumulation,
+    "accumulation",
+    [
+        (
+            "from-nominal",
+            "the profile's share applied to the undeformed robot at each update (the state at t depends on t alone)",
+            Accumulation::FromNominal
+        ),
+        (
+            "increments",
+            "the change of the share since the previous update applied to the robot as deformed (the authors' minute-by-minute updates)",
+            Accumulation::Increments
+        ),
+    ]
+);
+
 /// Settings of a run.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunSettings {
@@ -216,6 +233,9 @@ pub struct RunOutput {
     pub kinds: Vec<JointKind>,
     /// Min/max over the converged rows.
     pub summary: Summary,
+    /// Whether the rows have times to write (a time column in the authors' layout): a transient run,
+    /// or targets at their own times.
+    pub timed: bool,
 }
 
 impl RunOutput {
@@ -223,7 +243,12 @@ impl RunOutput {
         let transient = rows.iter().any(|r| r.time_min != 0.0);
         let mut summary = SummaryBuilder::new(transient, usize::MAX);
         rows.iter().for_each(|r| summary.add(r));
-        Self { rows, kinds: chain.joints().iter().map(|j| j.kind).collect(), summary: summary.finish() }
+        Self {
+            rows,
+            kinds: chain.joints().iter().map(|j| j.kind).collect(),
+            summary: summary.finish(),
+            timed: transient,
+        }
     }
 }
 

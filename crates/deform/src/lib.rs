@@ -78,6 +78,76 @@ pub enum DeformError {
     /// The deformed chain is invalid (non-finite values).
     #[error(transparent)]
     Chain(#[from] ChainError),
+    /// A state the robot cannot use: a time for a robot that does not drift with time, a reading of a
+    /// sensor no row follows, a profile without a table, or a table's profile without a time.
+    #[error("{0}")]
+    State(StateError),
+    /// A robot with identified corrections where the robot as described is needed (a diagnosis starts
+    /// from the geometry alone).
+    #[error("it carries identified corrections ({})", corrections.join("; "))]
+    CarriesCorrections {
+        /// What it carries beyond geometry, one item each.
+        corrections: Vec<String>,
+    },
+}
+
+/// A state or table setting a robot cannot use (the rule each front end words with its own flag or
+/// argument).
+#[derive(Debug, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum StateError {
+    /// A time given for a robot none of whose rows drifts with time, and no table and profile.
+    TimeWithoutDrift,
+    /// A sensor reading no drifting row follows.
+    UnknownSensor {
+        /// The sensor given.
+        name: String,
+        /// The sensors the robot's rows follow.
+        known: Vec<String>,
+    },
+    /// A time profile given without a deviation table.
+    ProfileWithoutTable,
+    /// A table under a time profile, but no time.
+    ProfileNeedsTime,
+    /// A time and a table, but no profile to grow the table with (and the robot does not drift).
+    TimeNeedsProfile,
+}
+
+impl std::fmt::Display for StateError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            StateError::TimeWithoutDrift => f.write_str(
+                "a time was given, but no row of this robot drifts with time (give a table and a profile to deform it)",
+            ),
+            StateError::UnknownSensor { name, known } => {
+                let known = if known.is_empty() { "none".to_string() } else { known.join(", ") };
+                write!(f, "no row of this robot drifts with sensor `{name}` (its sensors: {known})")
+            }
+            StateError::ProfileWithoutTable => f.write_str("a time profile needs a deviation table to grow"),
+            StateError::ProfileNeedsTime => f.write_str("a time profile needs the time (minutes) to evaluate it at"),
+            StateError::TimeNeedsProfile => {
+                f.write_str("a time was given with a table but no profile: say how the table grows with time")
+            }
+        }
+    }
+}
+
+/// The deviation table in force for a robot (`drifts_with_time`: some row of it drifts with time) given
+/// a table, an optional time profile and an optional time: the profile's share of the table at that
+/// time; the table in full without a profile (and without a time, or with a time the robot's own drift
+/// uses). The one rule `fk`, `ik`, `urdf export` and Python's `Robot.deformed` follow.
+pub fn table_in_force(
+    table: &DeviationTable,
+    profile: Option<&TimeProfile>,
+    time_min: Option<f64>,
+    drifts_with_time: bool,
+) -> Result<DeviationTable, DeformError> {
+    match (profile, time_min) {
+        (Some(p), Some(t)) => p.table_at(table, t),
+        (Some(_), None) => Err(DeformError::State(StateError::ProfileNeedsTime)),
+        (None, Some(_)) if !drifts_with_time => Err(DeformError::State(StateError::TimeNeedsProfile)),
+        (None, _) => Ok(table.clone()),
+    }
 }
 
 /// A row of a deviation table.
@@ -117,6 +187,44 @@ pub enum TableSemantics {
     /// (Dox, Doy, Doz), children following, with the robot standing at `at` (joint values). The result is
     /// re-expressed exactly as canonical error parameters.
     CoppeliaSim(CoppeliaSimEdits),
+}
+
+/// How a table acts on a robot, by name — [`TableSemantics`] without the configuration CoppeliaSim's
+/// edits are made at, which front ends take as the home configuration ([`SemanticsKind::at_home`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum SemanticsKind {
+    /// [`TableSemantics::Canonical`].
+    #[default]
+    Canonical,
+    /// [`TableSemantics::CoppeliaSim`], at home.
+    CoppeliaSim,
+}
+
+thermokin_chain::choices!(
+    SemanticsKind,
+    "table semantics",
+    [
+        (
+            "canonical",
+            "Table 7's reading: Trans·Rx·Ry·Rz at each joint (this library's model)",
+            SemanticsKind::Canonical
+        ),
+        (
+            "coppeliasim",
+            "the authors' scene: world shift and Euler-angle addition of each joint object, at home",
+            SemanticsKind::CoppeliaSim
+        ),
+    ]
+);
+
+impl SemanticsKind {
+    /// The semantics of this name for a robot of `dof` joints, CoppeliaSim's edits made at home.
+    pub fn at_home(self, dof: usize) -> TableSemantics {
+        match self {
+            SemanticsKind::Canonical => TableSemantics::Canonical,
+            SemanticsKind::CoppeliaSim => TableSemantics::coppeliasim_at_home(dof),
+        }
+    }
 }
 
 impl TableSemantics {

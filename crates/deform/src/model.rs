@@ -24,7 +24,7 @@
 use nalgebra::{Isometry3, Unit, Vector3};
 use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, OperatingState, Robot};
 
-use crate::{AfterStabilization, DeformError, DeviationTable, Row, TableSemantics, TimeProfile};
+use crate::{AfterStabilization, DeformError, DeviationTable, Row, StateError, TableSemantics, TimeProfile};
 
 /// Joint-variable corrections of one joint, beyond the zero offset the chain holds: `Δq = s·q + a₁ sin q
 /// + b₁ cos q + a₂ sin 2q + b₂ cos 2q + k·τ` (radians; mm for a prismatic joint's scale).
@@ -104,7 +104,7 @@ impl DriftLaw {
                 let t = state.time_min.ok_or_else(|| DeformError::MissingState {
                     needed: "an operating time (minutes)".into(),
                     why: format!(
-                        "{} drifts with operating time, {}; give --time (0 is the cold robot)",
+                        "{} drifts with operating time, {}; give the time (0 is the cold robot)",
                         row_name(row),
                         self.describe()
                     ),
@@ -367,6 +367,34 @@ impl RobotModel {
             && chain.base().error.is_zero()
             && chain.tool().error.is_zero()
             && chain.joints().iter().all(|j| j.error.is_zero() && j.zero == 0.0)
+    }
+
+    /// The robot as described, refused when it carries identified corrections (a diagnosis or a
+    /// simulation starts from the geometry alone).
+    pub fn require_plain(&self) -> Result<&Robot, DeformError> {
+        if self.is_plain() {
+            Ok(&self.robot)
+        } else {
+            Err(DeformError::CarriesCorrections { corrections: self.beyond_urdf() })
+        }
+    }
+
+    /// Checks a state against what the robot can use: a time only when a row drifts with time (or
+    /// `with_table`: a table is given to grow with it), sensor readings only of sensors some row follows,
+    /// a profile only with a table.
+    pub fn check_state(&self, state: &OperatingState, with_table: bool, with_profile: bool) -> Result<(), DeformError> {
+        let (time, sensors) = self.needs();
+        let refuse = |e| Err(DeformError::State(e));
+        if with_profile && !with_table {
+            return refuse(StateError::ProfileWithoutTable);
+        }
+        if state.time_min.is_some() && !time && !with_table {
+            return refuse(StateError::TimeWithoutDrift);
+        }
+        if let Some((unknown, _)) = state.temperatures_c.iter().find(|(n, _)| !sensors.contains(n)) {
+            return refuse(StateError::UnknownSensor { name: unknown.clone(), known: sensors });
+        }
+        Ok(())
     }
 
     /// Whether any row drifts with operating time; the sensors some row's drift reads.

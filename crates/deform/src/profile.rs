@@ -131,7 +131,7 @@ impl TimeProfile {
         let num = |v: &str| -> Result<f64, DeformError> {
             if v.trim().is_empty() {
                 return Err(bad(format!(
-                    "`{kind}` needs a value after a colon, e.g. {kind}:180 (see --help for every profile)"
+                    "`{kind}` needs a value after a colon, e.g. {kind}:180 (linear:T, linear-grow:T, exp:TAU, cubic:C1,C2,C3, temperature:LOG.csv)"
                 )));
             }
             v.trim().parse().map_err(|_| bad(format!("`{v}` is not a number")))

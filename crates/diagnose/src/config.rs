@@ -72,6 +72,21 @@ pub enum FoldGrouping {
     JointConfiguration,
 }
 
+thermokin_chain::choices!(
+    FoldGrouping,
+    "fold grouping",
+    [
+        (
+            "neighbourhood",
+            "grouped in time when the data span time; otherwise blocks of neighbouring arm configurations (4 per fold, k-means in joint space; single poses below 10 per block)",
+            FoldGrouping::Neighbourhood
+        ),
+        ("time", "grouped in time, or single poses shuffled", FoldGrouping::Time),
+        ("region", "leave one workspace quadrant out (reach × height)", FoldGrouping::WorkspaceRegion),
+        ("configuration", "leave one arm branch out (elbow × wrist)", FoldGrouping::JointConfiguration),
+    ]
+);
+
 /// How the diagnosis's own held-out error is measured.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum Validation {

@@ -193,10 +193,10 @@ fn nuisance_trade(scorer: &Scorer<'_>, nuisance: &[Effect], c: Effect) -> Result
         reason: format!("{} would be estimated together with {} (correlation {rho:+.4}, beyond ±{NEARLY_DEPENDENT}): the data determine their combination, not each", names[k], names[n]),
         remedy: match c.joint() {
             Some(j) => format!(
-                "measure joint {} over more of its travel, or give the base or tool frame (--frame base, --tool known)",
+                "measure joint {} over more of its travel, or state the base or tool frame (measurements in the base frame, the tool known)",
                 j.number()
             ),
-            None => "give the base or tool frame (--frame base, --tool known)".to_string(),
+            None => "state the base or tool frame (measurements in the base frame, the tool known)".to_string(),
         },
     }))
 }

@@ -45,6 +45,13 @@ pub enum DiagnoseError {
         /// Measurements needed.
         needed: usize,
     },
+    /// An export refused: the chosen model does not beat the nominal one on data it never saw
+    /// ([`crate::Report::honest_end`], the figures said there).
+    #[error("{reason}")]
+    DoesNotTransfer {
+        /// Where it does not, with the figures (the report's [`crate::Report::honest_end`]).
+        reason: String,
+    },
     /// A measurement with another number of joint values than the robot has joints.
     #[error("{set} measurement {measurement}: {got} joint values for {expected} joints")]
     JointCount {

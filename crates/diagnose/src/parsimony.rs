@@ -43,6 +43,10 @@ fn linear_for_exponential(scorer: &Scorer<'_>, config: &Config, sel: &mut Select
             let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
             if !significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
                 let row = format!("{} replaces the exponential (not significantly worse)", swapped[k].label());
+                // The linear drift takes the exponential's step in the additive table.
+                for s in sel.steps.iter_mut().filter(|s| s.effect == sel.effects[k]) {
+                    s.effect = swapped[k];
+                }
                 sel.replace(swapped, stats, errors, row);
             }
         }
@@ -79,7 +83,7 @@ impl Replacement {
             s.effect = c;
         }
         for &c in self.blocks.iter().skip(1) {
-            sel.steps.push(Step { effect: c, before_mm: f64::NAN, after_mm: self.stats.heldout_rms_mm });
+            sel.steps.push(Step { effect: c, before_mm: None, after_mm: self.stats.heldout_rms_mm });
         }
         sel.replace(with, self.stats, self.errors, row);
     }

@@ -35,7 +35,7 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if let Some(lever) = r.orientation_lever_mm {
         writeln!(
             f,
-            "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²) (--orientation-lever)"
+            "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²), {lever} mm the orientation lever"
         )?;
     }
     heldout(r, f)?;
@@ -127,12 +127,15 @@ fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     for e in &r.effects {
+        let steps = match (e.heldout_rms_before_mm, e.heldout_rms_after_mm) {
+            (Some(b), Some(a)) => format!("held-out RMS {b:.4} → {a:.4} mm"),
+            (None, Some(a)) => format!("held-out RMS → {a:.4} mm (joined replacing a larger block)"),
+            _ => "held-out RMS: not in the additive table".to_string(),
+        };
         writeln!(
             f,
-            "  {:<30} held-out RMS {:.4} → {:.4} mm (without it: {:.4}){}",
+            "  {:<30} {steps} (without it: {:.4}){}",
             e.label,
-            e.heldout_rms_before_mm,
-            e.heldout_rms_after_mm,
             e.heldout_rms_without_mm,
             if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
                 + &if e.contained_in.is_empty() {
@@ -192,7 +195,9 @@ fn frames_and_verdict(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             qa.iter().map(|v| format!("{v:.4}")).collect::<Vec<_>>().join(" ")
         )?;
     }
-    let four = |v: &[f64; 4]| v.iter().map(|x| format!("{x:.4}")).collect::<Vec<_>>().join(" ");
+    let four = |v: &[Option<f64>; 4]| {
+        v.iter().map(|x| x.map_or_else(|| "no-poses".to_string(), |x| format!("{x:.4}"))).collect::<Vec<_>>().join(" ")
+    };
     writeln!(
         f,
         "  workspace (near-low near-high far-low far-high)   {}   →   {}",
@@ -220,7 +225,7 @@ fn frames_and_verdict(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 /// What the data cannot identify, observability, fixed parameters.
 fn identifiability(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if !r.identifiability.not_identifiable.is_empty() {
-        writeln!(f, "\nnot identifiable from these data (not selectable; --help of diagnose says the rules):")?;
+        writeln!(f, "\nnot identifiable from these data (not selectable; each with what to measure):")?;
         for x in &r.identifiability.not_identifiable {
             writeln!(f, "  {:<30} {} — {}", x.effect, x.reason, x.remedy)?;
         }

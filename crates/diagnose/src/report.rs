@@ -63,10 +63,11 @@ pub struct EffectReport {
     pub label: String,
     /// Joints, 1-based.
     pub joints: Vec<usize>,
-    /// Held-out RMS before this effect was added, mm.
-    pub heldout_rms_before_mm: f64,
+    /// Held-out RMS before this effect was added, mm (none for an effect that joined in a replacement,
+    /// beside the block it replaced).
+    pub heldout_rms_before_mm: Option<f64>,
     /// Held-out RMS after it was added, mm.
-    pub heldout_rms_after_mm: f64,
+    pub heldout_rms_after_mm: Option<f64>,
     /// Held-out RMS of the final model without this effect, mm (the leave-one-out table).
     pub heldout_rms_without_mm: f64,
     /// Fitted parameters.
@@ -104,10 +105,12 @@ pub struct Identifiability {
 pub struct Breakdown {
     /// Per joint: RMS in the four quartiles of that joint's angle.
     pub by_joint: Vec<[f64; 4]>,
-    /// Workspace: near-low, near-high, far-low, far-high (reach and height against their medians).
-    pub by_workspace_region: [f64; 4],
-    /// Joint space: elbow (joint 3 below/above its median) × wrist (joint 5 negative/positive).
-    pub by_joint_space_region: [f64; 4],
+    /// Workspace: near-low, near-high, far-low, far-high (reach and height against their medians); none
+    /// for a region without poses.
+    pub by_workspace_region: [Option<f64>; 4],
+    /// Joint space: elbow (joint 3 below/above its median) × wrist (joint 5 negative/positive); none for
+    /// a region without poses.
+    pub by_joint_space_region: [Option<f64>; 4],
     /// Time quartiles (empty without a time column).
     pub by_time: Vec<f64>,
     /// |residual| of every measurement, in file order (model fitted on all data), mm.
@@ -245,18 +248,19 @@ pub(crate) fn breakdown(
     let all: Vec<usize> = (0..data.len()).collect();
     let r = residuals(robot, model, theta, data, &all, terms)?;
     let e: Vec<f64> = norms(&r, terms.stride()).iter().map(|x| x * x).collect();
-    let rms_of = |sel: &[usize]| -> f64 {
-        if sel.is_empty() { f64::NAN } else { (sel.iter().map(|&i| e[i]).sum::<f64>() / sel.len() as f64).sqrt() }
+    let rms_of = |sel: &[usize]| -> Option<f64> {
+        (!sel.is_empty()).then(|| (sel.iter().map(|&i| e[i]).sum::<f64>() / sel.len() as f64).sqrt())
     };
+    // Quartiles of at least four poses are never empty (a diagnosis needs four poses at the least).
     let quartiles = |key: &dyn Fn(usize) -> f64| -> [f64; 4] {
         let mut idx = all.clone();
         idx.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
         let n = idx.len();
-        [0, 1, 2, 3].map(|k| rms_of(&idx[k * n / 4..(k + 1) * n / 4]))
+        [0, 1, 2, 3].map(|k| rms_of(&idx[k * n / 4..(k + 1) * n / 4]).unwrap_or(0.0))
     };
     let n = robot.chain().dof();
     let by_joint = (0..n).map(|j| quartiles(&|i| data.measurements[i].q[j])).collect();
-    let region = |labels: &[usize]| -> [f64; 4] {
+    let region = |labels: &[usize]| -> [Option<f64>; 4] {
         [0, 1, 2, 3].map(|k| rms_of(&all.iter().copied().filter(|&i| labels[i] == k).collect::<Vec<_>>()))
     };
     let by_workspace_region = region(&workspace_quadrants(data));
@@ -268,6 +272,15 @@ pub(crate) fn breakdown(
 }
 
 impl Report {
+    /// Whether the identified robot may be exported: refused ([`DiagnoseError::DoesNotTransfer`]) when the
+    /// chosen model does not beat the nominal one on data it never saw, unless `force`d.
+    pub fn check_export(&self, force: bool) -> Result<(), DiagnoseError> {
+        match &self.honest_end {
+            Some(why) if !force => Err(DiagnoseError::DoesNotTransfer { reason: why.clone() }),
+            _ => Ok(()),
+        }
+    }
+
     /// The identified robot as a robot file carries it ([`Report::identified`], the model scored), on
     /// `file_robot` — the robot as its file describes it: its own link masses and name, here renamed
     /// `"<name> (calibrated on <source>)"` — with `payload`, the load the measurements were taken with,

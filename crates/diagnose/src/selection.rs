@@ -32,11 +32,11 @@ pub(crate) enum Scored {
 }
 
 /// An effect's step in the additive table: the selection's held-out RMS before and after it joined
-/// (`before` NaN for an effect that joined as part of a replacement).
+/// (`before` none for an effect that joined as part of a replacement, beside the block it replaced).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Step {
     pub(crate) effect: Effect,
-    pub(crate) before_mm: f64,
+    pub(crate) before_mm: Option<f64>,
     pub(crate) after_mm: f64,
 }
 
@@ -68,7 +68,7 @@ impl Selection {
         self.theta = theta;
         self.steps.push(Step {
             effect: c.effect,
-            before_mm: self.current.heldout_rms_mm,
+            before_mm: Some(self.current.heldout_rms_mm),
             after_mm: c.stats.heldout_rms_mm,
         });
         self.effects.push(c.effect);

@@ -112,6 +112,22 @@ impl HiddenEffect {
     }
 }
 
+impl std::fmt::Display for HiddenEffect {
+    /// `joint_offset[2]: 0.050000° (mm, degrees, minutes)`: the label and the values in report units.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let shown: Vec<String> = self
+            .values
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| {
+                let shown = self.effect.to_report_units(k, v);
+                if self.effect.is_angle(k) { format!("{shown:.6}°") } else { format!("{shown:.6}") }
+            })
+            .collect();
+        write!(f, "{}: {} (mm, degrees, minutes)", self.effect.label(), shown.join(", "))
+    }
+}
+
 /// Settings of a simulated data set.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SimulationConfig {

@@ -54,7 +54,7 @@ pub(crate) fn warnings(robot: &Robot, data: &Dataset, config: &Config, tables: &
     // measurements are in another frame.
     if config.frame == FrameMode::Base && tables.nominal.heldout_rms_mm > 50.0 {
         out.push(format!(
-            "the nominal model misses by {:.0} mm RMS in the base frame: are the measurements in a tracker frame? (--frame tracker estimates the registration)",
+            "the nominal model misses by {:.0} mm RMS in the base frame: are the measurements in a tracker frame? (a tracker frame's registration is estimated when the frame is said to be a tracker's)",
             tables.nominal.heldout_rms_mm
         ));
     }
@@ -139,13 +139,13 @@ fn verdict_sentence(config: &Config, tables: &Tables, nested: Option<&Nested>) -
         )),
         (Some(_), Some(_), None) => {
             return format!(
-                "{held:.4} mm RMS {how} remains (position and orientation combined); the orientation noise is not stated (--orientation-noise), so whether that is noise cannot be said"
+                "{held:.4} mm RMS {how} remains (position and orientation combined); the orientation noise is not stated, so whether that is noise cannot be said"
             );
         }
     };
     match floor {
         None => format!(
-            "{held:.4} mm RMS {how} remains; the measurement noise is not stated (--noise), so whether that is noise or an unexplained effect cannot be said"
+            "{held:.4} mm RMS {how} remains; the measurement noise is not stated, so whether that is noise or an unexplained effect cannot be said"
         ),
         Some((floor, stated)) => {
             if held <= 1.5 * floor {

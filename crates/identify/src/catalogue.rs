@@ -25,6 +25,24 @@ pub enum ToolMode {
     Unknown,
 }
 
+thermokin_chain::choices!(
+    FrameMode,
+    "measurement frame",
+    [
+        ("base", "the robot's base frame: a base misalignment is a candidate effect", FrameMode::Base),
+        ("tracker", "a tracker's frame: the registration is always estimated", FrameMode::Tracker),
+    ]
+);
+
+thermokin_chain::choices!(
+    ToolMode,
+    "tool",
+    [
+        ("known", "the robot description's tool: a tool error is a candidate effect", ToolMode::Known),
+        ("unknown", "estimated with every model (a probe of unknown offset)", ToolMode::Unknown),
+    ]
+);
+
 /// The settings of a measurement setup that decide which blocks are always estimated: the frame of the
 /// measurements, whether the tool is known, and the weight of measured orientations.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,31 +5,41 @@
 //! Every error names the file, the line and the field. The readers know nothing about kinematics beyond
 //! building the chain's table.
 
+mod bundled;
 mod csvtext;
 mod deviation;
+mod load;
 mod measurements;
+mod notation;
 mod paper;
 mod robot;
 mod targets;
 pub mod units;
 mod write;
 
+pub use bundled::{bundle, bundled, bundled_names, file_exists, open, read_bytes};
 pub use deviation::{
     parse_deviation_table, parse_temperature_log, read_deviation_table, read_deviation_table_for, read_profile_spec,
     read_temperature_log,
 };
+pub use load::{LoadError, LoadedRobot, RobotRequest};
 pub use measurements::{
-    JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with, read_measurements,
-    read_measurements_joined, read_measurements_with, write_measurements,
+    JointRow, JointUnits, MeasurementFormat, PositionUnits, UnitsUnclear, parse_measurements, parse_measurements_with,
+    read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with, settle_units,
+    write_measurements,
 };
+pub use notation::{PoseOut, PoseRow, csv_cell, parse_list, parse_payload, parse_pose, parse_temperatures};
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{
     RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot, read_robot_model, read_robot_model_with,
-    read_robot_with, robot_model_to_toml, robot_to_toml,
+    read_robot_with, robot_file_text, robot_model_to_toml, robot_to_toml,
 };
-pub use targets::{DEFAULT_ORIENTATION_DEG, TargetReader, parse_targets, read_targets, sensor_name};
+pub use targets::{
+    DEFAULT_ORIENTATION_DEG, TargetReader, TargetRows, parse_target_rows, parse_targets, read_target_rows,
+    read_targets, sensor_name,
+};
 pub use units::Orientation;
-pub use write::{write_atomic, write_atomic_with};
+pub use write::{remove_temporaries, write_atomic, write_atomic_with};
 
 use std::path::{Path, PathBuf};
 
@@ -56,6 +66,14 @@ pub enum IoError {
         /// What is wrong.
         message: String,
     },
+    /// The numbers of a file contradict the unit it is read in, which was not stated.
+    #[error("{path}: {unclear} (the unit was not stated)", path = path.display())]
+    UnitsUnclear {
+        /// The file.
+        path: PathBuf,
+        /// What the numbers look like.
+        unclear: UnitsUnclear,
+    },
 }
 
 impl IoError {
@@ -76,7 +94,7 @@ impl IoError {
 /// Reads a whole file as UTF-8 text, without a leading byte-order mark. Non-UTF-8 content is an error
 /// naming the line of the first bad byte.
 pub fn read_text(path: &Path) -> Result<String, IoError> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::file(path, e))?;
+    let bytes = read_bytes(path)?.into_owned();
     match String::from_utf8(bytes) {
         Ok(mut s) => {
             if s.starts_with('\u{feff}') {

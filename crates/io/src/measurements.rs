@@ -7,9 +7,10 @@
 use std::path::Path;
 
 use nalgebra::{UnitQuaternion, Vector3};
-use thermokin_chain::{Dataset, JointKind, Measurement};
+use thermokin_chain::{Dataset, JointKind, Measurement, OperatingState};
 
 use crate::csvtext::{Record, column, expect_fields, number, records_any_dialect};
+use crate::targets::sensor_name;
 use crate::units::{Orientation, joint_value_in, joint_value_out, xyz_euler_deg};
 use crate::{IoError, parse_paper_results, read_text};
 
@@ -29,16 +30,118 @@ pub enum JointUnits {
     Radians,
 }
 
+thermokin_chain::choices!(
+    JointUnits,
+    "joint unit",
+    [
+        ("deg", "degrees (this project's files)", JointUnits::Degrees),
+        ("rad", "radians (ROS, robot SDKs)", JointUnits::Radians),
+    ]
+);
+
+/// The unit of a measurement file's positions (and their standard deviations).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PositionUnits {
+    /// Millimetres (this project's files, most tracker software).
+    #[default]
+    Millimetres,
+    /// Metres (ROS, some tracker exports): converted to millimetres on reading.
+    Metres,
+}
+
+thermokin_chain::choices!(
+    PositionUnits,
+    "position unit",
+    [
+        ("mm", "millimetres (this project's files)", PositionUnits::Millimetres),
+        ("m", "metres (ROS, some tracker exports), converted on reading", PositionUnits::Metres),
+    ]
+);
+
+/// A unit the numbers of a file contradict, when the file's unit was not stated: refused rather than
+/// absorbed into hundreds of millimetres of "error".
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UnitsUnclear {
+    /// Every revolute joint value lies within ±2π when read as degrees (±6.28°): radians, most likely.
+    JointsLookLikeRadians {
+        /// The largest magnitude read, degrees.
+        largest_deg: f64,
+    },
+    /// Every coordinate lies within ±5 when read as millimetres: a robot's workspace in metres.
+    PositionsLookLikeMetres {
+        /// The largest magnitude read.
+        largest: f64,
+    },
+}
+
+impl std::fmt::Display for UnitsUnclear {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            UnitsUnclear::JointsLookLikeRadians { largest_deg } => write!(
+                f,
+                "every revolute joint value lies within ±{largest_deg:.3}: read as degrees, the arm would hardly move; these look like radians"
+            ),
+            UnitsUnclear::PositionsLookLikeMetres { largest } => write!(
+                f,
+                "every coordinate lies within ±{largest:.4}: read as millimetres, the whole workspace would fit in a 1 cm cube; these look like metres"
+            ),
+        }
+    }
+}
+
 /// How a measurement file writes what is not fixed by its columns' names: the unit of revolute joints
-/// and the convention of the measured orientation.
+/// and of positions, and the convention of the measured orientation. A unit left unstated (`None`) is
+/// the default one, checked against the numbers ([`UnitsUnclear`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct MeasurementFormat {
-    /// Revolute joint columns in degrees (default) or radians.
-    pub joint_units: JointUnits,
+    /// Revolute joint columns in degrees or radians; `None`: degrees, refused if the values look like
+    /// radians.
+    pub joint_units: Option<JointUnits>,
+    /// Positions in millimetres or metres; `None`: millimetres, refused if they look like metres.
+    pub position_units: Option<PositionUnits>,
     /// The orientation columns: `rx,ry,rz` as X-Y-Z Euler angles (`R = Rx·Ry·Rz`, the default and this
     /// project's convention) or as roll, pitch, yaw (`R = Rz(rz)·Ry(ry)·Rx(rx)`, ROS and many trackers),
     /// degrees; or `qw,qx,qy,qz`, a unit quaternion.
     pub orientation: Orientation,
+}
+
+/// Fewest measurements from which a unit is judged by the numbers ([`UnitsUnclear`]).
+const UNIT_EVIDENCE: usize = 10;
+
+/// The units of `data` (read with `format`) settled: positions given in metres scaled to millimetres;
+/// units left unstated that the numbers contradict refused ([`IoError::UnitsUnclear`]). Readers call it;
+/// a front end that builds a data set from arrays calls it too.
+pub fn settle_units(
+    path: &Path,
+    mut data: Dataset,
+    kinds: &[JointKind],
+    format: MeasurementFormat,
+) -> Result<Dataset, IoError> {
+    let unclear = |unclear| Err(IoError::UnitsUnclear { path: path.to_path_buf(), unclear });
+    if format.position_units == Some(PositionUnits::Metres) {
+        for m in &mut data.measurements {
+            m.position_mm = m.position_mm.map(crate::units::millimetres);
+            m.position_std_mm = m.position_std_mm.map(|s| s.map(crate::units::millimetres));
+        }
+    }
+    if data.len() < UNIT_EVIDENCE {
+        return Ok(data);
+    }
+    let revolute: Vec<usize> = (0..kinds.len()).filter(|&j| kinds[j] == JointKind::Revolute).collect();
+    if format.joint_units.is_none() && !revolute.is_empty() {
+        let largest = data.measurements.iter().flat_map(|m| revolute.iter().map(|&j| m.q[j].abs())).fold(0.0, f64::max);
+        // 2π read as degrees is 0.11 rad: joints that never leave ±6.3° were most likely written in radians.
+        if largest < crate::units::radians(std::f64::consts::TAU) {
+            return unclear(UnitsUnclear::JointsLookLikeRadians { largest_deg: crate::units::degrees(largest) });
+        }
+    }
+    if format.position_units.is_none() {
+        let largest = data.measurements.iter().map(|m| m.position_mm.amax()).fold(0.0, f64::max);
+        if largest <= 5.0 {
+            return unclear(UnitsUnclear::PositionsLookLikeMetres { largest });
+        }
+    }
+    Ok(data)
 }
 
 /// Reads a measurement set written in `format`.
@@ -91,15 +194,16 @@ pub fn parse_measurements_with(
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn,x,y,z"));
     };
-    let joints = JointColumns::find(path, header, kinds, format.joint_units)?;
+    let joints = JointColumns::find(path, header, kinds, format.joint_units.unwrap_or_default())?;
     let poses = PoseColumns::find(path, header, format.orientation)?;
     let pairs = rows.iter().map(|r| expect_fields(path, r, header.cells.len()).map(|()| (r, r)));
-    assemble(
+    let data = assemble(
         &joints,
         &poses,
         pairs,
         IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"),
-    )
+    )?;
+    settle_units(path, data, kinds, format)
 }
 
 /// Reads a measurement set kept in two files, as tracker and robot software often write them: the
@@ -121,7 +225,7 @@ pub fn read_measurements_joined(
     let Some((ph, prows)) = pr.split_first() else {
         return Err(IoError::input(poses_path, Some(1), "header", "empty file: expected x,y,z"));
     };
-    let joints = JointColumns::find(joints_path, jh, kinds, format.joint_units)?;
+    let joints = JointColumns::find(joints_path, jh, kinds, format.joint_units.unwrap_or_default())?;
     let poses = PoseColumns::find(poses_path, ph, format.orientation)?;
     for r in jrows {
         expect_fields(joints_path, r, jh.cells.len())?;
@@ -193,7 +297,47 @@ pub fn read_measurements_joined(
         }
     };
     let empty = IoError::input(joints_path, Some(jh.line + 1), "rows", "no measurements after the header");
-    assemble(&joints, &poses, pairs.into_iter().map(Ok), empty)
+    let data = assemble(&joints, &poses, pairs.into_iter().map(Ok), empty)?;
+    settle_units(poses_path, data, kinds, format)
+}
+
+/// One data row of a joints file: its 1-based line, and its joint values (internal units) with the
+/// operating state its `time_min` and `temp_*` columns give — or why the row cannot be read.
+#[derive(Debug)]
+pub struct JointRow {
+    /// The row's line in the file.
+    pub line: usize,
+    /// The joint values and the state, or the row's error.
+    pub values: Result<(Vec<f64>, OperatingState), IoError>,
+}
+
+/// Reads a file of joint values, `q1..qn` (degrees, or radians with [`JointUnits::Radians`]; mm for a
+/// prismatic joint) with optional `time_min` and `temp_<name>` columns, in any of the measurement files'
+/// dialects, row by row: a bad header is an error; a bad row is that row's error, the others are read.
+pub fn read_joint_rows(path: &Path, kinds: &[JointKind], units: JointUnits) -> Result<Vec<JointRow>, IoError> {
+    let text = read_text(path)?;
+    let recs = records_any_dialect(path, &text)?;
+    let Some((header, rows)) = recs.split_first() else {
+        return Err(IoError::input(path, Some(1), "header", "empty file: expected q1..qn"));
+    };
+    let joints = JointColumns::find(path, header, kinds, units)?;
+    let names: Vec<String> = joints.temperature_names().iter().map(|n| sensor_name(n)).collect();
+    let has_time = joints.time.is_some();
+    let out: Vec<JointRow> = rows
+        .iter()
+        .map(|r| {
+            let values =
+                expect_fields(path, r, header.cells.len()).and_then(|()| joints.read(r)).map(|(t, q, temps)| {
+                    let temperatures_c = names.iter().cloned().zip(temps).collect();
+                    (q, OperatingState { time_min: has_time.then_some(t), temperatures_c, payload: None })
+                });
+            JointRow { line: r.line, values }
+        })
+        .collect();
+    if out.is_empty() {
+        return Err(IoError::input(path, Some(header.line + 1), "rows", "no rows after the header"));
+    }
+    Ok(out)
 }
 
 /// The measurements of paired rows (joint side, pose side: the same record for a single file), in order;
@@ -231,8 +375,15 @@ impl<'a> JointColumns<'a> {
     fn find(path: &'a Path, header: &Record, kinds: &'a [JointKind], units: JointUnits) -> Result<Self, IoError> {
         let dof = kinds.len();
         let need = |name: &str| {
-            column(header, name)
-                .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
+            column(header, name).ok_or_else(|| {
+                let found = header.cells.join(", ");
+                IoError::input(
+                    path,
+                    Some(header.line),
+                    name,
+                    format!("missing column `{name}` (the header has {found})"),
+                )
+            })
         };
         let q: Vec<usize> = (1..=dof).map(|i| need(&format!("q{i}"))).collect::<Result<_, _>>()?;
         if column(header, &format!("q{}", dof + 1)).is_some() {
@@ -321,8 +472,15 @@ struct PoseColumns<'a> {
 impl<'a> PoseColumns<'a> {
     fn find(path: &'a Path, header: &Record, convention: Orientation) -> Result<Self, IoError> {
         let need = |name: &str| {
-            column(header, name)
-                .ok_or_else(|| IoError::input(path, Some(header.line), name, format!("missing column `{name}`")))
+            column(header, name).ok_or_else(|| {
+                let found = header.cells.join(", ");
+                IoError::input(
+                    path,
+                    Some(header.line),
+                    name,
+                    format!("missing column `{name}` (the header has {found})"),
+                )
+            })
         };
         let p: Vec<usize> = ["x", "y", "z"].iter().map(|n| need(n)).collect::<Result<_, _>>()?;
         let names: &'static [&'static str] = match convention {

@@ -601,7 +601,7 @@ fn is_urdf(path: &Path) -> bool {
 
 fn no_link_options(path: &Path, options: &RobotOptions) -> Result<(), IoError> {
     if options.base.is_some() || options.tip.is_some() {
-        return Err(IoError::input(path, None, "--base/--tip", "only URDF robots take a base or tip link"));
+        return Err(IoError::input(path, None, "base/tip", "only URDF robots take a base or tip link"));
     }
     Ok(())
 }
@@ -673,6 +673,18 @@ fn row_toml(out: &mut String, which: &str, row: &FixedRow) {
 /// degrees, numbers rounded to 1e-12 (`FILE_DECIMALS`).
 pub fn robot_to_toml(robot: &Robot) -> String {
     robot_model_to_toml(&RobotModel::new(robot.clone()))
+}
+
+/// A robot written as the file named `path` holds it: URDF when the path ends in `.urdf` (geometry and
+/// zeros, what it cannot hold named in its header, and returned), the project's TOML otherwise (the
+/// complete record). The one rule every front end's export and save follows.
+pub fn robot_file_text(model: &RobotModel, path: &Path) -> (String, Vec<String>) {
+    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+        let beyond = model.beyond_urdf();
+        (thermokin_urdf::export_robot_noting(model.robot(), &beyond), beyond)
+    } else {
+        (robot_model_to_toml(model), Vec::new())
+    }
 }
 
 /// The robot with every correction it carries as TOML (what [`read_robot_model`] reads back): per joint

@@ -30,16 +30,37 @@ pub fn read_targets(path: &Path) -> Result<Vec<Target>, IoError> {
 
 /// Parses a targets CSV's text.
 pub fn parse_targets(path: &Path, text: &str) -> Result<Vec<Target>, IoError> {
+    parse_target_rows(path, text)?.rows.into_iter().collect()
+}
+
+/// A targets file read row by row: each data row's target or its error, and the columns the header has
+/// that nothing reads (ignored, to be said).
+#[derive(Debug)]
+pub struct TargetRows {
+    /// Each data row: its target (its line in [`Target::line`]) or its error.
+    pub rows: Vec<Result<Target, IoError>>,
+    /// Columns the header names that no target reads (beside the label column).
+    pub ignored_columns: Vec<String>,
+}
+
+/// Reads a targets CSV row by row ([`TargetRows`]): a bad header is an error, a bad row that row's.
+pub fn read_target_rows(path: &Path) -> Result<TargetRows, IoError> {
+    let text = read_text(path)?;
+    parse_target_rows(path, &text)
+}
+
+/// Parses a targets CSV's text row by row.
+pub fn parse_target_rows(path: &Path, text: &str) -> Result<TargetRows, IoError> {
     let recs = records(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected the header ,X,Y,Z"));
     };
     let layout = Layout::of(path, header)?;
-    let out = rows.iter().enumerate().map(|(i, r)| layout.target(path, r, i)).collect::<Result<Vec<_>, _>>()?;
+    let out: Vec<Result<Target, IoError>> = rows.iter().enumerate().map(|(i, r)| layout.target(path, r, i)).collect();
     if out.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));
     }
-    Ok(out)
+    Ok(TargetRows { rows: out, ignored_columns: layout.ignored.clone() })
 }
 
 /// A targets CSV read in chunks, for programs too large to hold: memory stays that of one chunk whatever
@@ -99,6 +120,11 @@ impl<R: BufRead> TargetReader<R> {
     pub fn count(&self) -> usize {
         self.count
     }
+
+    /// Columns the header names that no target reads (beside the label column).
+    pub fn ignored_columns(&self) -> &[String] {
+        &self.layout.ignored
+    }
 }
 
 /// Where a targets file keeps its columns, from its header.
@@ -111,6 +137,8 @@ struct Layout {
     time: Option<usize>,
     /// `temp_<name>` columns: sensor readings at the target, °C (named with the prefix, `temp_j2`).
     temps: Vec<(usize, String)>,
+    /// Columns nothing reads: besides the label, only when an orientation is given (else refused).
+    ignored: Vec<String>,
 }
 
 impl Layout {
@@ -160,9 +188,29 @@ impl Layout {
             .map(|(i, c)| (i, sensor_name(c)))
             .collect();
         let state_col = |i: &usize| time == Some(*i) || temps.iter().any(|(c, _)| c == i);
-        let label =
-            (0..header.cells.len()).find(|i| !position.contains(i) && !orientation_cols.contains(i) && !state_col(i));
-        Ok(Self { columns: header.cells.len(), position, orientation, label, time, temps })
+        let unread: Vec<usize> = (0..header.cells.len())
+            .filter(|i| !position.contains(i) && !orientation_cols.contains(i) && !state_col(i))
+            .collect();
+        let label = unread.first().copied();
+        let ignored: Vec<String> = unread.iter().skip(1).map(|&i| header.cells[i].clone()).collect();
+        // Unknown columns beside a file without an orientation would leave every target at the default
+        // orientation — they may be an orientation under other names: refused, not guessed.
+        if orientation.is_none() && !ignored.is_empty() {
+            return Err(IoError::input(
+                path,
+                Some(header.line),
+                ignored.join(","),
+                format!(
+                    "unknown column{} {}: an orientation is read from RX,RY,RZ (X-Y-Z Euler degrees), ROLL,PITCH,YAW or QW,QX,QY,QZ; without one every target is at ({}, {}, {}) — name the columns, or drop them",
+                    if ignored.len() > 1 { "s" } else { "" },
+                    ignored.iter().map(|c| format!("`{c}`")).collect::<Vec<_>>().join(", "),
+                    DEFAULT_ORIENTATION_DEG[0],
+                    DEFAULT_ORIENTATION_DEG[1],
+                    DEFAULT_ORIENTATION_DEG[2]
+                ),
+            ));
+        }
+        Ok(Self { columns: header.cells.len(), position, orientation, label, time, temps, ignored })
     }
 
     /// Row `r`, the `index`-th target of the file (0-based, for the default label `P{index + 1}`).

@@ -60,6 +60,17 @@ impl Orientation {
     }
 }
 
+impl std::fmt::Display for Orientation {
+    /// The convention's name on command lines: `xyz`, `rpy` or `quat`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Orientation::XyzEuler => "xyz",
+            Orientation::Rpy => "rpy",
+            Orientation::Quaternion => "quat",
+        })
+    }
+}
+
 impl std::str::FromStr for Orientation {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {

@@ -321,7 +321,7 @@ fn table14_rows(static_run: &RunOutput, table14: &[(String, Vec<f64>)]) -> Vec<T
 fn authors_comparison(runs: &Runs<'_>, authors: &Path) -> Result<Option<AuthorsComparison>, PaperError> {
     let static_file = authors.join("results-static-case-study.csv");
     let transient_file = authors.join("results-transient-case-study.csv");
-    if !(static_file.exists() && transient_file.exists()) {
+    if !(thermokin_io::file_exists(&static_file) && thermokin_io::file_exists(&transient_file)) {
         return Ok(None);
     }
     let authors_static = read_paper_results(&static_file)?;

@@ -128,7 +128,7 @@ fn tracker_exports_in_every_dialect_and_unit_read_alike() {
         path,
         &radians,
         &kinds,
-        MeasurementFormat { joint_units: JointUnits::Radians, ..MeasurementFormat::default() },
+        MeasurementFormat { joint_units: Some(JointUnits::Radians), ..MeasurementFormat::default() },
     )
     .unwrap();
     for (a, b) in read.measurements.iter().zip(&reference.measurements) {

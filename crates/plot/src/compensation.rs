@@ -1,20 +1,14 @@
-//! SVG plots (plotters): deviation vs time, and the nominal vs deformed structure (the paper's Figure 15).
-//! Each file is drawn into memory and written atomically.
+//! Plots of a compensation run: the largest error per time step before and after, and the structure
+//! nominal and deformed (the paper's Figure 15).
 
-use std::path::Path;
-
-use anyhow::{Result, anyhow};
 use plotters::prelude::*;
 use thermokin_chain::Chain;
 use thermokin_compensate::RunOutput;
-use thermokin_io::write_atomic;
 
-fn save(path: &Path, svg: String) -> Result<()> {
-    write_atomic(path, svg.as_bytes()).map_err(|e| anyhow!(e))
-}
+use crate::{PlotError, tick};
 
 /// Largest error per time step, before and after compensation, on a log scale.
-pub fn deviation_vs_time(path: &Path, run: &RunOutput) -> Result<()> {
+pub fn deviation_vs_time(run: &RunOutput) -> Result<String, PlotError> {
     let mut times: Vec<f64> = run.rows.iter().map(|r| r.time_min).collect();
     times.dedup();
     let per_time = |f: &dyn Fn(&thermokin_compensate::TargetResult) -> f64| -> Vec<(f64, f64)> {
@@ -57,16 +51,16 @@ pub fn deviation_vs_time(path: &Path, run: &RunOutput) -> Result<()> {
         chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
         root.present()?;
     }
-    save(path, svg)
+    Ok(svg)
 }
 
 /// The structure at home, nominal and deformed, projected on the X–Z plane, the deformation magnified
 /// `magnify` times (the paper's Figure 15).
-pub fn structure(path: &Path, nominal: &Chain, deformed: &Chain, magnify: f64) -> Result<()> {
+pub fn structure(nominal: &Chain, deformed: &Chain, magnify: f64) -> Result<String, PlotError> {
     let zeros = vec![0.0; nominal.dof()];
-    let points = |c: &Chain| -> Result<Vec<(f64, f64)>> {
+    let points = |c: &Chain| -> Result<Vec<(f64, f64)>, PlotError> {
         let mut pts = vec![(0.0, 0.0)];
-        for f in c.joint_frames(&zeros).map_err(|e| anyhow!(e))? {
+        for f in c.joint_frames(&zeros)? {
             pts.push((f.translation.vector.x, f.translation.vector.z));
         }
         Ok(pts)
@@ -110,25 +104,5 @@ pub fn structure(path: &Path, nominal: &Chain, deformed: &Chain, magnify: f64) -
         chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw()?;
         root.present()?;
     }
-    save(path, svg)
-}
-
-/// A tick label at its meaningful precision: three significant digits (`1e-9`, not
-/// `9.999999999999999e-10`).
-fn tick(v: f64) -> String {
-    if v == 0.0 {
-        return "0".into();
-    }
-    let text = format!("{v:.2e}");
-    // 1.00e-9 → 1e-9, 2.50e1 → 2.5e1
-    match text.split_once('e') {
-        Some((mantissa, exponent)) => {
-            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
-            match exponent {
-                "0" => mantissa.to_string(),
-                _ => format!("{mantissa}e{exponent}"),
-            }
-        }
-        None => text,
-    }
+    Ok(svg)
 }
