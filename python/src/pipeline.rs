@@ -498,22 +498,10 @@ impl PyCompensation {
 
     /// Writes the results as `thermokin compensate --format` does: `"authors"` (the authors' results
     /// CSV), `"long"`, `"json"` or `"joints"`; atomically.
-    #[pyo3(signature = (path, *, format="authors"))]
-    fn write(&self, path: PathBuf, format: &str) -> PyResult<()> {
-        let transient = self.run.timed;
-        let run = &self.run;
-        let written = match format {
-            "authors" => {
-                thermokin_io::write_atomic_with(&path, |w| thermokin_compensate::write_results_csv(w, run, transient))
-            }
-            "long" => thermokin_io::write_atomic_with(&path, |w| thermokin_compensate::write_long_csv(w, run)),
-            "json" => thermokin_io::write_atomic_with(&path, |w| thermokin_compensate::write_results_json(w, run)),
-            "joints" => thermokin_io::write_atomic_with(&path, |w| thermokin_compensate::write_joint_csv(w, run)),
-            other => {
-                return Err(input(format!("format: `{other}` is not \"authors\", \"long\", \"json\" or \"joints\"")));
-            }
-        };
-        written.map_err(io)
+    #[pyo3(signature = (path, *, format=None))]
+    fn write(&self, path: PathBuf, format: Option<&str>) -> PyResult<()> {
+        let format = choice("format", format, thermokin_compensate::ResultsFormat::default())?;
+        thermokin_io::write_atomic_with(&path, |w| format.write(w, &self.run, self.run.timed)).map_err(io)
     }
 
     /// One row per target and time: label, time, joints, status and errors, as a pandas DataFrame

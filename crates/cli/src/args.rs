@@ -34,6 +34,7 @@ Exit status:
   2  bad input: unreadable or malformed file, bad flag value, conflicting flags
   3  the run finished but some targets were not reached (each is a record in the output)
   4  reproduce-paper --check found drift from the golden outputs
+  5  the diagnosis does not transfer: --export refused;  141  standard output closed (| head)
 
 Examples:
   thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0

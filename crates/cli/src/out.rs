@@ -1,6 +1,5 @@
-//! Standard output of a command's results. Every line goes through [`line`], which turns a closed pipe
-//! (`thermokin fk … | head -1`) into [`exit::CLOSED_PIPE`] — the command ends quietly — instead of the
-//! panic `println!` raises.
+//! Standard output of a command's results: every line through [`line`], which turns a closed pipe (`… |
+//! head -1`) into [`exit::CLOSED_PIPE`] — the command ends quietly — instead of `println!`'s panic.
 
 use std::io::Write;
 

@@ -762,6 +762,79 @@ fn readme_commands() -> Vec<Vec<String>> {
         .collect()
 }
 
+/// The figures the README states about its command block, recomputed: the exported warm-up's lines, the
+/// minute-60 program's errors, the canonical reading's distance from Table 16.
+fn readme_figures_are_the_commands(dir: &Path, commands: &[Vec<String>], printed: &[String]) {
+    let readme = std::fs::read_to_string(workspace("README.md")).unwrap();
+    let excerpt = readme.split("```toml\n").nth(1).unwrap().split("```").next().unwrap();
+    let warm = std::fs::read_to_string(dir.join("warm.toml")).unwrap();
+    for line in excerpt.lines().map(|l| l.split('#').next().unwrap().trim()).filter(|l| l.contains('=')) {
+        assert!(warm.lines().any(|w| w.trim() == line), "README's `{line}` is not in the exported warm.toml:\n{warm}");
+    }
+    // "a program computed on the calibrated cold robot would miss by up to 0.25 mm at minute 60": the
+    // summary's uncompensated figure.
+    let k = commands.iter().position(|c| c.iter().any(|a| a == "minute60.csv")).unwrap();
+    let cold: f64 =
+        printed[k].split("uncompensated program ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    assert!((cold - 0.25).abs() < 0.005, "{cold}");
+    // "one computed on the nominal robot by 0.55 mm": the nominal IK's joints through warm.toml at 60.
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_thermokin")).args(args).current_dir(dir).output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let nominal = run(&[
+        "ik",
+        "--robot",
+        ROBOT,
+        "--poses-file",
+        "fixtures/paper/table12-targets.csv",
+        "--seed",
+        "0,20,20,0,-45,0",
+    ]);
+    let q: Vec<String> =
+        nominal.lines().skip(1).map(|l| l.split(',').skip(2).take(6).collect::<Vec<_>>().join(",")).collect();
+    std::fs::write(dir.join("nominal-q.csv"), format!("q1,q2,q3,q4,q5,q6\n{}\n", q.join("\n"))).unwrap();
+    let reached = run(&["fk", "--robot", "warm.toml", "--time", "60", "--joints-file", "nominal-q.csv"]);
+    let targets = thermokin_io::read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap();
+    let worst = reached
+        .lines()
+        .skip(1)
+        .zip(&targets)
+        .map(|(l, t)| {
+            let p: Vec<f64> = l.split(',').skip(1).take(3).map(|c| c.parse().unwrap()).collect();
+            (nalgebra::Vector3::new(p[0], p[1], p[2]) - t.pose.translation.vector).norm()
+        })
+        .fold(0.0, f64::max);
+    assert!((worst - 0.55).abs() < 0.005, "{worst}");
+    // "the angles differ from Table 16 by 3.2° RMS (up to 8.6° on one joint)" without --semantics.
+    run(&[
+        "compensate",
+        "--robot",
+        "configs/irb140-scene.toml",
+        "--deformation",
+        "fixtures/paper/authors/deformations-case-study.csv",
+        "--targets",
+        "fixtures/paper/table12-targets.csv",
+        "--seed",
+        "0,20,20,0,-45,0",
+        "--out",
+        "canonical.csv",
+    ]);
+    let results = std::fs::read_to_string(dir.join("canonical.csv")).unwrap();
+    let table16 = std::fs::read_to_string(workspace("fixtures/paper/table16-joints-static.csv")).unwrap();
+    let mut d = Vec::new();
+    for line in table16.lines().filter(|l| l.starts_with('P')) {
+        let cells: Vec<&str> = line.split(',').collect();
+        let ours = results.lines().find(|l| l.starts_with(&format!("{},", cells[0]))).unwrap();
+        let ours: Vec<f64> = ours.split(',').skip(19).take(6).map(|c| c.parse().unwrap()).collect();
+        d.extend(ours.iter().zip(&cells[1..7]).map(|(a, b)| a - b.trim().parse::<f64>().unwrap()));
+    }
+    let rms = (d.iter().map(|x| x * x).sum::<f64>() / d.len() as f64).sqrt();
+    let max = d.iter().map(|x| x.abs()).fold(0.0, f64::max);
+    assert!((rms - 3.2).abs() < 0.05 && (max - 8.6).abs() < 0.05, "{rms} {max}");
+}
+
 #[test]
 fn every_readme_command_works_from_another_directory() {
     // An empty directory, not the repository: the binary must find its bundled robots and fixtures.
@@ -769,10 +842,15 @@ fn every_readme_command_works_from_another_directory() {
     std::fs::create_dir_all(&dir).unwrap();
     let commands = readme_commands();
     assert!(commands.len() >= 10, "{commands:?}");
+    let mut printed = Vec::new();
     for args in &commands {
         let o = Command::new(env!("CARGO_BIN_EXE_thermokin")).args(args).current_dir(&dir).output().unwrap();
         assert!(o.status.success(), "thermokin {}: exit {:?}\n{}", args.join(" "), o.status.code(), stderr(&o));
+        // No report prints NaN: an undefined figure says why.
+        assert!(!stdout(&o).contains("NaN"), "thermokin {}: NaN in\n{}", args.join(" "), stdout(&o));
+        printed.push(stdout(&o));
     }
+    readme_figures_are_the_commands(&dir, &commands, &printed);
     // The static case as the README says: joints within 0.005° of Table 16 for its 25 printed rows.
     let results = std::fs::read_to_string(dir.join("static.csv")).unwrap();
     let table16 = std::fs::read_to_string(workspace("fixtures/paper/table16-joints-static.csv")).unwrap();

@@ -2,5 +2,6 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail; case tables are tuples.
 
 mod bad_inputs;
+mod citizen;
 mod cli;
 mod warmup_loop;
