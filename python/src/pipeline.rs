@@ -283,6 +283,13 @@ impl PyReport {
         self.report.effects.iter().map(|e| e.label.clone()).collect()
     }
 
+    /// The joint rows the geometry completion added beside the effects for use (not causes found; in the
+    /// scores and the export).
+    #[getter]
+    fn completed(&self) -> Vec<String> {
+        self.report.completed.iter().map(|e| e.label.clone()).collect()
+    }
+
     /// Whether the effects found explain the data.
     #[getter]
     fn verdict(&self) -> String {

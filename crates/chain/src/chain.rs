@@ -12,6 +12,8 @@ use crate::ChainError;
 use crate::error_params::ErrorParams;
 use crate::frame::{AxisKind, Frame};
 
+/// A joint frame as its rotation matrix and origin in the base frame (mm).
+pub(crate) type RotationAndOrigin = (Matrix3<f64>, Vector3<f64>);
 /// Whether a joint turns or slides along its axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JointKind {
@@ -482,6 +484,20 @@ impl Chain {
             out.push(base_from_link.to_isometry());
         }
         out.push(base_from_link.mul(&self.tool_frame).to_isometry());
+        Ok(out)
+    }
+
+    /// Every joint frame after the joint's motion, as rotation matrix and origin (no quaternion: the fast
+    /// path of [`crate::gravity_torques`], which runs per pose per fit evaluation of a compliance).
+    pub(crate) fn joint_rotations_and_origins(&self, q: &[f64]) -> Result<Vec<RotationAndOrigin>, ChainError> {
+        self.check_q(q)?;
+        let mut out = Vec::with_capacity(self.dof());
+        let mut base_from_link = self.base_frame;
+        for (link, &qi) in self.links.iter().zip(q) {
+            base_from_link = base_from_link.mul(&link.fixed);
+            Self::apply_joint(link, &mut base_from_link, qi, None);
+            out.push((base_from_link.rot, base_from_link.trans));
+        }
         Ok(out)
     }
 

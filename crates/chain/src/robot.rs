@@ -3,7 +3,7 @@
 //! readers build them, every algorithm crate takes them; they live in the core so that readers sit below
 //! the algorithms.
 
-use nalgebra::{Isometry3, Point3, Unit, Vector3};
+use nalgebra::{Isometry3, Unit, Vector3};
 
 use crate::{Chain, ChainError};
 
@@ -180,16 +180,19 @@ pub fn gravity_torques(
     q: &[f64],
     down: &Unit<Vector3<f64>>,
 ) -> Result<Vec<f64>, ChainError> {
-    let frames = chain.joint_frames(q)?;
+    let frames = chain.joint_rotations_and_origins(q)?;
     let weight = down.into_inner() * STANDARD_GRAVITY;
     let n = chain.dof();
     let coms: Vec<Option<(f64, Vector3<f64>)>> = (0..n)
-        .map(|l| masses.get(l).copied().flatten().map(|m| (m.mass_kg, (frames[l] * Point3::from(m.com_mm)).coords)))
+        .map(|l| {
+            let (rot, origin) = &frames[l];
+            masses.get(l).copied().flatten().map(|m| (m.mass_kg, rot * m.com_mm + origin))
+        })
         .collect();
     Ok((0..n)
         .map(|j| {
-            let axis = frames[j].rotation * chain.joints()[j].axis.into_inner();
-            let origin = frames[j].translation.vector;
+            let axis = frames[j].0 * chain.joints()[j].axis.into_inner();
+            let origin = frames[j].1;
             let moment_nmm: Vector3<f64> =
                 coms.iter().skip(j).flatten().map(|(m, c)| (c - origin).cross(&(weight * *m))).sum();
             crate::units::newton_metres(axis.dot(&moment_nmm))

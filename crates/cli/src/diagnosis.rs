@@ -86,7 +86,7 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
     let model = report.export_model(robot, payload, &source).map_err(Failure::internal)?;
     let (text, beyond) = thermokin_io::robot_file_text(&model, path);
     write_atomic(path, text.as_bytes()).map_err(Failure::internal)?;
-    let carried: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
+    let carried: Vec<String> = report.effects.iter().chain(&report.completed).map(|e| e.label.clone()).collect();
     say!(
         "\nidentified robot → {}: {}",
         path.display(),

@@ -49,6 +49,19 @@ pub struct Config {
     /// How many candidates a forward step fits in full after ranking all by a linearised step
     /// ([`Screen`]; `Screen { keep: 0 }` fits every one).
     pub screen: Screen,
+    /// Whether the selection ends by completing the geometry ([`Completion`]).
+    pub completion: Completion,
+}
+
+/// The selection's last phase ([`crate::Config::completion`]; the module `completion` gives the why).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Completion {
+    /// The default: every eligible joint row joins the chosen effects unless the selected model is
+    /// significantly better held out (reported apart from them: [`crate::Report::completed`]).
+    #[default]
+    Geometry,
+    /// The selected effects as chosen (for comparisons: the selection before issue #36).
+    Off,
 }
 
 /// How measurements are grouped into cross-validation folds.
@@ -105,6 +118,25 @@ impl Config {
     /// The measurement setup these settings describe: frame, tool, orientation lever.
     pub fn setup(&self) -> Setup {
         Setup { frame: self.frame, tool: self.tool, orientation_lever_mm: self.orientation_lever_mm }
+    }
+
+    /// The RMS a model at the measurement noise leaves (3-D, or position and orientation combined with
+    /// `lever_mm` when orientations are fitted), from the stated noise: `√3 · σ`, or
+    /// `√(3σ² + 3(lever · σ_rot)²)`. `None` when the noise is not stated (or, with orientations fitted,
+    /// the orientation noise is not).
+    pub fn noise_floor_mm(&self, lever_mm: Option<f64>) -> Option<f64> {
+        match (self.noise_mm, lever_mm, self.orientation_noise_rad) {
+            (None, ..) | (Some(_), Some(_), None) => None,
+            (Some(sigma), None, _) => Some(sigma * 3f64.sqrt()),
+            (Some(sigma), Some(lever), Some(rot)) => Some((3.0 * sigma * sigma + 3.0 * (lever * rot).powi(2)).sqrt()),
+        }
+    }
+
+    /// Whether a held-out RMS is at the stated noise: within 1.5× its floor ([`Config::noise_floor_mm`];
+    /// the 3-D RMS of Gaussian noise scatters by ~10 % over 100 poses, a model error shows as more).
+    /// `None` when the noise is not stated.
+    pub fn at_the_noise(&self, heldout_rms_mm: f64, lever_mm: Option<f64>) -> Option<bool> {
+        self.noise_floor_mm(lever_mm).map(|floor| heldout_rms_mm <= 1.5 * floor)
     }
 
     /// The fewest poses a diagnosis with these folds can run on: two per fold.
@@ -166,6 +198,7 @@ impl Default for Config {
             eligibility: Eligibility::default(),
             plausibility: Plausibility::default(),
             screen: Screen::default(),
+            completion: Completion::default(),
         }
     }
 }
@@ -187,37 +220,32 @@ impl Default for Eligibility {
     }
 }
 
-/// Bounds beyond which a fitted value is not a property of a working robot but a fit running away
-/// (trading against another block, or chasing a few poses): a candidate whose fitted parameters exceed
-/// them on all data is refused as implausible, with the values. Industrial arms are built and
-/// calibrated to tenths of a millimetre and hundredths of a degree; these bounds are ten to a hundred
-/// times that, so that no real deviation is refused.
+/// The bound beyond which a fitted value is not a property of a working robot but a fit running away
+/// (trading against another block, or chasing a few poses), in the robot's own scale: every effect is
+/// judged by the largest displacement it causes at the tool point over the data, against the arm's
+/// extent over the data — so that a cable-driven research arm's real millimetres and a small arm's real
+/// degrees pass, and a robot at half the size with half the deviation is judged as the same robot. A
+/// candidate whose values exceed it in the fit it would join is refused, with the values measured.
+///
+/// The displacement of each kind: a joint row's (or drift's, at its factor 1) translation, and its
+/// rotation times the row's lever (the largest distance from the joint to the tool point over the data);
+/// a zero offset's angle times the lever (a prismatic joint's offset itself); a gear-ratio error's
+/// largest angle `|s|·max|q|` over the data times the lever; a cyclic error's largest angle `√(a1²+b1²) +
+/// √(a2²+b2²)` times the lever; a compliance's largest deflection `k·τ_max` (the joint's largest gravity
+/// torque) times the lever.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Plausibility {
-    /// Largest translation of a joint row's deviation or drift, mm. Default 5.
-    pub link_translation_mm: f64,
-    /// Largest rotation of a joint row's deviation or drift, degrees. Default 1.
-    pub link_rotation_deg: f64,
-    /// Largest zero offset, degrees. Default 5.
-    pub joint_offset_deg: f64,
-    /// Largest gear-ratio error (dimensionless). Default 0.01 (1 %).
-    pub joint_scale: f64,
-    /// Largest amplitude of a cyclic encoder term, degrees. Default 1.
-    pub periodic_deg: f64,
-    /// Largest deflection of a compliance at the joint's largest gravity torque, degrees. Default 1.
-    pub compliance_deflection_deg: f64,
+    /// Largest displacement at the tool point of any one effect, as a fraction of the arm's extent over
+    /// the data (the largest distance from joint 1 to the tool point). Default 0.02: 20 mm on a 1 m arm —
+    /// a hundred times what an industrial arm is calibrated to, a few times a cable-driven arm's real
+    /// wrist errors; a 90 % gear-ratio error or a 60° cyclic term of a wrist joint trading with the tool
+    /// point moves it by a hundred millimetres or more.
+    pub displacement_of_extent: f64,
 }
 
 impl Default for Plausibility {
     fn default() -> Self {
-        Self {
-            link_translation_mm: 5.0,
-            link_rotation_deg: 1.0,
-            joint_offset_deg: 5.0,
-            joint_scale: 0.01,
-            periodic_deg: 1.0,
-            compliance_deflection_deg: 1.0,
-        }
+        Self { displacement_of_extent: 0.02 }
     }
 }
 

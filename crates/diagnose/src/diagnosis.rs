@@ -6,7 +6,7 @@ use thermokin_chain::{Dataset, Robot};
 
 use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
-use crate::report::{HoldoutStats, Report};
+use crate::report::{HoldoutPair, HoldoutStats, Report};
 use crate::scoring::Scorer;
 use crate::select::select;
 use crate::tables::tables;
@@ -104,7 +104,13 @@ pub fn diagnose_with_progress(
             let always = config.setup().always_estimated(data);
             let score = |e: &[thermokin_identify::Effect]| transfer_score(&scorer, h, e, config);
             let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
-            let stats = HoldoutStats { nominal: score(&always)?, selected: score(&tables.effects)?, refitted };
+            let (nominal, selected) = (score(&always)?, score(&tables.effects)?);
+            let stats = HoldoutStats {
+                nominal: nominal.refitted,
+                selected: selected.refitted,
+                refitted,
+                same_frame: HoldoutPair { nominal: nominal.same_frame, selected: selected.same_frame },
+            };
             tell("hold-out set".into());
             Some(stats)
         }
@@ -124,6 +130,7 @@ pub fn diagnose_with_progress(
         validation: tables.validation,
         orientation_lever_mm: tables.orientation_lever_mm,
         effects: tables.reports,
+        completed: tables.completed,
         additive: tables.additive,
         leave_one_out: tables.leave_one_out,
         identifiability: tables.identifiability,

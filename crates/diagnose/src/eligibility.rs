@@ -24,7 +24,7 @@
 
 use faer::linalg::solvers::DenseSolveCore;
 use thermokin_chain::{Dataset, JointKind, Robot, units};
-use thermokin_identify::{DriftShape, Effect, NEARLY_DEPENDENT, identifiable, max_gravity_torque};
+use thermokin_identify::{DriftShape, Effect, NEARLY_DEPENDENT, identifiable};
 
 use crate::config::Eligibility;
 use crate::error::DiagnoseError;
@@ -52,6 +52,16 @@ pub(crate) fn check(
         }
     }
     Ok((eligible, refused))
+}
+
+/// `x` with three significant digits (a torque of a light wrist is milli-newton-metres: a fixed number
+/// of decimals would print it as 0.0).
+fn significant(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{x}");
+    }
+    let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
+    format!("{x:.decimals$}")
 }
 
 /// The lowest and highest of `values`.
@@ -106,17 +116,30 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
         Effect::JointCompliance(j) => {
             let j = j.index();
             let (lo, hi) = span(scorer.terms.torques.iter().map(|t| t[j]));
-            let bound = max_gravity_torque(robot, j);
-            if bound <= 0.0 {
-                return None; // No gravity torque: the identifiability gate says it moves nothing.
+            let torques = &scorer.scale.max_torque_nm;
+            let bound = torques[j];
+            // Rounding in the torque sum leaves ~1e-15 of the largest torque on an axis gravity never
+            // loads; a millionth of it is a torque no joint deflects under.
+            if bound <= 1e-6 * torques.iter().copied().fold(0.0, f64::max) {
+                return Some(Refusal {
+                    effect: e.label(),
+                    reason: format!(
+                        "gravity never loads joint {} (its largest gravity torque over the joint space is {bound:.1e} N·m): a compliance there moves nothing",
+                        j + 1
+                    ),
+                    remedy: "nothing to measure: the axis is vertical in every pose, or the masses beyond it are missing from the robot description".into(),
+                });
             }
             let fraction = (hi - lo) / (2.0 * bound);
             (fraction < rules.min_travel_fraction).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(
-                    "the gravity torque about joint {} spans {lo:.1} … {hi:.1} N·m only ({:.0}% of ±{bound:.1} N·m)",
+                    "the gravity torque about joint {} spans {} … {} N·m only ({:.0}% of ±{} N·m)",
                     j + 1,
-                    100.0 * fraction
+                    significant(lo),
+                    significant(hi),
+                    100.0 * fraction,
+                    significant(bound)
                 ),
                 remedy: format!(
                     "measure poses that load joint {} over at least {:.0}% of its gravity-torque range (arm stretched out on both sides)",

@@ -54,13 +54,7 @@ fn score_round(
     let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exponential(c)).collect();
     let effects = sel.effects.clone();
     // Score before you fit: the candidates ranked by a linearised step, the shortlist fitted in full.
-    let runs_away = |c: Effect, v: &[f64]| implausible(scorer.robot, v, c, &config.plausibility);
-    let screened = crate::screen::shortlist(scorer, &effects, &sel.theta, &linear, config.screen, &runs_away)?;
-    for (c, why) in screened.runaway {
-        sel.refused.push(why.refusal(c, Judged::LinearisedStep));
-        pool.retain(|p| *p != c);
-    }
-    let first = screened.keep;
+    let first = crate::screen::shortlist(scorer, &effects, &sel.theta, &linear, config.screen)?;
     let score_all = |list: &[Effect]| -> Result<Vec<(Effect, Scored)>, DiagnoseError> {
         list.par_iter().map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?))).collect()
     };
@@ -152,7 +146,7 @@ fn choose(
         let (model, full) = scorer.full_fit(&with)?;
         let o = model.offsets()[model.offsets().len() - 1];
         let values = &full.theta[o..o + cand.effect.len()];
-        if let Some(why) = implausible(scorer.robot, values, cand.effect, &config.plausibility) {
+        if let Some(why) = implausible(&scorer.scale, values, cand.effect, &config.plausibility) {
             sel.refused.push(why.refusal(cand.effect, Judged::Fitted));
             pool.retain(|c| *c != cand.effect);
             continue;

@@ -11,6 +11,7 @@
 //! ([`Report::text`]).
 
 mod backward;
+mod completion;
 mod config;
 mod diagnosis;
 mod eligibility;
@@ -32,14 +33,14 @@ mod tables;
 mod validation;
 mod verdict;
 
-pub use config::{Config, Eligibility, FoldGrouping, Plausibility, Screen, Validation};
+pub use config::{Completion, Config, Eligibility, FoldGrouping, Plausibility, Screen, Validation};
 pub use diagnosis::{Progress, diagnose, diagnose_with_progress};
 pub use error::DiagnoseError;
 pub use render::ReportText;
 pub use report::{
-    Breakdown, EffectReport, FittedFrames, HoldoutStats, Identifiability, Nested, OuterFold, ParameterValue,
-    PoseReport, Refusal, Report, Skipped, TableRow,
+    Breakdown, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,
+    ParameterValue, PoseReport, Refusal, Report, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::Stats;
-pub use validation::evaluate;
+pub use validation::{Transfer, evaluate};

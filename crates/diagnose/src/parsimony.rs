@@ -1,5 +1,6 @@
 //! Phase 5 of the selection: parsimony. An exponential drift not significantly better than its linear
-//! twin becomes the linear one; then each chosen block is replaced by the smallest combination (one or
+//! twin becomes the linear one, and a drift not significantly better than its row's static deviation
+//! becomes the static one; then each chosen block is replaced by the smallest combination (one or
 //! two) of eligible smaller catalogue blocks its directions contain on the data (rank test) when the
 //! larger is not significantly better held out — the same gate, the other way round. Two offsets of
 //! parallel joints inside one link row come out as the two offsets.
@@ -9,7 +10,7 @@ use thermokin_identify::{DriftShape, Effect};
 use crate::config::Config;
 use crate::error::DiagnoseError;
 use crate::scoring::{Relation, Scorer, significantly_better};
-use crate::selection::{Selection, Step};
+use crate::selection::{Joined, Selection, Step};
 use crate::stats::Stats;
 
 /// Both rules of the phase, in order.
@@ -20,6 +21,7 @@ pub(crate) fn parsimony(
     eligible: &[Effect],
 ) -> Result<(), DiagnoseError> {
     linear_for_exponential(scorer, config, sel)?;
+    static_for_drift(scorer, config, sel, eligible)?;
     let mut k = sel.always;
     while k < sel.effects.len() {
         k += match smaller_replacement(scorer, config, sel, k, eligible)? {
@@ -54,6 +56,38 @@ fn linear_for_exponential(scorer: &Scorer<'_>, config: &Config, sel: &mut Select
     Ok(())
 }
 
+/// A thermal drift not significantly better than its row's static deviation becomes the static one: a
+/// drift over before the data begin (an exponential whose time constant is short against the first
+/// measurement) or one the data cannot tell from constant is a static deviation in disguise, and the
+/// static explanation wins — it holds at every time, the drift's extrapolates.
+fn static_for_drift(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    eligible: &[Effect],
+) -> Result<(), DiagnoseError> {
+    for k in sel.always..sel.effects.len() {
+        let Effect::ThermalDrift(j, shape) = sel.effects[k] else { continue };
+        let row = Effect::LinkDeviation(j);
+        if shape == DriftShape::Temperature || !eligible.contains(&row) || sel.effects.contains(&row) {
+            continue;
+        }
+        let mut swapped = sel.effects.clone();
+        swapped[k] = row;
+        let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
+        if !significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
+            let drift = sel.effects[k];
+            let text =
+                format!("{} replaces {} (a static deviation, not significantly worse)", row.label(), drift.label());
+            for s in sel.steps.iter_mut().filter(|s| s.effect == drift) {
+                s.effect = row;
+            }
+            sel.replace(swapped, stats, errors, text);
+        }
+    }
+    Ok(())
+}
+
 /// Smaller blocks that replace a larger one, scored.
 struct Replacement {
     /// The block replaced.
@@ -83,7 +117,12 @@ impl Replacement {
             s.effect = c;
         }
         for &c in self.blocks.iter().skip(1) {
-            sel.steps.push(Step { effect: c, before_mm: None, after_mm: self.stats.heldout_rms_mm });
+            sel.steps.push(Step {
+                effect: c,
+                before_mm: None,
+                after_mm: self.stats.heldout_rms_mm,
+                joined: Joined::Replacing { larger: self.big },
+            });
         }
         sel.replace(with, self.stats, self.errors, row);
     }

@@ -1,85 +1,184 @@
-//! Physical plausibility of fitted values: a candidate whose values exceed the bounds of
-//! [`Plausibility`] is a fit running away (trading against another block, or chasing a few poses), not a
-//! property of a working robot.
+//! Physical sense of fitted values: a candidate whose values move the tool point by more than
+//! [`Plausibility`] allows in the robot's own scale ([`RobotScale`]), or contradict physics — a joint
+//! rising under its load, a drift over before the next measurement — is a fit running away or a static
+//! effect in disguise, not a property of the robot.
 
-use thermokin_chain::{Robot, units};
-use thermokin_identify::{Effect, max_gravity_torque};
+use thermokin_chain::{Dataset, Robot, units};
+use thermokin_identify::{DriftShape, Effect, max_gravity_torques};
 
 use crate::config::Plausibility;
 use crate::report::Refusal;
 
-/// A fitted value beyond its bound.
+/// The robot's scale over a data set, what plausibility is judged against: the arm's extent, each joint
+/// row's lever to the tool point, each joint's largest gravity torque, the measurements' time spacing.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Implausible {
-    /// What exceeded its bound ("its translation", "the offset", …).
-    what: &'static str,
-    /// The value, in `unit`.
-    value: f64,
-    /// The bound, in `unit`.
-    bound: f64,
-    /// The unit of both ("mm", "°", or none).
-    unit: &'static str,
+pub(crate) struct RobotScale {
+    /// The largest distance from joint 1 to the tool point over the data (nominal FK), mm.
+    pub(crate) extent_mm: f64,
+    /// Per joint, the largest distance from the joint to the tool point over the data, mm: what a
+    /// rotation of the joint's row about any axis moves the tool point by, per radian, at most.
+    pub(crate) lever_mm: Vec<f64>,
+    /// Per joint, the largest distance of the tool point from the joint's axis over the data, mm: what a
+    /// turn about the axis itself (an offset, a gear-ratio or cyclic error, a compliance) moves it by, per
+    /// radian.
+    pub(crate) axis_lever_mm: Vec<f64>,
+    /// Per joint, the largest gravity torque about it over its joint space, N·m.
+    pub(crate) max_torque_nm: Vec<f64>,
+    /// Per joint, the largest |q| over the data (radians or mm).
+    pub(crate) reach: Vec<f64>,
+    /// Per joint, whether it turns (its offsets and motions are angles) rather than slides.
+    pub(crate) revolute: Vec<bool>,
+    /// The smallest gap between successive distinct measurement times, minutes (`None` without time).
+    pub(crate) time_spacing_min: Option<f64>,
+}
+
+impl RobotScale {
+    /// The scale of `robot` over `data`.
+    pub(crate) fn of(robot: &Robot, data: &Dataset) -> Self {
+        let chain = robot.chain();
+        let dof = chain.dof();
+        let mut lever_mm = vec![0.0f64; dof];
+        let mut axis_lever_mm = vec![0.0f64; dof];
+        for m in &data.measurements {
+            let (Ok(frames), Ok(tool)) = (chain.joint_frames(&m.q), chain.tool_pose(&m.q)) else { continue };
+            for (j, f) in frames.iter().take(dof).enumerate() {
+                let arm = tool.translation.vector - f.translation.vector;
+                let axis = f.rotation * chain.joints()[j].axis.into_inner();
+                lever_mm[j] = lever_mm[j].max(arm.norm());
+                axis_lever_mm[j] = axis_lever_mm[j].max(arm.cross(&axis).norm());
+            }
+        }
+        let mut times: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let time_spacing_min = times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min);
+        let reach = (0..dof).map(|j| data.measurements.iter().map(|m| m.q[j].abs()).fold(0.0, f64::max)).collect();
+        Self {
+            extent_mm: lever_mm.first().copied().unwrap_or(0.0),
+            reach,
+            revolute: chain.joints().iter().map(|j| j.kind == thermokin_chain::JointKind::Revolute).collect(),
+            max_torque_nm: max_gravity_torques(robot),
+            lever_mm,
+            axis_lever_mm,
+            time_spacing_min,
+        }
+    }
+}
+
+/// A fitted value the robot cannot have, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Implausible {
+    /// Beyond its bound: `what` fitted at `value`, the bound `bound` (both in `unit`), `scale` saying
+    /// where the bound comes from.
+    Beyond { what: &'static str, value: f64, bound: f64, unit: &'static str, scale: String },
+    /// A compliance of the wrong sign: the joint would rise under its load (by `deflection_deg` at its
+    /// largest gravity torque).
+    Rising { k_deg_per_nm: f64, deflection_deg: f64 },
+    /// An exponential drift whose time constant is shorter than the measurements' spacing.
+    Instant { tau_min: f64, spacing_min: f64 },
 }
 
 /// How a value judged implausible was obtained.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Judged {
-    /// Fitted on all data.
+    /// Fitted on all data, in the model it would join.
     Fitted,
     /// Fitted on every fold of the selection.
     FittedOnEveryFold,
-    /// Predicted by one linearised step on all data (the screen).
-    LinearisedStep,
 }
 
 impl Implausible {
     /// The reason in words.
     pub(crate) fn reason(&self, judged: Judged) -> String {
-        let Self { what, value, bound, unit } = self;
-        let beyond = format!("(beyond the plausible {bound} {unit})");
-        match judged {
-            Judged::Fitted => format!("{what} fitted at {value:.4} {unit} {beyond}"),
-            Judged::FittedOnEveryFold => {
-                format!("{what} fitted at {value:.4} {unit} {beyond} in the fit of every fold")
+        let every = if judged == Judged::FittedOnEveryFold { " in the fit of every fold" } else { "" };
+        match self {
+            Implausible::Beyond { what, value, bound, unit, scale } => {
+                format!("{what} fitted at {value:.4}{unit}{every}, beyond the plausible {bound:.4}{unit} ({scale})")
             }
-            Judged::LinearisedStep => {
-                format!("one linearised step on all data puts {what} at {value:.4} {unit} {beyond}")
-            }
+            Implausible::Rising { k_deg_per_nm, deflection_deg } => format!(
+                "the compliance fitted at {k_deg_per_nm:.3e} °/N·m{every}: the joint would rise under its load, not sag ({deflection_deg:.2e}° at its largest gravity torque)"
+            ),
+            Implausible::Instant { tau_min, spacing_min } => format!(
+                "its time constant fitted at {tau_min:.3} min{every}, shorter than the measurements' spacing ({spacing_min:.3} min): a drift over before the next measurement is a static deviation"
+            ),
         }
     }
 
-    /// The refusal of `effect` for this value.
+    /// The refusal of `effect` for this value, with what was measured and what to do.
     pub(crate) fn refusal(&self, effect: Effect, judged: Judged) -> Refusal {
-        Refusal {
-            effect: effect.label(),
-            reason: self.reason(judged),
-            remedy: "check the robot description (masses, link lengths) and the units of the data".into(),
-        }
+        let remedy = match self {
+            Implausible::Beyond { .. } => {
+                "a value this large trades with another block or chases a few poses; if the robot truly deviates so much, raise the plausibility bound"
+            }
+            Implausible::Rising { .. } => {
+                "no gravity compliance is seen here: what moves with the load is another effect"
+            }
+            Implausible::Instant { .. } => {
+                "the static effects explain it; measure more often early in the warm-up to see a fast drift"
+            }
+        };
+        Refusal { effect: effect.label(), reason: self.reason(judged), remedy: remedy.into() }
     }
 }
 
-/// Whether the values `v` of `effect` (internal units) exceed the bounds `p`, and which.
-pub(crate) fn implausible(robot: &Robot, v: &[f64], effect: Effect, p: &Plausibility) -> Option<Implausible> {
-    let deg = units::degrees;
-    let over = |what: &'static str, value: f64, bound: f64, unit: &'static str| {
-        (value.abs() > bound).then_some(Implausible { what, value, bound, unit })
+/// Whether the values `v` of `effect` (internal units) are implausible for a robot of `scale` under the
+/// bound `p`, and why.
+pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Plausibility) -> Option<Implausible> {
+    let allowed_mm = p.displacement_of_extent * scale.extent_mm;
+    let why = |lever: f64| {
+        format!(
+            "{:.1} mm at the tool point, {:.0}% of the arm's {:.0} mm extent, at a {lever:.0} mm lever",
+            allowed_mm,
+            100.0 * p.displacement_of_extent,
+            scale.extent_mm
+        )
     };
+    let over = |what: &'static str, value: f64, moved_mm: f64, lever: f64, unit: &'static str| {
+        (moved_mm > allowed_mm).then(|| Implausible::Beyond {
+            what,
+            value,
+            bound: value.abs() * allowed_mm / moved_mm,
+            unit,
+            scale: why(lever),
+        })
+    };
+    let lever_of = |j: thermokin_identify::JointIndex| scale.lever_mm[j.index()].max(1.0);
+    let deg = units::degrees;
     match effect {
-        Effect::LinkDeviation(_) | Effect::ThermalDrift(..) => {
+        Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => {
+            if let (Effect::ThermalDrift(_, DriftShape::Exponential), Some(spacing)) = (effect, scale.time_spacing_min)
+                && v[6] < spacing
+            {
+                return Some(Implausible::Instant { tau_min: v[6], spacing_min: spacing });
+            }
             let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
-            let r = deg(v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt());
-            over("its translation", t, p.link_translation_mm, "mm")
-                .or_else(|| over("its rotation", r, p.link_rotation_deg, "°"))
+            let r = v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let lever = lever_of(j);
+            over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
         }
-        Effect::JointOffset(_) => over("the offset", deg(v[0]), p.joint_offset_deg, "°"),
-        Effect::JointScale(_) => over("the scale error", v[0], p.joint_scale, ""),
-        Effect::Periodic(_) => {
-            let a = v.iter().map(|x| deg(*x).abs()).fold(0.0, f64::max);
-            over("a cyclic amplitude", a, p.periodic_deg, "°")
-        }
-        Effect::JointCompliance(j) => {
-            let bound = max_gravity_torque(robot, j.index());
-            over("the deflection at the largest gravity torque", deg(v[0] * bound), p.compliance_deflection_deg, "°")
+        Effect::JointOffset(j) | Effect::JointScale(j) | Effect::Periodic(j) | Effect::JointCompliance(j) => {
+            let lever = scale.axis_lever_mm[j.index()].max(1.0);
+            let revolute = scale.revolute[j.index()];
+            // The largest joint motion the values cause over the data (radians, or mm for a prismatic
+            // joint), and the value reported.
+            let (what, value, unit, motion) = match effect {
+                Effect::JointOffset(_) if revolute => ("the offset", deg(v[0]), "°", v[0].abs()),
+                Effect::JointOffset(_) => ("the offset", v[0], " mm", v[0].abs()),
+                Effect::JointScale(_) => ("the scale error", v[0], "", (v[0] * scale.reach[j.index()]).abs()),
+                Effect::Periodic(_) => {
+                    let amplitude = v[0].hypot(v[1]) + v[2].hypot(v[3]);
+                    ("a cyclic amplitude", deg(amplitude), "°", amplitude)
+                }
+                _ => {
+                    let deflection = v[0] * scale.max_torque_nm[j.index()];
+                    if v[0] < 0.0 {
+                        return Some(Implausible::Rising { k_deg_per_nm: deg(v[0]), deflection_deg: deg(deflection) });
+                    }
+                    ("the deflection at the largest gravity torque", deg(deflection), "°", deflection)
+                }
+            };
+            let moved = if revolute { motion * lever } else { motion };
+            over(what, value, moved, lever, unit)
         }
         _ => None,
     }

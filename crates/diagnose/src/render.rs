@@ -89,7 +89,18 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if let Some(h) = &r.holdout {
         writeln!(f, "\nexplicit hold-out set (fitted on all measurements; never used to choose), mm:")?;
         if !h.refitted.is_empty() {
-            writeln!(f, "  (its own frame and probe: {} refitted on it, the effects kept)", h.refitted.join(", "))?;
+            writeln!(
+                f,
+                "  in the training frame (the model as fitted and exported, nothing refitted: the use-test when both files share the tracker frame and probe):"
+            )?;
+            header(f)?;
+            line(f, "nominal", &h.same_frame.nominal)?;
+            line(f, "the effects chosen below", &h.same_frame.selected)?;
+            writeln!(
+                f,
+                "  in its own frame and with its own probe ({} refitted on it, the effects kept):",
+                h.refitted.join(", ")
+            )?;
         }
         header(f)?;
         line(f, "nominal", &h.nominal)?;
@@ -105,7 +116,14 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     if !r.leave_one_out.is_empty() {
-        writeln!(f, "\nleave one out (mm):")?;
+        if r.completed.is_empty() {
+            writeln!(f, "\nleave one out (mm):")?;
+        } else {
+            writeln!(
+                f,
+                "\nleave one out (mm; an effect from the diagnosed effects, a completion row from the completed model):"
+            )?;
+        }
         for row in &r.leave_one_out {
             writeln!(
                 f,
@@ -117,7 +135,7 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     Ok(())
 }
 
-/// The effects, main cause first, with their parameters.
+/// The effects, main cause first, with their parameters; then the rows the geometry completion added.
 fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     writeln!(f, "\neffects, main cause first (the one whose removal raises the held-out error most):")?;
     if r.effects.is_empty() {
@@ -126,32 +144,51 @@ fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             "  none: no candidate lowers the held-out mean squared error by more than one standard error of the paired difference"
         )?;
     }
-    for e in &r.effects {
-        let steps = match (e.heldout_rms_before_mm, e.heldout_rms_after_mm) {
-            (Some(b), Some(a)) => format!("held-out RMS {b:.4} → {a:.4} mm"),
-            (None, Some(a)) => format!("held-out RMS → {a:.4} mm (joined replacing a larger block)"),
-            _ => "held-out RMS: not in the additive table".to_string(),
-        };
+    if !r.effects.is_empty() && !r.completed.is_empty() {
         writeln!(
             f,
-            "  {:<30} {steps} (without it: {:.4}){}",
-            e.label,
-            e.heldout_rms_without_mm,
-            if e.equivalent.is_empty() { String::new() } else { format!("; equivalent: {}", e.equivalent.join(", ")) }
-                + &if e.contained_in.is_empty() {
-                    String::new()
-                } else {
-                    format!("; contained in: {}", e.contained_in.join(", "))
-                }
-                + &if e.contains.is_empty() { String::new() } else { format!("; contains: {}", e.contains.join(", ")) }
+            "  (their values as fitted without the completion's rows, which share them out; the export carries the completed fit)"
         )?;
-        for (name, v) in &e.parameters {
-            match (&v.fixed, v.std) {
-                (Some(why), _) => writeln!(f, "      {name:<44} {:>12.6}   fixed, not fitted: {why}", v.value)?,
-                (None, Some(sd)) => writeln!(f, "      {name:<44} {:>12.6} ± {sd:.6}", v.value)?,
-                (None, None) => {
-                    writeln!(f, "      {name:<44} {:>12.6}   (no uncertainty: singular normal matrix)", v.value)?
-                }
+    }
+    for e in &r.effects {
+        effect(e, f)?;
+    }
+    if !r.completed.is_empty() {
+        writeln!(
+            f,
+            "\ngeometry completed for use (not causes found: the rows a robot used in its training frame needs beside them; in every score above and in the export):"
+        )?;
+        for e in &r.completed {
+            effect(e, f)?;
+        }
+    }
+    Ok(())
+}
+
+/// One effect: its steps, leave-one-out error, relations and parameters.
+fn effect(e: &crate::report::EffectReport, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let steps = match (e.heldout_rms_before_mm, e.heldout_rms_after_mm) {
+        (Some(b), Some(a)) => format!("held-out RMS {b:.4} → {a:.4} mm"),
+        (None, Some(a)) => format!("held-out RMS → {a:.4} mm (joined: {})", e.joined),
+        _ => "held-out RMS: not in the additive table".to_string(),
+    };
+    let list =
+        |what: &str, v: &[String]| if v.is_empty() { String::new() } else { format!("; {what}: {}", v.join(", ")) };
+    writeln!(
+        f,
+        "  {:<30} {steps} (without it: {:.4}){}{}{}",
+        e.label,
+        e.heldout_rms_without_mm,
+        list("equivalent", &e.equivalent),
+        list("contained in", &e.contained_in),
+        list("contains", &e.contains)
+    )?;
+    for (name, v) in &e.parameters {
+        match (&v.fixed, v.std) {
+            (Some(why), _) => writeln!(f, "      {name:<44} {:>12.6}   fixed, not fitted: {why}", v.value)?,
+            (None, Some(sd)) => writeln!(f, "      {name:<44} {:>12.6} ± {sd:.6}", v.value)?,
+            (None, None) => {
+                writeln!(f, "      {name:<44} {:>12.6}   (no uncertainty: singular normal matrix)", v.value)?
             }
         }
     }
@@ -169,7 +206,11 @@ fn frames_and_verdict(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     if let Some([x, y, z]) = r.frames.tool_point_mm {
-        writeln!(f, "fitted tool point (flange frame): {x:.4}, {y:.4}, {z:.4} mm")?;
+        write!(f, "fitted tool point, in the robot's tip frame (its last link): {x:.4}, {y:.4}, {z:.4} mm")?;
+        if let Some([a, b, c]) = r.frames.tool_point_joint_frame_mm {
+            write!(f, " (in the last joint's same-orientation frame: {a:.4}, {b:.4}, {c:.4} mm)")?;
+        }
+        writeln!(f)?;
     }
     if let Some([x, y, z]) = r.frames.tool_rotation_deg {
         writeln!(f, "fitted probe rotation (tool row's X-Y-Z error angles): {x:.5}, {y:.5}, {z:.5}°")?;
@@ -225,9 +266,18 @@ fn frames_and_verdict(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 /// What the data cannot identify, observability, fixed parameters.
 fn identifiability(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if !r.identifiability.not_identifiable.is_empty() {
-        writeln!(f, "\nnot identifiable from these data (not selectable; each with what to measure):")?;
+        writeln!(
+            f,
+            "\nrefused: not identifiable from these data, or fitted beyond physical sense (each with what to do):"
+        )?;
         for x in &r.identifiability.not_identifiable {
             writeln!(f, "  {:<30} {} — {}", x.effect, x.reason, x.remedy)?;
+        }
+    }
+    if !r.identifiability.skipped_candidates.is_empty() {
+        writeln!(f, "\nadding nothing identifiable beside the model they were scored with (another block's freedom):")?;
+        for x in &r.identifiability.skipped_candidates {
+            writeln!(f, "  {:<30} {}", x.effect, x.reason)?;
         }
     }
     if let Some(o) = &r.identifiability.observability {

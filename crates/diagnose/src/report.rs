@@ -68,6 +68,9 @@ pub struct EffectReport {
     pub heldout_rms_before_mm: Option<f64>,
     /// Held-out RMS after it was added, mm.
     pub heldout_rms_after_mm: Option<f64>,
+    /// The phase of the selection it joined in: "forward step", "replacing …" (parsimony), "geometry
+    /// completion", "replacing … (physics first)".
+    pub joined: String,
     /// Held-out RMS of the final model without this effect, mm (the leave-one-out table).
     pub heldout_rms_without_mm: f64,
     /// Fitted parameters.
@@ -155,13 +158,27 @@ pub struct OuterFold {
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HoldoutStats {
+    /// The nominal model, its always-estimated blocks refitted on the hold-out file.
+    pub nominal: Stats,
+    /// The selected model, its always-estimated blocks refitted on the hold-out file, the effects kept
+    /// as fitted on the training file.
+    pub selected: Stats,
+    /// The blocks refitted on the hold-out file for `nominal` and `selected` (its own tracker frame, its
+    /// own probe); empty when none is estimated, and then both protocols are one.
+    pub refitted: Vec<String>,
+    /// Both models exactly as fitted on the training file — registration and tool point included, the
+    /// model the export carries — nothing refitted: the fair use-test when the two files share one tracker
+    /// frame and probe mount (a calibrated robot is used as exported).
+    pub same_frame: HoldoutPair,
+}
+
+/// The nominal and the selected model's errors on a hold-out file under one protocol.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct HoldoutPair {
     /// The nominal model.
     pub nominal: Stats,
     /// The selected model.
     pub selected: Stats,
-    /// The blocks refitted on the hold-out file (its own tracker frame, its own probe); the effects are
-    /// kept as fitted on the training file.
-    pub refitted: Vec<String>,
 }
 
 /// The diagnosis.
@@ -191,8 +208,14 @@ pub struct Report {
     /// `Some(lever)` when measured orientations were fitted (6-D probe): every error of this report
     /// then combines position and rotation, `√(|Δp|² + (lever · |δφ|)²)` mm.
     pub orientation_lever_mm: Option<f64>,
-    /// Effects of the final model, main cause first.
+    /// The diagnosed effects of the final model (the selection's choice), main cause first.
     pub effects: Vec<EffectReport>,
+    /// The joint rows the geometry completion added beside the diagnosed effects, main first: not causes
+    /// found, but what the identified robot needs to be used in its training frame (a partial geometry
+    /// leans on the registration and the tool point, which only holds where those are refitted). Part of
+    /// the model every score, table and export of this report is of. Empty when the completion was off,
+    /// had no row to add or was significantly worse.
+    pub completed: Vec<EffectReport>,
     /// Held-out errors as effects are added, in the order chosen.
     pub additive: Vec<TableRow>,
     /// Held-out errors of the final model with each effect left out.
@@ -228,8 +251,12 @@ pub struct PoseReport {
 pub struct FittedFrames {
     /// `measurement_frame_from_base`, when the measurements are in a tracker frame.
     pub registration: Option<PoseReport>,
-    /// The tool point in the flange's same-orientation frame, mm, when it was unknown.
+    /// The tool point in the robot's tip frame (its last link as loaded: the frame a user names the
+    /// tool in), mm, when it was unknown.
     pub tool_point_mm: Option<[f64; 3]>,
+    /// The same point in the last joint's same-orientation frame (the paper's, where the tool row's
+    /// translation lives), mm.
+    pub tool_point_joint_frame_mm: Option<[f64; 3]>,
     /// The unknown probe's rotation, when orientations were measured: the tool row's error angles
     /// (X-Y-Z, degrees, eq. 19 — about the axes of the flange's same-orientation frame, before the
     /// row's nominal rotation).

@@ -2,17 +2,24 @@
 //! when it exceeds its own uncertainty over blocks of poses, and how two blocks' parameter directions
 //! relate on the data.
 
+use std::collections::HashMap;
+use std::sync::Mutex;
+
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Robot};
 use thermokin_identify::{
-    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, fit, identifiable, initial_registration, norms,
+    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, StartFrames, fit, identifiable, initial_frames, norms,
     project_out, residuals, residuals_and_jacobian,
 };
 
 use crate::config::Config;
 use crate::error::DiagnoseError;
 use crate::folds::{Folds, folds_for, forward_chained};
+use crate::plausibility::RobotScale;
 use crate::stats::Stats;
+
+/// A starting frame's key: the measurement rows, whether a registration and a tool point start.
+type StartKey = (Vec<usize>, bool, bool);
 
 /// What every held-out evaluation of one diagnosis shares: the robot, the data with their per-pose
 /// terms, the selection's folds and the blocks its gate counts.
@@ -24,6 +31,12 @@ pub(crate) struct Scorer<'a> {
     /// The block of each held-out error of `folds`, in order (the gate's unit of evidence).
     pub(crate) blocks: Vec<usize>,
     pub(crate) forward: Folds,
+    /// The robot's scale over the data, what fitted values are judged against.
+    pub(crate) scale: RobotScale,
+    /// The starting frames already computed, by measurement rows and which frame blocks they start
+    /// (every model of one fold starts from the same registration and tool point: the alternating
+    /// closed form runs once per fold, not once per candidate).
+    starts: Mutex<HashMap<StartKey, StartFrames>>,
 }
 
 /// A model scored on folds ([`Scorer::heldout_fits`]).
@@ -56,18 +69,31 @@ impl<'a> Scorer<'a> {
             folds: partition.folds,
             blocks,
             forward: forward_chained(data, config.folds),
+            scale: RobotScale::of(robot, data),
+            starts: Mutex::new(HashMap::new()),
         }
     }
 
-    /// The model of `effects`, its registration started from the measurements `rows` (Kabsch).
+    /// The model of `effects`, its registration and tool point started from the measurements `rows`
+    /// ([`initial_frames`]).
     pub(crate) fn model(&self, effects: &[Effect], rows: &[usize]) -> Result<Model, DiagnoseError> {
         let m = Model::new(self.robot, effects.to_vec())?;
-        Ok(if m.has_registration() {
-            let registration = initial_registration(self.robot, self.data, rows)?;
-            m.with_registration(registration)
-        } else {
-            m
-        })
+        let key = (rows.to_vec(), m.has_registration(), effects.contains(&Effect::ToolPoint));
+        if !(key.1 || key.2) {
+            return Ok(m);
+        }
+        let known = self.starts.lock().ok().and_then(|s| s.get(&key).copied());
+        let start = match known {
+            Some(s) => s,
+            None => {
+                let s = initial_frames(self.robot, self.data, rows, effects)?;
+                if let Ok(mut starts) = self.starts.lock() {
+                    starts.insert(key, s);
+                }
+                s
+            }
+        };
+        Ok(m.with_start(start))
     }
 
     /// Held-out statistics of a model by cross-validation on `folds`.

@@ -31,7 +31,6 @@ use thermokin_identify::{Effect, residuals_and_jacobian};
 
 use crate::config::Screen;
 use crate::error::DiagnoseError;
-use crate::plausibility::Implausible;
 use crate::scoring::Scorer;
 
 /// Ridge on the scaled normal equations, relative to their unit diagonal: keeps a candidate that
@@ -41,53 +40,34 @@ const RIDGE: f64 = 1e-9;
 /// point (an exponential drift's τ at zero amplitude) and are left out.
 const NEGLIGIBLE_COLUMN: f64 = 1e-12;
 
-/// What the screen decided for one forward step.
-pub(crate) struct Shortlist {
-    /// The candidates to fit in full, best linearised held-out error first.
-    pub(crate) keep: Vec<Effect>,
-    /// Candidates whose values one linearised step on all data puts beyond physical bounds, with the
-    /// value: refused without a full fit, which would run away (a block trading with the probe takes a
-    /// hundred LM iterations per fold to reach 16 mm on the UR10) and be refused.
-    pub(crate) runaway: Vec<(Effect, Implausible)>,
-}
-
 /// The candidates to fit in full: all when `keep` is 0 or covers them, otherwise the `keep` with the
-/// lowest linearised held-out sum of squares over the selection's folds, after refusing those whose
-/// linearised values `implausible` (the selection's [`crate::config::Plausibility`] test) rejects.
+/// lowest linearised held-out sum of squares over the selection's folds. A prediction is not a fit: the
+/// values a candidate's linearised step reaches are not judged here — those fitted in full are, on every
+/// fold ([`crate::selection::score`]), and refused with the values measured.
 pub(crate) fn shortlist(
     scorer: &Scorer<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
     screen: Screen,
-    implausible: &(dyn Fn(Effect, &[f64]) -> Option<Implausible> + Sync),
-) -> Result<Shortlist, DiagnoseError> {
+) -> Result<Vec<Effect>, DiagnoseError> {
     if screen.keep == 0 || candidates.len() <= screen.keep {
-        return Ok(Shortlist { keep: candidates.to_vec(), runaway: Vec::new() });
+        return Ok(candidates.to_vec());
     }
-    let (predicted, values) = linearised_heldout(scorer, effects, theta, candidates)?;
-    let mut runaway = Vec::new();
-    let mut order: Vec<usize> = Vec::new();
-    for (k, (&c, v)) in candidates.iter().zip(&values).enumerate() {
-        match implausible(c, v) {
-            // A prediction, not a fit — far off where the block trades with another.
-            Some(why) => runaway.push((c, why)),
-            None => order.push(k),
-        }
-    }
+    let predicted = linearised_heldout(scorer, effects, theta, candidates)?;
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
     order.sort_by(|&a, &b| predicted[a].total_cmp(&predicted[b]));
-    Ok(Shortlist { keep: order.into_iter().take(screen.keep).map(|k| candidates[k]).collect(), runaway })
+    Ok(order.into_iter().take(screen.keep).map(|k| candidates[k]).collect())
 }
 
 /// Per candidate, the held-out sum of squares (mm²) that one Gauss–Newton step from the current all-data
-/// fit on each fold's training part predicts on its test part, and its own values after that step on all
-/// data (internal units; zeros where a column carries nothing).
+/// fit on each fold's training part predicts on its test part.
 fn linearised_heldout(
     scorer: &Scorer<'_>,
     effects: &[Effect],
     theta: &[f64],
     candidates: &[Effect],
-) -> Result<(Vec<f64>, Vec<Vec<f64>>), DiagnoseError> {
+) -> Result<Vec<f64>, DiagnoseError> {
     let all = scorer.all();
     let mut joint_model: Vec<Effect> = effects.to_vec();
     joint_model.extend_from_slice(candidates);
@@ -117,23 +97,6 @@ fn linearised_heldout(
     let own: Vec<Vec<usize>> =
         candidates.iter().zip(offsets).map(|(c, &o)| (o..o + c.len()).filter_map(column).collect()).collect();
     let (n_all, g_all) = normal_equations(&a, &r, None);
-    let offsets_all = model.offsets().to_vec();
-    let values: Vec<Vec<f64>> = candidates
-        .iter()
-        .enumerate()
-        .map(|(k, c)| {
-            let o = offsets_all[effects.len() + k];
-            let idx: Vec<usize> = current.iter().chain(&own[k]).copied().collect();
-            let mut v = vec![0.0; c.len()];
-            if let Some(step) = solve(&n_all, &g_all, &idx) {
-                for (&col, s) in idx.iter().zip(&step).skip(current.len()) {
-                    let param = used[col];
-                    v[param - o] = at[param] + s / norms[param];
-                }
-            }
-            v
-        })
-        .collect();
     let stride = scorer.terms.stride();
     let mut sse = vec![0.0; candidates.len()];
     for (_, test) in &scorer.folds {
@@ -159,7 +122,7 @@ fn linearised_heldout(
                 .sum::<f64>();
         }
     }
-    Ok((sse, values))
+    Ok(sse)
 }
 
 /// `AᵀA` and `Aᵀr` over all rows, or over `rows` only.

@@ -10,11 +10,14 @@
 //! 5. **parsimony** — an exponential drift not better than its linear twin becomes linear; each block is
 //!    replaced by the smallest combination of smaller catalogue blocks it contains when that is not
 //!    significantly worse ([`crate::parsimony`]);
-//! 6. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
+//! 6. **completion** — the geometry completed for use (every eligible joint row beside the chosen
+//!    effects) unless the selected model is significantly better held out ([`crate::completion`]);
+//! 7. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
 
 use thermokin_identify::Effect;
 
 use crate::backward::backward;
+use crate::completion::complete;
 use crate::config::Config;
 use crate::eligibility::check;
 use crate::error::DiagnoseError;
@@ -30,7 +33,7 @@ pub(crate) struct Selected {
     pub(crate) catalogue: Vec<Effect>,
 }
 
-/// Phases 1–5 on the scorer's data: candidates chosen by cross-validation on its folds.
+/// Phases 1–6 on the scorer's data: candidates chosen by cross-validation on its folds.
 pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, DiagnoseError> {
     let data = scorer.data;
     let needed = config.minimum_poses();
@@ -56,9 +59,10 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, D
         skipped: Vec::new(),
         refused,
     };
-    // 3–5.
+    // 3–6.
     forward(scorer, config, &mut selection, eligible.clone())?;
     backward(scorer, config, &mut selection)?;
     parsimony(scorer, config, &mut selection, &eligible)?;
+    complete(scorer, config, &mut selection, &eligible)?;
     Ok(Selected { selection, catalogue })
 }

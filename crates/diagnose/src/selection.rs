@@ -38,6 +38,30 @@ pub(crate) struct Step {
     pub(crate) effect: Effect,
     pub(crate) before_mm: Option<f64>,
     pub(crate) after_mm: f64,
+    /// The phase it joined in.
+    pub(crate) joined: Joined,
+}
+
+/// The phase an effect joined the model in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Joined {
+    /// A forward step, passing the gate on its own.
+    Forward,
+    /// Parsimony: beside others, in the place of a larger block that contains it.
+    Replacing { larger: Effect },
+    /// The geometry completion, with the other rows it completed.
+    Completion,
+}
+
+impl Joined {
+    /// How it joined, in words, for the report.
+    pub(crate) fn describe(self) -> String {
+        match self {
+            Joined::Forward => "forward step".into(),
+            Joined::Replacing { larger } => format!("replacing {}", larger.label()),
+            Joined::Completion => "geometry completion".into(),
+        }
+    }
 }
 
 /// Where the selection stands between phases.
@@ -70,6 +94,7 @@ impl Selection {
             effect: c.effect,
             before_mm: Some(self.current.heldout_rms_mm),
             after_mm: c.stats.heldout_rms_mm,
+            joined: Joined::Forward,
         });
         self.effects.push(c.effect);
         self.current = c.stats;
@@ -123,7 +148,7 @@ pub(crate) fn score(
         .thetas
         .iter()
         .filter(|t| t.len() >= o + c.len())
-        .map(|t| implausible(scorer.robot, &t[o..o + c.len()], c, plausibility))
+        .map(|t| implausible(&scorer.scale, &t[o..o + c.len()], c, plausibility))
         .collect();
     let runaway = if !reasons.is_empty() && reasons.iter().all(Option::is_some) {
         reasons.into_iter().flatten().next()

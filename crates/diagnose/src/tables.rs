@@ -4,7 +4,7 @@
 //! scores).
 
 use rayon::prelude::*;
-use thermokin_chain::{Chain, units, xyz_angles_for_output};
+use thermokin_chain::{Chain, FixedRow, units, xyz_angles_for_output};
 use thermokin_identify::{Effect, Fit, MAX_ITERATIONS, Model, fit, observability, residuals_and_jacobian};
 
 use crate::config::Config;
@@ -15,7 +15,7 @@ use crate::report::{
 };
 use crate::scoring::{Relation, Scorer};
 use crate::select::Selected;
-use crate::selection::Selection;
+use crate::selection::{Joined, Selection};
 use crate::stats::Stats;
 
 /// What the selection reports of its choice: everything in a report but the validation of the whole
@@ -28,7 +28,10 @@ pub(crate) struct Tables {
     pub(crate) nominal: Stats,
     pub(crate) validation: String,
     pub(crate) orientation_lever_mm: Option<f64>,
+    /// The diagnosed effects' reports, main cause first.
     pub(crate) reports: Vec<EffectReport>,
+    /// The rows the geometry completion added, in the same order ([`crate::Report::completed`]).
+    pub(crate) completed: Vec<EffectReport>,
     pub(crate) additive: Vec<TableRow>,
     pub(crate) leave_one_out: Vec<TableRow>,
     pub(crate) identifiability: Identifiability,
@@ -51,21 +54,44 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
     let all = scorer.all();
     let (_, jac) = residuals_and_jacobian(robot, &model, &final_fit.theta, data, &all, &scorer.terms)?;
     let observability = observability(&jac, &final_fit.free);
-    let without = leave_one_out(scorer, &effects, sel.always)?;
+    // The diagnosed effects' values and their leave-one-out errors come from their own model: beside a
+    // complete geometry a zero offset is nearly a combination of its rows' rotations (its value there is
+    // a share, not the cause) and any one row's removal is made up by the others.
+    let completion: Vec<Effect> =
+        sel.steps.iter().filter(|s| s.joined == Joined::Completion).map(|s| s.effect).collect();
+    let diagnosed: Vec<Effect> = effects.iter().copied().filter(|e| !completion.contains(e)).collect();
+    let diagnosed_fit = if completion.is_empty() { None } else { Some(scorer.full_fit(&diagnosed)?) };
+    let in_diagnosed = leave_one_out(scorer, &diagnosed, sel.always..diagnosed.len())?;
+    let rows_at: Vec<usize> = (0..effects.len()).filter(|&k| completion.contains(&effects[k])).collect();
+    let in_completed = leave_one_out(scorer, &effects, rows_at)?;
+    let without: Vec<(usize, Stats)> = in_diagnosed
+        .into_iter()
+        .map(|(k, s)| (effects.iter().position(|e| *e == diagnosed[k]).unwrap_or(k), s))
+        .chain(in_completed)
+        .collect();
     let leave_one_out =
         without.iter().map(|(k, s)| TableRow { model: format!("all − {}", effects[*k].label()), stats: *s }).collect();
+    let fitted = Fitted { completed: (&model, &final_fit), diagnosed: diagnosed_fit.as_ref().map(|(m, f)| (m, f)) };
     let mut reports: Vec<(Effect, EffectReport)> = without
         .iter()
         .map(|(k, _)| effects[*k])
-        .zip(effect_reports(scorer, &model, &final_fit, &sel, &without, &catalogue)?)
+        .zip(effect_reports(scorer, &fitted, &sel, &without, &catalogue)?)
         .collect();
     // Main cause first: the effect whose removal hurts most.
     reports.sort_by(|(_, a), (_, b)| (b.heldout_rms_without_mm).total_cmp(&a.heldout_rms_without_mm));
     let (main_first, reports): (Vec<Effect>, Vec<EffectReport>) = reports.into_iter().unzip();
+    let completion: Vec<Effect> =
+        sel.steps.iter().filter(|s| s.joined == Joined::Completion).map(|s| s.effect).collect();
+    let mut completed = Vec::new();
+    let mut diagnosed_reports = Vec::new();
+    for (e, r) in main_first.iter().zip(reports) {
+        if completion.contains(e) { completed.push(r) } else { diagnosed_reports.push(r) }
+    }
+    let reports = diagnosed_reports;
     let nominal_model = scorer.model(&effects[..sel.always], &all)?;
     let nominal_fit = fit(robot, &nominal_model, data, &all, &scorer.terms)?;
     let (calibrated, left_out) = model.calibrated_chain(robot, &final_fit.theta)?;
-    let frames = fitted_frames(&model, &calibrated, &effects);
+    let frames = fitted_frames(&model, &calibrated, robot.chain().tool(), &effects);
     // The identified robot carries every chosen effect: the model written is the model scored.
     let identified = model.robot_model(robot, &final_fit.theta, data)?;
     debug_assert!(left_out.iter().all(|e| !e.is_static()));
@@ -83,6 +109,7 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
         validation: describe(data, config),
         orientation_lever_mm: scorer.terms.lever_mm,
         reports,
+        completed,
         leave_one_out,
         identifiability: Identifiability {
             observability,
@@ -104,9 +131,15 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
     })
 }
 
-/// The held-out statistics of the final model without each reported effect (index into `effects`).
-fn leave_one_out(scorer: &Scorer<'_>, effects: &[Effect], always: usize) -> Result<Vec<(usize, Stats)>, DiagnoseError> {
-    (always..effects.len())
+/// The held-out statistics of the model `effects` without each of the effects at `at` (indices into
+/// `effects`).
+fn leave_one_out(
+    scorer: &Scorer<'_>,
+    effects: &[Effect],
+    at: impl IntoIterator<Item = usize>,
+) -> Result<Vec<(usize, Stats)>, DiagnoseError> {
+    at.into_iter()
+        .collect::<Vec<_>>()
         .into_par_iter()
         .map(|k| {
             let rest: Vec<Effect> = effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
@@ -115,27 +148,38 @@ fn leave_one_out(scorer: &Scorer<'_>, effects: &[Effect], always: usize) -> Resu
         .collect()
 }
 
+/// Where reported parameters come from: the final model's fit, and — when the geometry was completed —
+/// the fit of the diagnosed effects alone, which their values are read from.
+struct Fitted<'m> {
+    completed: (&'m Model, &'m Fit),
+    diagnosed: Option<(&'m Model, &'m Fit)>,
+}
+
 /// Each reported effect of the final model: its parameters in report units (or why fixed), its steps,
 /// its leave-one-out error, and how it relates to the catalogue's blocks on the data.
 fn effect_reports(
     scorer: &Scorer<'_>,
-    model: &Model,
-    final_fit: &Fit,
+    fitted: &Fitted<'_>,
     sel: &Selection,
     without: &[(usize, Stats)],
     catalogue: &[Effect],
 ) -> Result<Vec<EffectReport>, DiagnoseError> {
-    let names = model.parameter_names();
     without
         .iter()
         .map(|(k, w)| {
-            let e = model.effects()[*k];
-            let o = model.offsets()[*k];
+            let e = fitted.completed.0.effects()[*k];
+            let (model, fit) = match fitted.diagnosed {
+                Some((m, f)) if m.effects().contains(&e) => (m, f),
+                _ => fitted.completed,
+            };
+            let names = model.parameter_names();
+            let at = model.effects().iter().position(|x| *x == e).unwrap_or(*k);
+            let o = model.offsets()[at];
             let parameters = (0..e.len())
                 .map(|p| {
-                    let v = final_fit.theta[o + p];
-                    let s = final_fit.std[o + p];
-                    let fixed = final_fit.fixed.iter().find(|f| f.parameter == names[o + p]).map(|f| f.reason.clone());
+                    let v = fit.theta[o + p];
+                    let s = fit.std[o + p];
+                    let fixed = fit.fixed.iter().find(|f| f.parameter == names[o + p]).map(|f| f.reason.clone());
                     let std = (fixed.is_none() && s.is_finite()).then(|| e.to_report_units(p, s).abs());
                     (names[o + p].clone(), ParameterValue { value: e.to_report_units(p, v), std, fixed })
                 })
@@ -151,6 +195,7 @@ fn effect_reports(
                 joints: e.joint().map(|j| vec![j.number()]).unwrap_or_default(),
                 heldout_rms_before_mm: step.and_then(|s| s.before_mm),
                 heldout_rms_after_mm: step.map(|s| s.after_mm),
+                joined: step.map_or_else(|| "forward step".into(), |s| s.joined.describe()),
                 heldout_rms_without_mm: w.heldout_rms_mm,
                 parameters,
                 equivalent: of(Relation::Equivalent),
@@ -162,8 +207,9 @@ fn effect_reports(
 }
 
 /// The always-estimated frames as fitted: the registration (the measurement frame's pose of the base),
-/// the tool point and the probe's rotation, where estimated.
-fn fitted_frames(model: &Model, calibrated: &Chain, effects: &[Effect]) -> FittedFrames {
+/// the tool point (in the tip frame of the robot as given, `given_tool` its last joint → tip row, and in
+/// the last joint's frame) and the probe's rotation, where estimated.
+fn fitted_frames(model: &Model, calibrated: &Chain, given_tool: &FixedRow, effects: &[Effect]) -> FittedFrames {
     FittedFrames {
         registration: model.has_registration().then(|| {
             let world_from_base = calibrated.base().pose();
@@ -175,6 +221,11 @@ fn fitted_frames(model: &Model, calibrated: &Chain, effects: &[Effect]) -> Fitte
             }
         }),
         tool_point_mm: effects.contains(&Effect::ToolPoint).then(|| {
+            let in_joint_frame = calibrated.tool().translation + calibrated.tool().error.translation;
+            let t = (given_tool.pose().inverse() * nalgebra::Point3::from(in_joint_frame)).coords;
+            [t.x, t.y, t.z]
+        }),
+        tool_point_joint_frame_mm: effects.contains(&Effect::ToolPoint).then(|| {
             let t = calibrated.tool().translation + calibrated.tool().error.translation;
             [t.x, t.y, t.z]
         }),

@@ -4,7 +4,7 @@
 
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Robot};
-use thermokin_identify::{Effect, Model, PoseTerms, Start, fit_from, initial_registration, norms, residuals};
+use thermokin_identify::{Effect, Model, PoseTerms, Start, fit_from, initial_frames, norms, residuals};
 
 use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
@@ -133,40 +133,53 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
     }
 }
 
-/// The model of `effects` fitted on all of the scorer's data, scored on `holdout`. When the registration
-/// or the tool point is always estimated, the hold-out file may be in another tracker frame or carry
-/// another probe: those blocks (only) are refitted on it, the effects kept as fitted.
+/// The model of `effects` fitted on all of the scorer's data and scored on `holdout`, under both
+/// protocols: as fitted (the training frame), and with the always-estimated frame blocks (registration,
+/// tool point) refitted on the hold-out file — which may be in another tracker frame or carry another
+/// probe — the effects kept as fitted.
 pub(crate) fn transfer_score(
     scorer: &Scorer<'_>,
     holdout: &Dataset,
     effects: &[Effect],
     config: &Config,
-) -> Result<Stats, DiagnoseError> {
+) -> Result<Transfer, DiagnoseError> {
     let robot = scorer.robot;
     let rows: Vec<usize> = (0..holdout.len()).collect();
     let terms = PoseTerms::against(robot, holdout, scorer.data, config.orientation_lever_mm);
     let (trained, f) = scorer.full_fit(effects)?;
-    let (model, theta) = if trained.effects().iter().any(|b| !b.is_reported()) {
-        let mut model = Model::new(robot, effects.to_vec())?;
-        if model.has_registration() {
-            model = model.with_registration(initial_registration(robot, holdout, &rows)?);
-        }
-        let mut theta = f.theta.clone();
-        let mut movable = vec![false; model.len()];
-        for (b, &o) in model.effects().iter().zip(model.offsets()) {
-            if !b.is_reported() {
-                // The frame blocks restart from the hold-out file's own registration.
-                theta[o..o + b.len()].fill(0.0);
-                movable[o..o + b.len()].fill(true);
-            }
-        }
-        let refit = fit_from(robot, &model, holdout, &rows, &terms, &Start::new(theta, movable))?;
-        (model, refit.theta)
-    } else {
-        (trained, f.theta)
+    let score = |model: &Model, theta: &[f64]| -> Result<Stats, DiagnoseError> {
+        let r = residuals(robot, model, theta, holdout, &rows, &terms)?;
+        Ok(Stats::of(&norms(&r, terms.stride())))
     };
-    let r = residuals(robot, &model, &theta, holdout, &rows, &terms)?;
-    Ok(Stats::of(&norms(&r, terms.stride())))
+    let same_frame = score(&trained, &f.theta)?;
+    if !trained.effects().iter().any(|b| !b.is_reported()) {
+        return Ok(Transfer { same_frame, refitted: same_frame });
+    }
+    let mut model = Model::new(robot, effects.to_vec())?;
+    if model.has_registration() || effects.contains(&Effect::ToolPoint) {
+        model = model.with_start(initial_frames(robot, holdout, &rows, effects)?);
+    }
+    let mut theta = f.theta.clone();
+    let mut movable = vec![false; model.len()];
+    for (b, &o) in model.effects().iter().zip(model.offsets()) {
+        if !b.is_reported() {
+            // The frame blocks restart from the hold-out file's own registration and tool point.
+            theta[o..o + b.len()].fill(0.0);
+            movable[o..o + b.len()].fill(true);
+        }
+    }
+    let refit = fit_from(robot, &model, holdout, &rows, &terms, &Start::new(theta, movable))?;
+    Ok(Transfer { same_frame, refitted: score(&model, &refit.theta)? })
+}
+
+/// A model's errors on a hold-out file under both protocols ([`evaluate`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transfer {
+    /// As fitted on the training file, nothing refitted (the training frame).
+    pub same_frame: Stats,
+    /// The always-estimated frame blocks (registration, tool point) refitted on the hold-out file, the
+    /// effects kept; equal to `same_frame` when none is estimated.
+    pub refitted: Stats,
 }
 
 /// The model of `effects` (the always-estimated blocks are added) fitted on all of `data` and scored on
@@ -178,7 +191,7 @@ pub fn evaluate(
     holdout: &Dataset,
     effects: &[Effect],
     config: &Config,
-) -> Result<Stats, DiagnoseError> {
+) -> Result<Transfer, DiagnoseError> {
     config.validate()?;
     let scorer = Scorer::new(robot, data, config);
     let mut all = config.setup().always_estimated(data);

@@ -65,7 +65,7 @@ pub(crate) fn warnings(robot: &Robot, data: &Dataset, config: &Config, tables: &
 /// the nested validation's mean error, any of its outer folds (also when the selection on all data
 /// chose nothing: the procedure itself is then not to be trusted on these data), or the hold-out set's.
 pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Option<&HoldoutStats>) -> Option<String> {
-    let chose = !tables.reports.is_empty();
+    let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
     let mut out = Vec::new();
     if let Some(n) = nested {
         if n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
@@ -129,26 +129,26 @@ fn verdict_sentence(config: &Config, tables: &Tables, nested: Option<&Nested>) -
             "cross-validated",
         ),
     };
-    let floor = match (config.noise_mm, tables.orientation_lever_mm, config.orientation_noise_rad) {
-        (None, ..) => None,
-        (Some(sigma), None, _) => Some((sigma * 3f64.sqrt(), format!("σ = {sigma} mm per axis"))),
-        (Some(sigma), Some(lever), Some(rot)) => Some((
-            (3.0 * sigma * sigma + 3.0 * (lever * rot).powi(2)).sqrt(),
-            // Degrees as the user gave them: the round trip through radians rounded off at 1e-9°.
-            format!("σ = {sigma} mm and {}° per axis, lever {lever} mm", (units::degrees(rot) * 1e9).round() / 1e9),
-        )),
+    let lever = tables.orientation_lever_mm;
+    let stated = match (config.noise_mm, lever, config.orientation_noise_rad) {
+        (Some(sigma), None, _) => format!("σ = {sigma} mm per axis"),
+        // Degrees as the user gave them: the round trip through radians rounded off at 1e-9°.
+        (Some(sigma), Some(lever), Some(rot)) => {
+            format!("σ = {sigma} mm and {}° per axis, lever {lever} mm", (units::degrees(rot) * 1e9).round() / 1e9)
+        }
         (Some(_), Some(_), None) => {
             return format!(
                 "{held:.4} mm RMS {how} remains (position and orientation combined); the orientation noise is not stated, so whether that is noise cannot be said"
             );
         }
+        (None, ..) => String::new(),
     };
-    match floor {
+    match config.noise_floor_mm(lever) {
         None => format!(
             "{held:.4} mm RMS {how} remains; the measurement noise is not stated, so whether that is noise or an unexplained effect cannot be said"
         ),
-        Some((floor, stated)) => {
-            if held <= 1.5 * floor {
+        Some(floor) => {
+            if config.at_the_noise(held, lever) == Some(true) {
                 format!("explained: {held:.4} mm RMS {how} is at the stated noise ({floor:.4} mm RMS for {stated})")
             } else {
                 format!(

@@ -7,7 +7,7 @@ use serde::Serialize;
 use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
-use crate::identifiability::{FixedParameter, INERT, identifiable};
+use crate::identifiability::{FixedParameter, identifiable, inert_columns};
 use crate::lm::{CONVERGED, Lm, REUSE_JACOBIAN, Rates};
 use crate::model::Model;
 use crate::residuals::weighted;
@@ -158,7 +158,9 @@ pub fn fit_from(
         if !inert {
             break;
         }
-        inert = (0..model.len()).any(|c| start.movable[c] && it.jac.col(c).norm_l2() <= INERT);
+        let norms: Vec<f64> = (0..model.len()).map(|c| it.jac.col(c).norm_l2()).collect();
+        let inert_now = inert_columns(&norms);
+        inert = (0..model.len()).any(|c| start.movable[c] && inert_now[c]);
         let decided = identifiable(&it.jac, &start.movable);
         if decided.free == free {
             break;

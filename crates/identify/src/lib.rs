@@ -33,9 +33,9 @@ pub use identifiability::{
     DEPENDENT, Dependence, DependsOn, FixedParameter, Identifiable, Observability, identifiable, observability,
     project_out,
 };
-pub use model::Model;
+pub use model::{Model, StartFrames};
 pub use predict::{ChainCache, PoseInputs};
-pub use registration::{initial_registration, kabsch};
+pub use registration::{initial_frames, initial_registration, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
 pub use sampling::{normal, random_configuration};
-pub use terms::{PoseTerms, gravity_torques, max_gravity_torque, sensor_joint};
+pub use terms::{PoseTerms, gravity_torques, max_gravity_torques, sensor_joint};

@@ -20,6 +20,7 @@ pub struct Model {
     offsets: Vec<usize>,
     len: usize,
     registration: Isometry3<f64>,
+    tool_start_mm: Vector3<f64>,
 }
 
 impl Model {
@@ -33,12 +34,23 @@ impl Model {
             offsets.push(len);
             len += e.len();
         }
-        Ok(Self { effects, offsets, len, registration: Isometry3::identity() })
+        Ok(Self { effects, offsets, len, registration: Isometry3::identity(), tool_start_mm: Vector3::zeros() })
     }
 
     /// The same model with the tracker registration starting at `registration` (identity: the base frame).
     pub fn with_registration(mut self, registration: Isometry3<f64>) -> Self {
         self.registration = registration;
+        self
+    }
+
+    /// The same model with its frame blocks starting at `start` ([`crate::initial_frames`]): the
+    /// registration, and the tool point (when the model estimates one; ignored otherwise) — the
+    /// parameters are corrections on top.
+    pub fn with_start(mut self, start: StartFrames) -> Self {
+        self.registration = start.registration;
+        if self.effects.contains(&Effect::ToolPoint) {
+            self.tool_start_mm = start.tool_point_mm;
+        }
         self
     }
 
@@ -142,11 +154,17 @@ impl Model {
     /// Its forward model equals [`Model::predict`]'s at every measurement (a test checks it to 1e-9 mm).
     pub fn robot_model(&self, robot: &Robot, theta: &[f64], data: &Dataset) -> Result<RobotModel, IdentifyError> {
         let (chain, _) = self.static_chain(robot, theta)?;
-        let down = {
-            let world_from_base_fitted = chain.base().pose().rotation;
-            let world_from_base_given = robot.chain().base().pose().rotation;
-            world_from_base_fitted * world_from_base_given.inverse() * -Vector3::z_axis()
-        };
+        let down = self.gravity_down(&chain, robot);
+        // A measured frame's rows in their simplest form: the tracker registration's start and correction,
+        // and an unknown tool point's, are one pose each — written as one (a start of −31.66 mm and a
+        // correction of +31.25 mm read as alarming numbers that cancel).
+        let mut chain = chain;
+        if self.has_registration() {
+            chain = chain.with_base(thermokin_chain::FixedRow::from_isometry(&chain.base().pose()))?;
+        }
+        if self.effects.contains(&Effect::ToolPoint) {
+            chain = chain.with_tool(thermokin_chain::FixedRow::from_isometry(&chain.tool().pose()))?;
+        }
         let dof = robot.chain().dof();
         let mut joints = vec![JointCorrection::NONE; dof];
         let mut drift = Vec::new();
@@ -232,9 +250,26 @@ impl Model {
         Ok((built, joint_err))
     }
 
-    /// `chain` with the registration's starting pose in its base row's nominal pose (its parameters are
-    /// small corrections on top, in the row's error).
+    /// Gravity's direction in the world frame of `chain` (a static chain of this model): −Z of the robot's
+    /// base as given, turned with the base row where a registration or base frame turned it — gravity
+    /// keeps its direction in the robot's base.
+    pub(crate) fn gravity_down(&self, chain: &Chain, robot: &Robot) -> nalgebra::Unit<Vector3<f64>> {
+        let world_from_base_fitted = chain.base().pose().rotation;
+        let world_from_base_given = robot.chain().base().pose().rotation;
+        world_from_base_fitted * world_from_base_given.inverse() * -Vector3::z_axis()
+    }
+
+    /// `chain` with the registration's starting pose in its base row's nominal pose and the tool point's
+    /// start in its tool row's nominal translation (their parameters are small corrections on top, in the
+    /// rows' errors).
     fn registered(&self, chain: Chain) -> Result<Chain, IdentifyError> {
+        let chain = if self.tool_start_mm == Vector3::zeros() {
+            chain
+        } else {
+            let mut tool = chain.tool().clone();
+            tool.translation += self.tool_start_mm;
+            chain.with_tool(tool)?
+        };
         if self.registration == Isometry3::identity() {
             return Ok(chain);
         }
@@ -262,4 +297,14 @@ impl Model {
         }
         rows
     }
+}
+
+/// Where a model's frame blocks start ([`crate::initial_frames`]): the registration (identity in the base
+/// frame) and the tool point's offset from the robot's tool (in the tool row's parent frame, mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StartFrames {
+    /// `tracker_from_base` at the start.
+    pub registration: Isometry3<f64>,
+    /// The tool point's start, added to the robot's tool translation (the last joint's frame), mm.
+    pub tool_point_mm: Vector3<f64>,
 }

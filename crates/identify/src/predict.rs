@@ -1,7 +1,7 @@
 //! A model's prediction of one measured pose and the Jacobian of it — the identification's
 //! per-measurement hot path (from [`thermokin_chain::Chain::parameter_jacobian`]'s rows).
 
-use nalgebra::{Matrix3, Matrix6xX, Vector3};
+use nalgebra::{Matrix3, Matrix6xX, Unit, Vector3};
 use thermokin_chain::{Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
 
 use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at};
@@ -24,6 +24,12 @@ pub struct ChainCache {
     drift_rows: Vec<(usize, ErrorParams)>,
     /// `(sin, cos)` of the joint values the chain sees.
     sin_cos: Vec<(f64, f64)>,
+    /// For a model with a compliance: the static chain (no drift) and gravity's direction in its world
+    /// frame, which the gravity torques are computed on — the law the identified robot evaluates at use
+    /// ([`Model::robot_model`]), so that its predictions are the fit's exactly — and the torques of the
+    /// current measurement.
+    gravity: Option<(Chain, Unit<Vector3<f64>>)>,
+    torques: Vec<f64>,
 }
 
 /// A drift's factor at one measurement: `s = f(t) / f(180)` and `∂s/∂τ`, for the effect at `effect` in
@@ -35,12 +41,11 @@ struct DriftFactor {
     ds_dtau: f64,
 }
 
-/// What one measurement's pose depends on besides the parameters: its gravity torques and temperature
-/// rise per joint ([`crate::PoseTerms`]), and the sines of its measured joints when they are known.
+/// What one measurement's pose depends on besides the parameters and its joints: the temperature rise
+/// per joint ([`crate::PoseTerms`]), and the sines of its measured joints when they are known. (Gravity
+/// torques are computed on the model's own chain, as the identified robot computes them.)
 #[derive(Clone, Copy, Debug)]
 pub struct PoseInputs<'a> {
-    /// Gravity torque about each joint, N·m.
-    pub torques: &'a [f64],
     /// The temperature rise each joint's drift follows, K.
     pub temp_rise: &'a [f64],
     /// `(sin q_i, cos q_i)` of the measured joints, when computed once beforehand.
@@ -81,6 +86,11 @@ impl Model {
                 let (chain, joint_err) = self.static_chain(robot, theta)?;
                 let pj = Matrix6xX::zeros(chain.parameter_layout().len());
                 let rows = self.parameter_rows(chain.dof());
+                let gravity = self
+                    .effects()
+                    .iter()
+                    .any(|e| matches!(e, Effect::JointCompliance(_)))
+                    .then(|| (chain.clone(), self.gravity_down(&chain, robot)));
                 cache.insert(ChainCache {
                     chain,
                     joint_err,
@@ -90,6 +100,8 @@ impl Model {
                     drift_scale: Vec::new(),
                     drift_rows: Vec::new(),
                     sin_cos: Vec::with_capacity(dof),
+                    gravity,
+                    torques: Vec::with_capacity(dof),
                 })
             }
         })
@@ -100,6 +112,7 @@ impl Model {
     #[inline]
     fn move_joints_and_drift(
         &self,
+        robot: &Robot,
         theta: &[f64],
         m: &Measurement,
         inputs: &PoseInputs<'_>,
@@ -108,6 +121,9 @@ impl Model {
     ) -> Result<(), IdentifyError> {
         q.clear();
         q.extend_from_slice(&m.q);
+        if let Some((chain, down)) = &cached.gravity {
+            cached.torques = thermokin_chain::gravity_torques(chain, robot.masses(), &m.q, down)?;
+        }
         let mut drift_rows = std::mem::take(&mut cached.drift_rows);
         cached.drift_scale.clear();
         drift_rows.clear();
@@ -115,7 +131,7 @@ impl Model {
             match *e {
                 Effect::JointCompliance(j) => {
                     let j = j.index();
-                    q[j] += theta[o] * inputs.torques[j];
+                    q[j] += theta[o] * cached.torques[j];
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) => {
                     let j = j.index();
@@ -160,7 +176,7 @@ impl Model {
     ) -> Result<(Vector3<f64>, Matrix3<f64>), IdentifyError> {
         let cached = self.cache(robot, theta, m.q.len(), cache)?;
         let mut q = std::mem::take(&mut cached.q);
-        let moved = self.move_joints_and_drift(theta, m, inputs, cached, &mut q);
+        let moved = self.move_joints_and_drift(robot, theta, m, inputs, cached, &mut q);
         if let Err(e) = moved {
             cached.q = q;
             return Err(e);
@@ -195,7 +211,7 @@ impl Model {
         };
         cached.q = q;
         let pose = pose?;
-        self.fill_jacobian(robot.chain(), theta, m, inputs, cached, jac);
+        self.fill_jacobian(robot.chain(), theta, m, cached, jac);
         Ok(pose)
     }
 
@@ -208,7 +224,6 @@ impl Model {
         chain: &Chain,
         theta: &[f64],
         m: &Measurement,
-        inputs: &PoseInputs<'_>,
         cached: &ChainCache,
         jac: &mut Matrix6xX<f64>,
     ) {
@@ -231,7 +246,7 @@ impl Model {
                 Effect::LinkDeviation(j) => (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, 1.0)),
                 Effect::JointCompliance(j) => {
                     let j = j.index();
-                    let scale = if chain.joints()[j].kind == JointKind::Revolute { inputs.torques[j] } else { 0.0 };
+                    let scale = if chain.joints()[j].kind == JointKind::Revolute { cached.torques[j] } else { 0.0 };
                     copy(o, layout.zero(j), scale);
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) => {

@@ -55,8 +55,7 @@ fn evaluate(
     let lever = terms.lever_mm.unwrap_or(0.0);
     for (k, &i) in rows.iter().enumerate() {
         let m = &data.measurements[i];
-        let inputs =
-            PoseInputs { torques: &terms.torques[i], temp_rise: &terms.rise[i], sin_cos: Some(&terms.sin_cos[i]) };
+        let inputs = PoseInputs { temp_rise: &terms.rise[i], sin_cos: Some(&terms.sin_cos[i]) };
         let (p, rot) = model.predict(robot, theta, m, &inputs, jac.is_some().then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;
         r.extend_from_slice(&[d.x, d.y, d.z]);

@@ -3,9 +3,11 @@
 //! stated standard deviations, the joints' sines.
 
 use nalgebra::Vector3;
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, Dataset, LinkMass, Robot};
+
+use crate::sampling::random_configuration;
 
 /// Gravity torque about each joint's axis at configuration `q`, N·m, from the link masses, gravity along
 /// the chain's world −Z ([`thermokin_chain::gravity_torques`], the law a robot file's compliance is
@@ -14,25 +16,20 @@ pub fn gravity_torques(chain: &Chain, masses: &[Option<LinkMass>], q: &[f64]) ->
     thermokin_chain::gravity_torques(chain, masses, q, &-Vector3::z_axis()).unwrap_or_else(|_| vec![0.0; chain.dof()])
 }
 
-/// The largest gravity torque about joint `j` over its robot's joint space (2,000 seeded configurations
-/// within the limits, ±π without), N·m: the scale a compliance's deflection and a torque span are judged
-/// against.
-pub fn max_gravity_torque(robot: &Robot, j: usize) -> f64 {
+/// The largest gravity torque about each joint over its robot's joint space (2,000 seeded configurations
+/// within the limits, ±π without — [`random_configuration`] with no margin), N·m: the scale a
+/// compliance's deflection and a torque span are judged against. Zero for a joint gravity never loads
+/// (a vertical first axis) or for a robot without masses.
+pub fn max_gravity_torques(robot: &Robot) -> Vec<f64> {
     let mut rng = ChaCha8Rng::seed_from_u64(0x7a0e);
-    let joints = robot.chain().joints();
-    (0..2000)
-        .map(|_| {
-            let q: Vec<f64> = joints
-                .iter()
-                .map(|jt| {
-                    let (lo, hi) =
-                        jt.limits.map_or((-std::f64::consts::PI, std::f64::consts::PI), |l| (l.lower, l.upper));
-                    rng.random_range(lo..=hi)
-                })
-                .collect();
-            gravity_torques(robot.chain(), robot.masses(), &q)[j].abs()
-        })
-        .fold(0.0, f64::max)
+    let mut largest = vec![0.0f64; robot.chain().dof()];
+    for _ in 0..2000 {
+        let q = random_configuration(robot.chain(), 0.0, &mut rng);
+        for (l, t) in largest.iter_mut().zip(gravity_torques(robot.chain(), robot.masses(), &q)) {
+            *l = l.max(t.abs());
+        }
+    }
+    largest
 }
 
 /// The joint (0-based) a temperature column belongs to, from its name without the `temp_` prefix:

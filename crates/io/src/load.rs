@@ -20,7 +20,8 @@ pub struct RobotRequest {
     pub path: PathBuf,
     /// The URDF's base and tip links.
     pub options: RobotOptions,
-    /// A tool replacing the file's: the TCP in the last joint's frame.
+    /// A tool behind the file's: the TCP in the file's tool frame (a URDF's tip link, a TOML's `[tool]`),
+    /// composed after it — the identity is the file's own tool.
     pub tool: Option<Isometry3<f64>>,
     /// A base replacing the file's: the robot base in the world frame.
     pub base: Option<Isometry3<f64>>,
@@ -67,13 +68,14 @@ pub struct LoadedRobot {
 }
 
 impl LoadedRobot {
-    /// Reads the robot, replaces its tool and base, reads the table and profile, and checks the state
-    /// against what the robot can use.
+    /// Reads the robot, puts the requested tool behind its tool frame and replaces its base, reads the
+    /// table and profile, and checks the state against what the robot can use.
     pub fn load(request: &RobotRequest) -> Result<Self, LoadError> {
         let model = read_robot_model_with(&request.path, &request.options)?;
         let mut robot = model.robot().clone();
-        if let Some(flange_from_tool) = &request.tool {
-            robot = robot.with_chain(robot.chain().with_tool(FixedRow::from_isometry(flange_from_tool))?)?;
+        if let Some(tip_from_tcp) = &request.tool {
+            let last_joint_from_tcp = robot.chain().tool().pose() * tip_from_tcp;
+            robot = robot.with_chain(robot.chain().with_tool(FixedRow::from_isometry(&last_joint_from_tcp))?)?;
         }
         if let Some(world_from_base) = &request.base {
             robot = robot.with_chain(robot.chain().with_base(FixedRow::from_isometry(world_from_base))?)?;

@@ -733,7 +733,8 @@ fn poses_in_every_orientation_convention_reach_the_same_joints() {
 #[test]
 fn tool_and_base_flags_override_the_robot_file() {
     let plain = fk_position(&["fk", "--robot", ROBOT, "--joints", "0,0,0,0,0,0", "--json"]);
-    // The TCP 100 mm further along joint 6's axis (X), and the robot base lifted by 250 mm.
+    // The TCP 100 mm along the file's tool Z (turned Ry(90°): joint 6's axis, X), and the robot base
+    // lifted by 250 mm.
     let moved = fk_position(&[
         "fk",
         "--robot",
@@ -741,12 +742,49 @@ fn tool_and_base_flags_override_the_robot_file() {
         "--joints",
         "0,0,0,0,0,0",
         "--tool-pose",
-        "125.5,0,0,0,90,0",
+        "0,0,100,0,0,0",
         "--base-pose",
         "0,0,250,0,0,0",
         "--json",
     ]);
     assert!(close(&moved, &[plain[0] + 100.0, plain[1], plain[2] + 250.0]), "{plain:?} → {moved:?}");
+}
+
+#[test]
+fn a_tool_pose_sits_behind_the_tip_link() {
+    // UR10's tool0 is turned against wrist_3 (−90° about X): a zero --tool-pose is tool0 itself, and a
+    // tool 100 mm along tool0's Z lands where tool0's Z axis points — the tip link's fixed turn followed,
+    // not replaced.
+    let ur10 = thermokin_testdata::urdf("ur10.urdf");
+    let ur10 = ur10.to_str().unwrap();
+    let q = "10,-40,30,20,50,-60";
+    let pose = |extra: &[&str]| -> serde_json::Value {
+        let mut args = vec!["fk", "--robot", ur10, "--tip", "tool0", "--joints", q, "--json"];
+        args.extend_from_slice(extra);
+        let o = thermokin(&args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        serde_json::from_str(stdout(&o).trim()).unwrap()
+    };
+    let plain = pose(&[]);
+    let zero = pose(&["--tool-pose", "0,0,0,0,0,0"]);
+    let nums = |v: &serde_json::Value, k: &str| -> Vec<f64> {
+        v[k].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    };
+    assert!(close(&nums(&plain, "position_mm"), &nums(&zero, "position_mm")), "{plain} vs {zero}");
+    assert!(close(&nums(&plain, "xyz_euler_deg"), &nums(&zero, "xyz_euler_deg")), "{plain} vs {zero}");
+    let along = nums(&pose(&["--tool-pose", "0,0,100,0,0,0"]), "position_mm");
+    let robot = thermokin_io::read_robot_with(
+        std::path::Path::new(ur10),
+        &thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) },
+    )
+    .unwrap();
+    let qs: Vec<f64> = q.split(',').map(|x| x.parse::<f64>().unwrap().to_radians()).collect();
+    let tool0 = robot.chain().tool_pose(&qs).unwrap();
+    let expected = tool0 * nalgebra::Point3::new(0.0, 0.0, 100.0);
+    assert!(
+        (nalgebra::Vector3::new(along[0], along[1], along[2]) - expected.coords).norm() < 1e-6,
+        "{along:?} vs {expected}"
+    );
 }
 
 /// The README's command block, line by line (continuations joined), without the leading `thermokin`.

@@ -32,3 +32,26 @@ pub fn drift_check(case: &str, robot: &Robot, report: &Report) {
         );
     }
 }
+
+/// The robot `diagnose --export` writes (on `robot`), read back from its text, reproduces the report's
+/// residual of every measurement of `data` (the fit on all of it) to 1e-9 mm — whatever was chosen,
+/// compliance included: the export is the model the report scores. Position-only data.
+pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &thermokin_chain::Dataset) {
+    let export = report.export_model(robot, None, "check").unwrap();
+    let text = thermokin_io::robot_model_to_toml(&export);
+    let read = thermokin_io::parse_robot_model_toml("exported.toml".as_ref(), &text).unwrap();
+    let fitted = &report.residuals_after.per_measurement_mm;
+    assert_eq!(fitted.len(), data.len());
+    let worst = data
+        .measurements
+        .iter()
+        .zip(fitted)
+        .map(|(m, r)| {
+            let state = thermokin_chain::OperatingState::at_time(m.time_min);
+            let p = read.tool_pose(&m.q, &state).unwrap().translation.vector;
+            ((p - m.position_mm).norm() - r).abs()
+        })
+        .fold(0.0, f64::max);
+    eprintln!("the export reproduces the fit's residuals to {worst:.2e} mm");
+    assert!(worst < 1e-9, "the export's residuals differ from the report's by up to {worst:.3e} mm");
+}

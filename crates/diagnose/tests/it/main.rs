@@ -3,6 +3,7 @@
 
 mod catalogue;
 mod export;
+mod frames;
 mod golden;
 mod hidden;
 mod identified;

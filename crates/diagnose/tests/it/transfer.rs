@@ -2,7 +2,7 @@
 //! fitted, series B in other arm configurations scored), and on data made by the independent tracker of
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
-use thermokin_chain::ErrorParams;
+use thermokin_chain::{ErrorParams, Robot};
 use thermokin_diagnose::{Config, FoldGrouping, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::workspace;
@@ -35,6 +35,7 @@ fn ur10_series_c_transfers_to_series_b() {
         ..Config::default()
     };
     let report = diagnose(&robot, &train, Some(&b), &config).unwrap();
+    crate::golden::export_reproduces_the_residuals(&robot, &report, &train);
     crate::golden::drift_check("ur10-c-holdout-b", &robot, &report);
     let labels: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
     let h = report.holdout.as_ref().unwrap();
@@ -147,23 +148,62 @@ fn an_effect_that_moves_with_the_probe_is_refused() {
     assert!(labels.iter().any(|l| l.starts_with("joint_offset[") || l.starts_with("link_deviation[")), "{labels:?}");
 }
 
-#[test]
-fn a_link_deviation_beyond_the_plausible_is_refused_with_its_value() {
-    // Joint 3's row moved by 8 mm — more than a working arm is off its drawing (bound 5 mm): the fit's
-    // value is reported as implausible instead of being taken as the robot's.
-    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+/// `robot` with every length (rows, centres of mass) multiplied by `size`, masses kept.
+fn halved_or_whole(robot: Robot, size: f64) -> Robot {
+    let c = robot.chain();
+    let row =
+        |r: &thermokin_chain::FixedRow| thermokin_chain::FixedRow { translation: r.translation * size, ..r.clone() };
+    let joints = c.joints().iter().map(|j| thermokin_chain::Joint { offset: j.offset * size, ..j.clone() }).collect();
+    let chain = thermokin_chain::Chain::new(row(c.base()), joints, row(c.tool())).unwrap();
+    let masses =
+        robot.masses().iter().map(|m| m.map(|m| thermokin_chain::LinkMass { com_mm: m.com_mm * size, ..m })).collect();
+    Robot::new(robot.name(), chain).with_masses(masses).unwrap()
+}
+
+/// The IRB 140 with joint 3's row moved by `dx_mm`, scaled by `size` (every length of the robot and the
+/// deviation alike), diagnosed; the refusal of `link_deviation[3]`, if any.
+fn row_three_moved(dx_mm: f64, size: f64) -> (Option<String>, Vec<String>) {
+    let robot = halved_or_whole(thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap(), size);
     let chain = robot.chain();
     let mut rows = vec![ErrorParams::ZERO; 6];
-    rows[2] = thermokin_testdata::error_mm_deg([8.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+    rows[2] = thermokin_testdata::error_mm_deg([dx_mm * size, 0.0, 0.0, 0.0, 0.0, 0.0]);
     let zeros = vec![0.0; 6];
     let truth = chain.with_errors_and_zeros(ErrorParams::ZERO, &rows, ErrorParams::ZERO, &zeros).unwrap();
     let data = measure(&truth, 120, 302, <[f64]>::to_vec);
     let config = Config { validation: Validation::SelectionOnly, ..Config::default() };
     let report = diagnose(&robot, &data, None, &config).unwrap();
-    let refused = report.identifiability.not_identifiable.iter().find(|r| r.effect == "link_deviation[3]").unwrap();
-    eprintln!("{} — {}", refused.effect, refused.reason);
-    assert!(refused.reason.contains("beyond the plausible 5 mm"), "{}", refused.reason);
-    assert!(report.effects.iter().all(|e| e.label != "link_deviation[3]"));
+    let refused = report.identifiability.not_identifiable.iter().find(|r| r.effect == "link_deviation[3]");
+    let labels = report.effects.iter().map(|e| e.label.clone()).collect();
+    (refused.map(|r| r.reason.clone()), labels)
+}
+
+#[test]
+fn a_link_deviation_beyond_the_plausible_is_refused_with_its_value_in_the_robots_scale() {
+    // Joint 3's row moved by 40 mm on an arm whose tool point reaches ~0.8 m from joint 1: beyond 2 % of
+    // the extent (the bound in the robot's own scale), the fit's value is refused with the value measured
+    // and where the bound comes from, instead of being taken as the robot's.
+    let (refused, labels) = row_three_moved(40.0, 1.0);
+    let reason = refused.expect("the 40 mm row is refused");
+    eprintln!("{reason}");
+    assert!(reason.contains("its translation fitted at 40.0"), "{reason}");
+    assert!(reason.contains("2% of the arm's") && reason.contains("mm extent"), "{reason}");
+    assert!(!labels.contains(&"link_deviation[3]".to_string()));
+    // 8 mm — a cable-driven arm's real wrist error, and 1 % of this arm's extent — is the robot's.
+    let (refused, labels) = row_three_moved(8.0, 1.0);
+    assert_eq!(refused, None);
+    assert!(labels.contains(&"link_deviation[3]".to_string()), "{labels:?}");
+}
+
+#[test]
+fn the_plausibility_bounds_scale_with_the_robot() {
+    // The same robot at half its size with the deviation halved is the same robot: judged the same.
+    // (Absolute millimetre and degree bounds refused the halved arm's rotation where they passed the
+    // whole one's.)
+    for dx in [8.0, 40.0] {
+        let (whole, _) = row_three_moved(dx, 1.0);
+        let (half, _) = row_three_moved(dx, 0.5);
+        assert_eq!(whole.is_some(), half.is_some(), "{dx} mm: {whole:?} vs {half:?}");
+    }
 }
 
 #[test]

@@ -21,12 +21,42 @@ fn wam_grid_to_random() {
     assert_eq!((grid.len(), random.len()), (216, 20));
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     let report = diagnose(&robot, &grid, Some(&random), &config).unwrap();
-    crate::golden::drift_check("wam-grid-holdout-random", &robot, &report);
     let h = report.holdout.as_ref().unwrap();
+    let labels: Vec<&str> = report.effects.iter().chain(&report.completed).map(|e| e.label.as_str()).collect();
     eprintln!(
-        "WAM random: nominal {:.4} → chosen {:.4} mm mean (refit)",
-        h.nominal.heldout_mean_mm, h.selected.heldout_mean_mm
+        "WAM random: same frame {:.4} → {:.4}, refitted {:.4} → {:.4} mm mean; {labels:?}",
+        h.same_frame.nominal.heldout_mean_mm,
+        h.same_frame.selected.heldout_mean_mm,
+        h.nominal.heldout_mean_mm,
+        h.selected.heldout_mean_mm
     );
-    // The nominal model with registration and tool refitted on the test poses: the independent 3.573.
+    for r in &report.identifiability.not_identifiable {
+        eprintln!("refused: {} — {}", r.effect, r.reason);
+    }
+    // The nominal model scored as the data's README scores it, both protocols: the independent 4.046
+    // (training registration and tool kept) and 3.573 (refitted on the 20 test poses).
+    assert!((h.same_frame.nominal.heldout_mean_mm - 4.046).abs() < 0.01, "{}", h.same_frame.nominal.heldout_mean_mm);
     assert!((h.nominal.heldout_mean_mm - 3.573).abs() < 0.01, "{}", h.nominal.heldout_mean_mm);
+    // At or below the independent full-DH fit in both protocols (3.091 same frame, 2.723 refitted; the
+    // diagnosis before issue #36: 3.779 and 3.535). The independent DH + gravity compliance fit (2.741,
+    // 2.361) is not reached: our complete geometry with every compliance, chosen on the test set itself,
+    // reaches 2.92 / 2.48 — recorded in docs/diagnosis.md.
+    assert!(h.same_frame.selected.heldout_mean_mm <= 3.091, "same frame {:.4}", h.same_frame.selected.heldout_mean_mm);
+    assert!(h.selected.heldout_mean_mm <= 2.723, "refitted {:.4}", h.selected.heldout_mean_mm);
+    // A cable-driven arm's real wrist millimetres are not refused as implausible (the absolute 5 mm bound
+    // refused link_deviation[5] at 9 mm with advice about masses and units), and every row is in the model.
+    assert!(
+        report.identifiability.not_identifiable.iter().all(|r| !r.reason.contains("beyond the plausible")),
+        "{:?}",
+        report.identifiability.not_identifiable
+    );
+    for j in 1..=7 {
+        assert!(labels.contains(&format!("link_deviation[{j}]").as_str()), "{labels:?}");
+    }
+    // Joint 1 carries no gravity torque: its compliance is refused as such, not as a 0/0 span.
+    let c1 = report.identifiability.not_identifiable.iter().find(|r| r.effect == "joint_compliance[1]").unwrap();
+    assert!(c1.reason.contains("gravity never loads joint 1"), "{}", c1.reason);
+    assert!(report.identifiability.not_identifiable.iter().all(|r| !r.reason.contains("±0.0 N·m")));
+    crate::golden::export_reproduces_the_residuals(&robot, &report, &grid);
+    crate::golden::drift_check("wam-grid-holdout-random", &robot, &report);
 }

@@ -1,0 +1,103 @@
+//! Phase 6 of the selection: the geometry completed.
+//!
+//! **Why.** The selection's folds refit everything on each training part — registration and tool
+//! included — so a model that explains part of the training data through the frame and the tool point
+//! scores as well there as one that explains it through the arm. Used as exported, in the training frame,
+//! the two differ: on the real UR10 (series C → B, one tracker frame and probe mount) the selected
+//! partial geometry misses B by 0.942 mm, the complete one by 0.632. A kinematic calibration is complete
+//! in its geometry by the practice of the trade (every joint row identified, what the data cannot tell
+//! apart fixed by the identifiability gate), so the phase proposes it: the chosen effects, and beside
+//! them every eligible joint row ([`Effect::LinkDeviation`]) not chosen — a chosen zero offset stays
+//! (the diagnosis named it) and its row's rotation about the joint axis is fixed as equivalent to it.
+//! The rows join unless the selected model is significantly better held out — the selection's own gate,
+//! the other way round — and unless a row's fitted value is implausible on all data, which leaves that
+//! row out with its refusal. The rows are reported apart from the diagnosed effects: they are what the
+//! identified robot needs to be used in its training frame, not causes found
+//! ([`crate::Report::completed`]).
+//!
+//! Where the noise is stated and the chosen effects already leave only it ([`Config::at_the_noise`]),
+//! there is nothing to complete: the phase stands aside.
+//!
+//! The diagnosis' nested validation reruns this phase inside every outer fold, so its held-out figure
+//! scores the procedure with the completion, on data the completion never saw.
+
+use thermokin_identify::{Effect, JointIndex};
+
+use crate::config::{Completion, Config};
+use crate::error::DiagnoseError;
+use crate::plausibility::{Judged, implausible};
+use crate::scoring::{Scorer, significantly_better};
+use crate::selection::{Joined, Selection, Step};
+
+/// Phase 6 as set by [`Config::completion`].
+pub(crate) fn complete(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    eligible: &[Effect],
+) -> Result<(), DiagnoseError> {
+    // Nothing to complete where the chosen effects already leave the stated noise only: the rows would
+    // be fitted to noise, and share out the diagnosed values in the export for nothing.
+    if config.completion == Completion::Off
+        || config.at_the_noise(sel.current.heldout_rms_mm, scorer.terms.lever_mm) == Some(true)
+    {
+        return Ok(());
+    }
+    complete_geometry(scorer, config, sel, eligible)
+}
+
+/// The complete geometry: the chosen effects and every other eligible row whose fitted value on all data
+/// is plausible; taken unless the selected model is significantly better.
+fn complete_geometry(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    eligible: &[Effect],
+) -> Result<(), DiagnoseError> {
+    let mut rows: Vec<Effect> = (0..scorer.robot.chain().dof())
+        .filter_map(|j| JointIndex::of(scorer.robot, j).ok())
+        .map(Effect::LinkDeviation)
+        .filter(|e| eligible.contains(e) && !sel.effects.contains(e))
+        .collect();
+    let kept = sel.effects.clone();
+    let effects = loop {
+        let mut effects = kept.clone();
+        effects.extend(rows.iter().copied());
+        let (model, full) = scorer.full_fit(&effects)?;
+        let offsets = model.offsets();
+        let refused: Vec<(Effect, _)> = effects
+            .iter()
+            .zip(offsets)
+            .filter(|(e, _)| rows.contains(e))
+            .filter_map(|(&e, &o)| {
+                implausible(&scorer.scale, &full.theta[o..o + e.len()], e, &config.plausibility).map(|why| (e, why))
+            })
+            .collect();
+        if refused.is_empty() {
+            break effects;
+        }
+        for (e, why) in refused {
+            // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
+            sel.refused.retain(|r| r.effect != e.label());
+            sel.refused.push(why.refusal(e, Judged::Fitted));
+            rows.retain(|r| *r != e);
+        }
+    };
+    if rows.is_empty() {
+        return Ok(());
+    }
+    let (stats, errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
+    if significantly_better(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
+        return Ok(());
+    }
+    // A row refused beside a partial model (its fit running away on every fold there) is plausible beside
+    // the complete geometry, and in the model: its earlier refusal no longer holds.
+    sel.refused.retain(|r| !rows.iter().any(|e| e.label() == r.effect));
+    let names: Vec<String> = rows.iter().map(Effect::label).collect();
+    let row = format!("geometry completed: + {} (not significantly worse)", names.join(", "));
+    for &e in &rows {
+        sel.steps.push(Step { effect: e, before_mm: None, after_mm: stats.heldout_rms_mm, joined: Joined::Completion });
+    }
+    sel.replace(effects, stats, errors, row);
+    Ok(())
+}
