@@ -283,7 +283,7 @@ impl PyReport {
         self.report.effects.iter().map(|e| e.label.clone()).collect()
     }
 
-    /// The joint rows the geometry completion added beside the effects for use (not causes found; in the
+    /// The joint rows and compliances the completion added beside the effects for use (not causes found; in the
     /// scores and the export).
     #[getter]
     fn completed(&self) -> Vec<String> {

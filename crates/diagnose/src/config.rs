@@ -56,10 +56,11 @@ pub struct Config {
 /// The selection's last phase ([`crate::Config::completion`]; the module `completion` gives the why).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub enum Completion {
-    /// The default: every eligible joint row joins the chosen effects unless the selected model is
-    /// significantly better held out (reported apart from them: [`crate::Report::completed`]).
+    /// The default: every eligible joint row and gravity compliance joins the chosen effects unless the
+    /// selected model is significantly better held out (reported apart from them:
+    /// [`crate::Report::completed`]).
     #[default]
-    Geometry,
+    GeometryAndCompliance,
     /// The selected effects as chosen (for comparisons: the selection before issue #36).
     Off,
 }

@@ -135,7 +135,7 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     Ok(())
 }
 
-/// The effects, main cause first, with their parameters; then the rows the geometry completion added.
+/// The effects, main cause first, with their parameters; then the rows and compliances the completion added.
 fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     writeln!(f, "\neffects, main cause first (the one whose removal raises the held-out error most):")?;
     if r.effects.is_empty() {
@@ -156,7 +156,7 @@ fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     if !r.completed.is_empty() {
         writeln!(
             f,
-            "\ngeometry completed for use (not causes found: the rows a robot used in its training frame needs beside them; in every score above and in the export):"
+            "\ncompleted for use (not causes found: the joint rows and compliances a robot used in its training frame needs beside them; in every score above and in the export):"
         )?;
         for e in &r.completed {
             effect(e, f)?;

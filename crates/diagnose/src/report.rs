@@ -210,7 +210,7 @@ pub struct Report {
     pub orientation_lever_mm: Option<f64>,
     /// The diagnosed effects of the final model (the selection's choice), main cause first.
     pub effects: Vec<EffectReport>,
-    /// The joint rows the geometry completion added beside the diagnosed effects, main first: not causes
+    /// The joint rows and compliances the completion added beside the diagnosed effects, main first: not causes
     /// found, but what the identified robot needs to be used in its training frame (a partial geometry
     /// leans on the registration and the tool point, which only holds where those are refitted). Part of
     /// the model every score, table and export of this report is of. Empty when the completion was off,

@@ -10,8 +10,9 @@
 //! 5. **parsimony** — an exponential drift not better than its linear twin becomes linear; each block is
 //!    replaced by the smallest combination of smaller catalogue blocks it contains when that is not
 //!    significantly worse ([`crate::parsimony`]);
-//! 6. **completion** — the geometry completed for use (every eligible joint row beside the chosen
-//!    effects) unless the selected model is significantly better held out ([`crate::completion`]);
+//! 6. **completion** — the model completed for use (every eligible joint row, and every compliance the
+//!    data determine, beside the chosen effects) unless the selected model is significantly better held
+//!    out ([`crate::completion`]);
 //! 7. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
 
 use thermokin_identify::Effect;

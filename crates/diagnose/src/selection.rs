@@ -49,7 +49,7 @@ pub(crate) enum Joined {
     Forward,
     /// Parsimony: beside others, in the place of a larger block that contains it.
     Replacing { larger: Effect },
-    /// The geometry completion, with the other rows it completed.
+    /// The completion for use, with the other rows it completed.
     Completion,
 }
 
@@ -59,7 +59,7 @@ impl Joined {
         match self {
             Joined::Forward => "forward step".into(),
             Joined::Replacing { larger } => format!("replacing {}", larger.label()),
-            Joined::Completion => "geometry completion".into(),
+            Joined::Completion => "completion for use".into(),
         }
     }
 }

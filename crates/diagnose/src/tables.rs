@@ -30,7 +30,7 @@ pub(crate) struct Tables {
     pub(crate) orientation_lever_mm: Option<f64>,
     /// The diagnosed effects' reports, main cause first.
     pub(crate) reports: Vec<EffectReport>,
-    /// The rows the geometry completion added, in the same order ([`crate::Report::completed`]).
+    /// The rows and compliances the completion added, in the same order ([`crate::Report::completed`]).
     pub(crate) completed: Vec<EffectReport>,
     pub(crate) additive: Vec<TableRow>,
     pub(crate) leave_one_out: Vec<TableRow>,
