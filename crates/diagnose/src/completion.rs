@@ -29,6 +29,8 @@
 //! The diagnosis' nested validation reruns this phase inside every outer fold, so its held-out figure
 //! scores the procedure with the completion, on data the completion never saw.
 
+use std::ops::Not;
+
 use thermokin_identify::{Effect, JointIndex};
 
 use crate::config::{Completion, Config};
@@ -84,7 +86,8 @@ fn complete_geometry(
             .iter()
             .zip(offsets)
             .filter(|(e, _)| rows.contains(e) && matches!(e, Effect::JointCompliance(_)))
-            .filter(|&(_, &o)| !(full.theta[o].abs() > SEEN_STANDARD_ERRORS * full.std[o]))
+            // A fixed compliance (σ NaN) is not determined either.
+            .filter(|&(_, &o)| (full.theta[o].abs() > SEEN_STANDARD_ERRORS * full.std[o]).not())
             .map(|(&e, _)| e)
             .collect();
         let refused: Vec<(Effect, _)> = effects
