@@ -124,7 +124,7 @@ impl PyMeasurements {
             })
             .collect::<PyResult<Vec<_>>>()?;
         let kinds = kinds(robot);
-        let data = Dataset { measurements, temperature_names: names };
+        let data = Dataset { measurements, temperature_names: names, source_lines: Vec::new() };
         let data =
             thermokin_io::settle_units(std::path::Path::new("arrays"), data, &kinds, format).map_err(units_error)?;
         Ok(Self { data, kinds, source: "arrays".to_string() })
@@ -372,9 +372,10 @@ impl PyReport {
 /// sensor) as for `Measurements`. Settings as the command line's flags: `noise_mm` (the tracker's σ per
 /// axis), `folds`, `folds_by` (`"neighbourhood"`, `"time"`, `"region"`, `"configuration"`), `frame`
 /// (`"base"` or `"tracker"`: estimate the measurement frame), `tool` (`"known"` or `"unknown"`:
-/// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`. Runs without the GIL.
+/// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`, `outliers` (`"exclude"`:
+/// gross errors listed and left out, or `"keep"`). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -390,6 +391,7 @@ pub fn diagnose(
     tool: Option<&str>,
     orientation_lever_mm: Option<f64>,
     orientation_noise_deg: Option<f64>,
+    outliers: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -418,6 +420,7 @@ pub fn diagnose(
         folds: folds.unwrap_or(defaults.folds),
         frame: choice("frame", frame, defaults.frame)?,
         tool: choice("tool", tool, defaults.tool)?,
+        outliers: choice("outliers", outliers, defaults.outliers)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -167,6 +167,25 @@ def test_diagnose_takes_arrays_as_it_takes_a_measurement_set(irb140):
         thermokin.diagnose(irb140, data, data.xyz)
 
 
+def test_gross_errors_are_listed_by_line_and_left_out_unless_kept(irb140, tmp_path):
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=120, minutes=0)
+    xyz = data.xyz.copy()
+    xyz[[10, 70]] += [[4.0, 0.0, 0.0], [0.0, -6.0, 2.0]]
+    path = tmp_path / "m.csv"
+    thermokin.Measurements(irb140, data.q, xyz).to_csv(path)
+    report = thermokin.diagnose(irb140, thermokin.Measurements.from_csv(path, irb140), noise_mm=0.005)
+    flagged = report.to_dict()["outliers"]
+    # The header is line 1: rows 10 and 70 (0-based) are lines 12 and 72.
+    assert [o["line"] for o in flagged] == [12, 72]
+    assert report.to_dict()["outlier_screen"]["excluded"] is True
+    assert report.effects[0] == "joint_offset[2]"
+    kept = thermokin.diagnose(irb140, xyz=xyz, data=data.q, noise_mm=0.005, outliers="keep").to_dict()
+    assert [o["measurement"] for o in kept["outliers"]] == [11, 71] and kept["outliers"][0]["line"] is None
+    assert kept["outlier_screen"]["excluded"] is False
+    with pytest.raises(InputError, match="outliers"):
+        thermokin.diagnose(irb140, data, outliers="drop")
+
+
 def test_compensate_writes_the_command_lines_joints(root, cli, tmp_path):
     scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
     table = root / "fixtures" / "paper" / "authors" / "deformations-case-study.csv"

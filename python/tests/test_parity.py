@@ -101,8 +101,10 @@ def test_compensate_field_by_field(root, cli, warm, tmp_path):
     "flags,kw",
     [
         ([], {}),
-        (["--frame", "tracker", "--tool", "unknown", "--folds", "4", "--folds-by", "time", "--noise", "0.005"],
-         {"frame": "tracker", "tool": "unknown", "folds": 4, "folds_by": "time", "noise_mm": 0.005}),
+        (["--frame", "tracker", "--tool", "unknown", "--folds", "4", "--folds-by", "time", "--noise", "0.005",
+          "--outliers", "keep"],
+         {"frame": "tracker", "tool": "unknown", "folds": 4, "folds_by": "time", "noise_mm": 0.005,
+          "outliers": "keep"}),
     ],
 )
 def test_diagnose_field_by_field(root, cli, tmp_path, flags, kw):

@@ -195,6 +195,7 @@ def diagnose(
     tool: str | None = None,
     orientation_lever_mm: float | None = None,
     orientation_noise_deg: float | None = None,
+    outliers: str | None = None,
 ) -> Report: ...
 def compensate(
     robot: Robot,

@@ -29,6 +29,10 @@ pub struct Dataset {
     pub measurements: Vec<Measurement>,
     /// Names of the temperature columns.
     pub temperature_names: Vec<String>,
+    /// Where each measurement was read: its 1-based line in the measurements file (the header is line
+    /// 1; of the poses file when joints and poses are kept apart), one per measurement — empty when the
+    /// set was not read from a file. What a report names a measurement by ([`Dataset::line_of`]).
+    pub source_lines: Vec<usize>,
 }
 
 impl Dataset {
@@ -37,7 +41,17 @@ impl Dataset {
         Dataset {
             measurements: rows.iter().filter_map(|&i| self.measurements.get(i).cloned()).collect(),
             temperature_names: self.temperature_names.clone(),
+            source_lines: if self.source_lines.len() == self.measurements.len() {
+                rows.iter().filter_map(|&i| self.source_lines.get(i).copied()).collect()
+            } else {
+                Vec::new()
+            },
         }
+    }
+
+    /// The file line measurement `i` (0-based) was read from, when the set was read from a file.
+    pub fn line_of(&self, i: usize) -> Option<usize> {
+        (self.source_lines.len() == self.measurements.len()).then(|| self.source_lines.get(i).copied()).flatten()
     }
 
     /// Number of measurements.

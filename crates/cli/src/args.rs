@@ -6,7 +6,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use thermokin_compensate::{Accumulation, Controller, Cycle, ResultsFormat};
 use thermokin_deform::{SemanticsKind, TimeProfile};
-use thermokin_diagnose::{Config, FoldGrouping, SimulationConfig};
+use thermokin_diagnose::{Config, FoldGrouping, Outliers, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
 
@@ -337,6 +337,10 @@ pub struct DiagnoseArgs {
     /// was fitted on and the gate counts blocks, not poses.
     #[arg(long, value_parser = choice(FoldGrouping::CHOICES), default_value_t = Config::default().folds_by)]
     pub folds_by: FoldGrouping,
+    /// Gross errors (a beam break, a knocked probe): listed by file line (JSON `outliers`) and left out
+    /// of every fit and figure, or kept.
+    #[arg(long, value_parser = choice(Outliers::CHOICES), default_value_t = Config::default().outliers)]
+    pub outliers: Outliers,
     /// Unit of the measurement files' revolute joint columns (default: degrees, refused when every value
     /// lies within ±2π — joints written in radians; give deg to read them as degrees anyway).
     #[arg(long, value_parser = choice(JointUnits::CHOICES))]

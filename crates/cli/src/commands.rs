@@ -70,8 +70,8 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
     Ok(exit::OK)
 }
 
-/// `fk --joints-file`: one output row per input row — its pose, or why it has none — the state of each
-/// row its own `time_min` / `temp_*` columns when it has them, the flags' otherwise.
+/// `fk --joints-file`: one output row per input row — its pose, or why it has none — in the row's own
+/// state (`time_min` / `temp_*`) or the flags'.
 fn fk_rows(path: &std::path::Path, model: &RobotModel, flags: &OperatingState, json: bool) -> Result<u8, Failure> {
     let chain = model.robot().chain();
     let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
@@ -150,9 +150,8 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
 }
 
-/// `ik --poses-file`: a targets file (any of its orientation conventions, its own states), one output row
-/// per input row — the joints to command and the status checked by FK, or why the row has none — each
-/// solved from `seed`.
+/// `ik --poses-file`: one output row per target row (its conventions, its states), solved from `seed` —
+/// the joints to command and the status checked by FK, or why it has none.
 fn ik_rows(
     path: &std::path::Path,
     model: &RobotModel,

@@ -30,8 +30,7 @@ fn setting_error(e: DiagnoseError) -> Failure {
     Failure::input(anyhow!("{flag} {rule}"))
 }
 
-/// A measurement file's unit the numbers contradict, in the words of the command line: the flag that
-/// states it.
+/// A measurement file's unit the numbers contradict, in the command line's words: the flag to state it.
 fn units_error(e: IoError) -> Failure {
     let IoError::UnitsUnclear { unclear, .. } = &e else { return Failure::input(e) };
     let flag = match unclear {
@@ -45,11 +44,8 @@ fn units_error(e: IoError) -> Failure {
     Failure::input(anyhow!("{e}: {flag}"))
 }
 
-/// The diagnosis with progress on stderr, one step per stage — the selection, each outer fold of the
-/// nested validation, the hold-out set: on a terminal a bar once the run has lasted a second (the one rule
-/// of every command's progress), otherwise a line per stage with an estimate of the time left (a log
-/// file, CI), nothing with --quiet. Stages cost about the same, so the estimate is the mean time per stage
-/// so far times the stages left.
+/// The diagnosis with progress on stderr, a step per stage (selection, outer folds, hold-out): a bar on a
+/// terminal, else a line per stage with the time left (mean per stage × stages left); none with --quiet.
 fn run_with_progress(
     a: &DiagnoseArgs,
     robot: &Robot,
@@ -109,6 +105,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     }
     let config = Config {
         folds_by: a.folds_by,
+        outliers: a.outliers,
         noise_mm: a.noise,
         orientation_lever_mm: a.orientation_lever,
         orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),

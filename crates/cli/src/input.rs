@@ -82,8 +82,7 @@ pub fn joints(chain: &Chain, flag: &str, text: &str) -> Result<Vec<f64>, Failure
     })
 }
 
-/// A pose flag ([`thermokin_io::parse_pose`]): `x,y,z` (mm) and the orientation in `convention`, or a
-/// JSON pose.
+/// A pose flag ([`thermokin_io::parse_pose`]): `x,y,z` (mm) and orientation in `convention`, or JSON.
 pub fn pose(text: &str, flag: &str, convention: Orientation) -> Result<Isometry3<f64>, Failure> {
     thermokin_io::parse_pose(text, convention).map_err(|m| Failure::input(anyhow!("--{flag}: {m}")))
 }

@@ -2,8 +2,7 @@
 //! sim-to-real diagnosis, and the reproduction of the paper's case studies. It parses, calls the
 //! libraries and prints: every default, rule and refusal is a library's.
 
-/// Prints one line of a command's results on standard output ([`out::line`]); a closed pipe ends the
-/// command quietly.
+/// Prints one line of results on standard output ([`out::line`]); a closed pipe ends the command quietly.
 macro_rules! say {
     ($($arg:tt)*) => {
         $crate::out::line(format_args!($($arg)*))?
@@ -37,8 +36,7 @@ pub mod exit {
     pub const DRIFT: u8 = 4;
     /// The diagnosis does not transfer: the export was refused (the report says why).
     pub const REFUSED: u8 = 5;
-    /// Standard output was closed before the results were written (`… | head -1`): as a process ended by
-    /// SIGPIPE reports it, and nothing is said.
+    /// Standard output closed early (`… | head -1`): reported as SIGPIPE would, and nothing is said.
     pub const CLOSED_PIPE: u8 = 141;
 }
 

@@ -51,7 +51,28 @@ pub struct Config {
     pub screen: Screen,
     /// Whether the selection ends by completing the geometry ([`Completion`]).
     pub completion: Completion,
+    /// What becomes of measurements flagged as gross errors ([`Outliers`]).
+    pub outliers: Outliers,
 }
+
+/// What becomes of measurements the screen for gross errors flags (the module `outliers` gives the rule).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Outliers {
+    /// The default: listed in the report and kept out of every fit, score and table.
+    #[default]
+    Exclude,
+    /// Listed in the report, and kept in the data as measured.
+    Keep,
+}
+
+thermokin_chain::choices!(
+    Outliers,
+    "outlier handling",
+    [
+        ("exclude", "flagged gross errors are listed and left out of every fit and figure", Outliers::Exclude),
+        ("keep", "flagged gross errors are listed and kept in the data", Outliers::Keep),
+    ]
+);
 
 /// The selection's last phase ([`crate::Config::completion`]; the module `completion` gives the why).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -200,6 +221,7 @@ impl Default for Config {
             plausibility: Plausibility::default(),
             screen: Screen::default(),
             completion: Completion::default(),
+            outliers: Outliers::default(),
         }
     }
 }

@@ -6,6 +6,7 @@ use thermokin_chain::{Dataset, Robot};
 
 use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
+use crate::outliers::screen;
 use crate::report::{HoldoutPair, HoldoutStats, Report};
 use crate::scoring::Scorer;
 use crate::select::select;
@@ -89,6 +90,22 @@ pub fn diagnose_with_progress(
         progress(Progress { done, total, stage });
     };
     check_joint_counts(robot, data, holdout)?;
+    // Gross errors first: everything after works on the measurements the screen keeps.
+    let screened = screen(robot, data, config)?;
+    let kept_data;
+    let data = if screened.kept.len() == data.len() {
+        data
+    } else {
+        kept_data = data.subset(&screened.kept);
+        if kept_data.len() < config.minimum_poses() {
+            return Err(DiagnoseError::TooFewMeasurements {
+                count: kept_data.len(),
+                folds: config.folds,
+                needed: config.minimum_poses(),
+            });
+        }
+        &kept_data
+    };
     let scorer = Scorer::new(robot, data, config);
     let tables = tables(&scorer, config, select(&scorer, config)?)?;
     tell("selection on all measurements".into());
@@ -121,6 +138,8 @@ pub fn diagnose_with_progress(
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     Ok(Report {
+        outliers: screened.outliers,
+        outlier_screen: screened.screen,
         nominal: tables.nominal,
         nested,
         holdout,

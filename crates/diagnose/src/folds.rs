@@ -259,6 +259,7 @@ mod tests {
                 .map(|i| at(&[(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos(), i as f64 * 0.01]))
                 .collect(),
             temperature_names: Vec::new(),
+            source_lines: Vec::new(),
         };
         let p = neighbourhood_folds(&data, 5, 3);
         let mut tested = vec![0; 200];

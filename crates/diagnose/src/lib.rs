@@ -3,7 +3,8 @@
 //! judged on held-out data.
 //!
 //! The model of effects, its fit and identifiability are `thermokin-identify`'s. The diagnosis stacks,
-//! from the bottom: its settings ([`Config`]) and errors; folds and the held-out scoring of a model, with
+//! from the bottom: its settings ([`Config`]) and errors; the screen for gross errors, which decides the
+//! measurements everything above works on; folds and the held-out scoring of a model, with
 //! the gate that accepts a gain only beyond its own uncertainty; eligibility (what the data cannot pin
 //! down), plausibility and the screen; the selection's phases (forward, backward, parsimony) and the
 //! tables of its choice; the validation of the whole procedure on data it never saw (nested, a hold-out
@@ -18,6 +19,7 @@ mod eligibility;
 mod error;
 mod folds;
 mod forward;
+mod outliers;
 mod parsimony;
 mod plausibility;
 mod regions;
@@ -33,13 +35,14 @@ mod tables;
 mod validation;
 mod verdict;
 
-pub use config::{Completion, Config, Eligibility, FoldGrouping, Plausibility, Screen, Validation};
+pub use config::{Completion, Config, Eligibility, FoldGrouping, Outliers, Plausibility, Screen, Validation};
 pub use diagnosis::{Progress, diagnose, diagnose_with_progress};
 pub use error::DiagnoseError;
+pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};
 pub use render::ReportText;
 pub use report::{
-    Breakdown, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,
-    ParameterValue, PoseReport, Refusal, Report, Skipped, TableRow,
+    Breakdown, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold, Outlier,
+    OutlierScreen, ParameterValue, PoseReport, Refusal, Report, ScaleSource, ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::Stats;

@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use crate::report::Report;
+use crate::report::{Report, ScaleSource, ScreenModel};
 use crate::stats::Stats;
 
 /// The text rendering of a report ([`Report::text`]): held-out errors (nested, hold-out set, the
@@ -38,10 +38,45 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
             "6-D measurements: orientations fitted with positions; every error below is √(|Δp|² + ({lever} mm · |δφ|)²), {lever} mm the orientation lever"
         )?;
     }
+    gross_errors(r, f)?;
     heldout(r, f)?;
     effects(r, f)?;
     frames_and_verdict(r, f)?;
     identifiability(r, f)
+}
+
+/// The screen for gross errors: what it judged against, and every flagged measurement by its line.
+fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+    let s = &r.outlier_screen;
+    let model = match s.model {
+        ScreenModel::FullGeometry => "the full geometry with gravity compliance",
+        ScreenModel::FrameOnly => "the registration and tool freedoms alone (too few poses for the full geometry)",
+    };
+    let scale = match s.scale_from {
+        ScaleSource::StatedNoise => {
+            format!("{:.4} mm per axis (the stated noise; the residuals' is smaller)", s.scale_mm)
+        }
+        ScaleSource::Residuals => {
+            format!("{:.4} mm per axis (the residuals' robust scale, estimated from the data)", s.scale_mm)
+        }
+    };
+    let fate = if s.excluded { "left out of everything below" } else { "kept in the data (as asked)" };
+    match r.outliers.len() {
+        0 => writeln!(f, "gross errors: none beyond {:.4} mm against {model}; scale {scale}", s.threshold_mm),
+        n => {
+            let poses = if n == 1 { "measurement" } else { "measurements" };
+            writeln!(
+                f,
+                "gross errors: {n} {poses} beyond {:.4} mm against {model}, {fate}; scale {scale}:",
+                s.threshold_mm
+            )?;
+            for o in &r.outliers {
+                let at = o.line.map_or(format!("measurement {}", o.measurement), |l| format!("line {l}"));
+                writeln!(f, "  {at:<16} residual {:.4} mm", o.residual_mm)?;
+            }
+            Ok(())
+        }
+    }
 }
 
 /// One row of held-out statistics.

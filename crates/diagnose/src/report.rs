@@ -11,6 +11,54 @@ use crate::error::DiagnoseError;
 use crate::regions::{arm_branches, workspace_quadrants};
 use crate::stats::Stats;
 
+/// A measurement flagged as a gross error by the screen (the module `outliers` gives the rule).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Outlier {
+    /// Its 1-based line in the measurements file (the header is line 1), when it was read from one.
+    pub line: Option<usize>,
+    /// Its 1-based position among the measurements.
+    pub measurement: usize,
+    /// Its residual against the screening model, mm (position and weighted rotation combined with a
+    /// 6-D probe).
+    pub residual_mm: f64,
+}
+
+/// Which model screened for gross errors.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ScreenModel {
+    /// The always-estimated blocks, every joint row and every loaded joint's gravity compliance.
+    FullGeometry,
+    /// The always-estimated blocks alone: too few measurements for the full geometry to leave residual
+    /// freedom.
+    FrameOnly,
+}
+
+/// Where the screen's residual scale comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ScaleSource {
+    /// Estimated from the screening model's residuals (robustly).
+    Residuals,
+    /// The stated noise, larger than the residuals' robust scale.
+    StatedNoise,
+}
+
+/// How the screen for gross errors judged.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct OutlierScreen {
+    /// The model whose residuals were judged.
+    pub model: ScreenModel,
+    /// The residual scale per axis, mm: robust (`1.4826 · median |r|`) over every measurement, or
+    /// the stated noise where that is larger. With the tracker's per-point standard deviations, the
+    /// residuals are first divided by each point's over their mean: the scale is then the mean point's.
+    pub scale_mm: f64,
+    /// Where the scale comes from.
+    pub scale_from: ScaleSource,
+    /// The residual beyond which a measurement is flagged, mm.
+    pub threshold_mm: f64,
+    /// Whether the flagged measurements were left out of everything else in the report.
+    pub excluded: bool,
+}
+
 /// A candidate the data cannot pin down: not selectable, reported with what to measure.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Refusal {
@@ -184,6 +232,10 @@ pub struct HoldoutPair {
 /// The diagnosis.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Report {
+    /// Measurements flagged as gross errors, in file order (empty when none was).
+    pub outliers: Vec<Outlier>,
+    /// How they were found.
+    pub outlier_screen: OutlierScreen,
     /// The nominal model (with the always-estimated blocks), the selection's cross-validation.
     pub nominal: Stats,
     /// The held-out error of the whole procedure, by nested cross-validation (the honest figure; `None`

@@ -361,7 +361,7 @@ mod convergence {
                 }
             })
             .collect();
-        let data = Dataset { measurements, temperature_names: Vec::new() };
+        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
         let robot = Robot::new("IRB 140", nominal);
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let model = Model::new(&robot, vec![Effect::JointOffset(joint(1)), Effect::LinkDeviation(joint(3))]).unwrap();

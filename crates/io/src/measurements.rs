@@ -188,7 +188,7 @@ pub fn parse_measurements_with(
                 temps: Vec::new(),
             })
             .collect();
-        return Ok(Dataset { measurements, temperature_names: Vec::new() });
+        return Ok(Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() });
     }
     let recs = records_any_dialect(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
@@ -349,16 +349,19 @@ fn assemble<'r>(
     empty: IoError,
 ) -> Result<Dataset, IoError> {
     let mut measurements = Vec::new();
+    // The measured pose's line: where a gross error of the tracker is found in its file.
+    let mut source_lines = Vec::new();
     for pair in pairs {
         let (j, p) = pair?;
         let (time_min, q, temps) = joints.read(j)?;
         let (position_mm, orientation, position_std_mm) = poses.read(p)?;
         measurements.push(Measurement { time_min, q, position_mm, orientation, position_std_mm, temps });
+        source_lines.push(p.line);
     }
     if measurements.is_empty() {
         return Err(empty);
     }
-    Ok(Dataset { measurements, temperature_names: joints.temperature_names() })
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines })
 }
 
 /// Where a file's joint-side columns are: `q1..qn`, `time_min`, `temp_<name>`.

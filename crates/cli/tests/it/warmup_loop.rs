@@ -56,7 +56,7 @@ fn day1(nominal: &Chain, truth: &Truth, n: usize, seed: u64) -> Dataset {
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: vec!["j2".into(), "j3".into()] }
+    Dataset { measurements, temperature_names: vec!["j2".into(), "j3".into()], source_lines: Vec::new() }
 }
 
 /// Runs the loop; returns (compensated RMS, uncompensated RMS), mm.

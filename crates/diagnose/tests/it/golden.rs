@@ -41,10 +41,13 @@ pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &th
     let text = thermokin_io::robot_model_to_toml(&export);
     let read = thermokin_io::parse_robot_model_toml("exported.toml".as_ref(), &text).unwrap();
     let fitted = &report.residuals_after.per_measurement_mm;
-    assert_eq!(fitted.len(), data.len());
-    let worst = data
-        .measurements
-        .iter()
+    // The fit is on the measurements the screen for gross errors kept.
+    let gross: Vec<usize> = report.outliers.iter().map(|o| o.measurement - 1).collect();
+    let kept: Vec<_> =
+        data.measurements.iter().enumerate().filter(|(i, _)| !gross.contains(i)).map(|(_, m)| m).collect();
+    assert_eq!(fitted.len(), kept.len());
+    let worst = kept
+        .into_iter()
         .zip(fitted)
         .map(|(m, r)| {
             let state = thermokin_chain::OperatingState::at_time(m.time_min);

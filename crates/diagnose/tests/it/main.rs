@@ -5,6 +5,7 @@ mod catalogue;
 mod export;
 mod frames;
 mod golden;
+mod gross;
 mod hidden;
 mod identified;
 mod payload;

@@ -31,7 +31,7 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new() }
+    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
 }
 
 /// Orientation noise of [`measure_6d`], degrees per axis.
@@ -66,7 +66,7 @@ pub fn measure_6d(
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new() }
+    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
 }
 
 /// `n` poses as [`random_q`] draws them, but joint `joint` (0-based) kept between `lo_deg` and `hi_deg`
@@ -94,5 +94,5 @@ pub fn measure_short_arc(
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new() }
+    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
 }

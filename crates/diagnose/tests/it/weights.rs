@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Dataset, Measurement};
-use thermokin_diagnose::{Config, Validation, diagnose};
+use thermokin_diagnose::{Config, Outliers, Validation, diagnose};
 use thermokin_testdata::workspace;
 
 use crate::tracker::{gauss, random_q};
@@ -33,12 +33,15 @@ fn data(stated: bool) -> (thermokin_chain::Robot, Dataset) {
             }
         })
         .collect();
-    (robot, Dataset { measurements, temperature_names: Vec::new() })
+    (robot, Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() })
 }
 
 #[test]
 fn stated_standard_deviations_weight_the_fit() {
-    let config = Config { validation: Validation::SelectionOnly, ..Config::default() };
+    // Every point kept: the comparison is of the fits' weighting. (The screen for gross errors is
+    // checked below: with the σ stated it flags none of the noisy points; without, it flags them, ten
+    // times the bulk's noise.)
+    let config = Config { validation: Validation::SelectionOnly, outliers: Outliers::Keep, ..Config::default() };
     let offset = |stated: bool| {
         let (robot, data) = data(stated);
         let report = diagnose(&robot, &data, None, &config).unwrap();
@@ -67,4 +70,17 @@ fn standard_deviations_round_trip_and_must_be_positive() {
     let bad = "q1,q2,q3,q4,q5,q6,x,y,z,std_x,std_y,std_z\n0,0,0,0,0,0,1,2,3,0.01,0,0.01\n";
     let err = thermokin_io::parse_measurements(std::path::Path::new("m.csv"), bad, &kinds).unwrap_err().to_string();
     assert!(err.contains("m.csv:2: std_y") && err.contains("positive"), "{err}");
+}
+
+#[test]
+fn stated_standard_deviations_keep_noisy_points_from_being_flagged() {
+    // The noisy third is measured as stated: judged against its own σ, none is a gross error. Without
+    // the σ, the same points are ten times the bulk's noise, and the screen flags most of them.
+    let config = Config { validation: Validation::SelectionOnly, ..Config::default() };
+    let (robot, stated) = data(true);
+    assert!(diagnose(&robot, &stated, None, &config).unwrap().outliers.is_empty());
+    let (robot, unstated) = data(false);
+    let flagged = diagnose(&robot, &unstated, None, &config).unwrap().outliers;
+    assert!(flagged.iter().all(|o| (o.measurement - 1) % 3 == 0), "only the noisy points: {flagged:?}");
+    assert!(flagged.len() > 25, "{} of the 50 noisy points", flagged.len());
 }

@@ -116,8 +116,14 @@ fn tracker_exports_in_every_dialect_and_unit_read_alike() {
     let semicolons = "time_min;q1;q2;x;y;z;temp_j1\r\n0;90;250;1,5;2;3;20,25\r\n5;-45;10,5;4;-5,125;6;21\r\n";
     assert_eq!(parse_measurements(path, semicolons, &kinds).unwrap(), reference);
     // A whitespace-separated tracker report (tabs and runs of spaces), with a comment line.
+    // Its measurements keep their own file lines (the comment is line 1, the header line 2).
     let spaces = "# exported by the tracker\ntime_min\tq1  q2 x y z temp_j1\n0 90 250   1.5 2 3 20.25\n5\t-45 10.5 4 -5.125 6 21\n";
-    assert_eq!(parse_measurements(path, spaces, &kinds).unwrap(), reference);
+    let from_spaces = parse_measurements(path, spaces, &kinds).unwrap();
+    assert_eq!(
+        (&from_spaces.measurements, &from_spaces.temperature_names),
+        (&reference.measurements, &reference.temperature_names)
+    );
+    assert_eq!((from_spaces.source_lines, &reference.source_lines), (vec![3, 4], &vec![2, 3]));
     // Radians by flag: the revolute column only (the prismatic one stays millimetres).
     let radians = format!(
         "time_min,q1,q2,x,y,z,temp_j1\n0,{},250,1.5,2,3,20.25\n5,{},10.5,4,-5.125,6,21\n",
