@@ -281,6 +281,18 @@ fn bench(json: bool) -> Result<()> {
             300.0,
         ),
         (
+            "diagnose_wam_real_s",
+            scale["real_wam"]["seconds"].as_f64(),
+            "the real Barrett WAM: 216 grid poses nested, 20 random held out",
+            5.0,
+        ),
+        (
+            "diagnose_ur10_real_s",
+            scale["real_ur10"]["seconds"].as_f64(),
+            "the real UR10: series C (2,773 poses) nested, series B held out",
+            15.0,
+        ),
+        (
             "transient_10050_s",
             mean_ns("program/transient_10050").map(|n| n / 1e9),
             "10,050 targets, warm-started (paper's 200 min)",

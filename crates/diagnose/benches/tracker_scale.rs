@@ -2,14 +2,16 @@
 //! joint offset, a link deviation, gravity compliance and a linear thermal drift, measured at 3,000 and
 //! 12,000 poses over a 240-minute warm-up with two joint temperature columns, diagnosed with nested
 //! validation (5 outer folds, the default). Timed once per size (minutes of work do not fit criterion's
-//! sampling); the process's peak resident memory is read after each size. Written to
-//! `target/criterion/diagnose_scale.json` for `cargo xtask bench`.
+//! sampling); the process's peak resident memory is read after each size. Then the real sets as a user
+//! runs them, each timed once: the Barrett WAM (grid, the random poses held out; issue #36's goal ≤ 5 s)
+//! and the UR10 (series C, series B held out). Written to `target/criterion/diagnose_scale.json` for
+//! `cargo xtask bench`.
 #![allow(missing_docs, clippy::unwrap_used)] // a bench binary; it unwraps to fail.
 
 use std::time::Instant;
 
 use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, simulate};
-use thermokin_identify::{DriftShape, Effect, JointIndex};
+use thermokin_identify::{DriftShape, Effect, FrameMode, JointIndex, ToolMode};
 
 fn main() {
     // `cargo bench` passes `--bench`; anything else (`cargo test --benches`) runs a tiny size only.
@@ -53,6 +55,26 @@ fn main() {
             .insert(format!("{poses}"), serde_json::json!({"seconds": seconds, "peak_rss_mib": rss, "chosen": chosen}));
     }
     if full {
+        for (name, urdf, tip, train, test) in [
+            ("wam", "fixtures/real/jacobi-wam/wam.urdf", None, "jacobi-wam/wam-grid.csv", "jacobi-wam/wam-random.csv"),
+            ("ur10", "fixtures/urdf/ur10.urdf", Some("tool0"), "ur10-ipa/series_C.csv", "ur10-ipa/series_B.csv"),
+        ] {
+            let options = thermokin_io::RobotOptions { base: None, tip: tip.map(String::from) };
+            let robot = thermokin_io::read_robot_with(&root.join(urdf), &options).unwrap();
+            let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+            let read = |f: &str| thermokin_io::read_measurements(&root.join("fixtures/real").join(f), &kinds).unwrap();
+            let (train, test) = (read(train), read(test));
+            let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
+            let t0 = Instant::now();
+            let report = diagnose(&robot, &train, Some(&test), &config).unwrap();
+            let seconds = t0.elapsed().as_secs_f64();
+            let h = report.holdout.unwrap();
+            println!(
+                "diagnose_real {name}: {seconds:.2} s nested with hold-out; {:.4} mm refitted, {:.4} same frame",
+                h.selected.heldout_mean_mm, h.same_frame.selected.heldout_mean_mm
+            );
+            results.insert(format!("real_{name}"), serde_json::json!({"seconds": seconds}));
+        }
         let dir = root.join("target/criterion");
         let _ = std::fs::create_dir_all(&dir);
         let _ = std::fs::write(dir.join("diagnose_scale.json"), serde_json::Value::Object(results).to_string());

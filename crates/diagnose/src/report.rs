@@ -182,7 +182,9 @@ pub struct Nested {
     pub selections: Vec<Vec<String>>,
     /// Each outer fold on its own.
     pub folds: Vec<OuterFold>,
-    /// Outer folds (1-based) whose chosen model predicts its test poses worse than the nominal one.
+    /// Outer folds (1-based) whose chosen model predicts its test poses worse than the nominal one, by
+    /// more than twice the standard error of the fold's own paired difference (a fold whose error rose
+    /// within its scatter is shown among the folds, not listed here).
     pub worse_than_nominal: Vec<usize>,
     /// The outer fold (1-based) holding more than half of the squared held-out error, if one does.
     pub dominated_by: Option<usize>,

@@ -98,6 +98,24 @@ fn outer_fold(
     Ok(OuterOutcome { fold, nominal, selected })
 }
 
+/// How many standard errors of its own paired difference a fold's chosen model must be worse than the
+/// nominal one by to count as worse: a fold of six poses whose error rose by less than its own scatter
+/// does not decide that a diagnosis fails to transfer (the pooled figures over every fold do).
+const WORSE_STANDARD_ERRORS: f64 = 2.0;
+
+/// Whether the errors `selected` of a fold's test poses are larger than `nominal`'s (the same poses) by
+/// more than [`WORSE_STANDARD_ERRORS`] standard errors of the mean paired difference of squares.
+fn significantly_worse(nominal: &[f64], selected: &[f64]) -> bool {
+    let d: Vec<f64> = selected.iter().zip(nominal).map(|(s, n)| s * s - n * n).collect();
+    let n = d.len() as f64;
+    if d.len() < 2 {
+        return d.first().is_some_and(|x| *x > 0.0);
+    }
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    mean > WORSE_STANDARD_ERRORS * (var / n).sqrt()
+}
+
 /// The outer folds' outcomes as the report gives them: pooled statistics, each fold, the folds worse
 /// than nominal, and a fold holding more than half of the squared error with at most twice its share of
 /// the poses.
@@ -105,6 +123,8 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
     let mut folds = Vec::new();
+    let worse_than_nominal =
+        outcomes.iter().filter(|o| significantly_worse(&o.nominal, &o.selected)).map(|o| o.fold.fold).collect();
     for o in outcomes {
         nominal_norms.extend(o.nominal);
         selected_norms.extend(o.selected);
@@ -123,11 +143,7 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
         nominal: Stats::of(&nominal_norms),
         selected: Stats::of(&selected_norms),
         selections: folds.iter().map(|f| f.effects.clone()).collect(),
-        worse_than_nominal: folds
-            .iter()
-            .filter(|f| f.selected.heldout_rms_mm > f.nominal.heldout_rms_mm)
-            .map(|f| f.fold)
-            .collect(),
+        worse_than_nominal,
         dominated_by,
         folds,
     }
@@ -201,4 +217,25 @@ pub fn evaluate(
         }
     }
     transfer_score(&scorer, holdout, &all, config)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::significantly_worse;
+
+    #[test]
+    fn one_small_fold_worse_within_its_scatter_does_not_count() {
+        // Six poses, 0.74 → 0.47 mm on five of them and one pose much worse (0.3 → 1.4 mm): the fold's mean
+        // squared error rose, within its own scatter — not a fold that decides.
+        let nominal = [0.74, 0.70, 0.81, 0.66, 0.77, 0.30];
+        let selected = [0.47, 0.45, 0.52, 0.40, 0.50, 1.40];
+        let (n2, s2): (f64, f64) = (nominal.iter().map(|x| x * x).sum(), selected.iter().map(|x| x * x).sum());
+        assert!(s2 > n2, "the fold is worse on the mean: {s2} vs {n2}");
+        assert!(!significantly_worse(&nominal, &selected));
+        // The same fold where every pose got worse by about the same: that counts.
+        let worse: Vec<f64> = nominal.iter().map(|x| x + 0.3).collect();
+        assert!(significantly_worse(&nominal, &worse));
+        // Better is never worse.
+        assert!(!significantly_worse(&nominal[..5], &selected[..5]));
+    }
 }
