@@ -163,6 +163,10 @@ const CASES: &[Case] = &[
 #[test]
 fn the_bad_input_table() {
     assert!(CASES.len() >= 40, "{} cases", CASES.len());
+    // docs/reliability.md states the table's size: kept true here.
+    let doc = std::fs::read_to_string(workspace("docs/reliability.md")).unwrap();
+    let stated = format!("`crates/cli/tests/it/bad_inputs.rs`: {} cases", CASES.len());
+    assert!(doc.contains(&stated), "docs/reliability.md does not say `{stated}`");
     let _ = JOINT;
     let mut failures = Vec::new();
     for (k, case) in CASES.iter().enumerate() {
