@@ -96,14 +96,8 @@ pub fn diagnose_with_progress(
     let data = if screened.kept.len() == data.len() {
         data
     } else {
+        // Too few left is the selection's refusal, as for too few given.
         kept_data = data.subset(&screened.kept);
-        if kept_data.len() < config.minimum_poses() {
-            return Err(DiagnoseError::TooFewMeasurements {
-                count: kept_data.len(),
-                folds: config.folds,
-                needed: config.minimum_poses(),
-            });
-        }
         &kept_data
     };
     let scorer = Scorer::new(robot, data, config);
