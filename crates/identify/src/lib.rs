@@ -35,7 +35,7 @@ pub use identifiability::{
 };
 pub use model::{Model, StartFrames};
 pub use predict::{ChainCache, PoseInputs};
-pub use registration::{initial_frames, initial_registration, kabsch};
+pub use registration::{initial_frames, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
 pub use sampling::{normal, random_configuration};
 pub use terms::{PoseTerms, gravity_torques, max_gravity_torques, sensor_joint};

@@ -37,12 +37,6 @@ impl Model {
         Ok(Self { effects, offsets, len, registration: Isometry3::identity(), tool_start_mm: Vector3::zeros() })
     }
 
-    /// The same model with the tracker registration starting at `registration` (identity: the base frame).
-    pub fn with_registration(mut self, registration: Isometry3<f64>) -> Self {
-        self.registration = registration;
-        self
-    }
-
     /// The same model with its frame blocks starting at `start` ([`crate::initial_frames`]): the
     /// registration, and the tool point (when the model estimates one; ignored otherwise) — the
     /// parameters are corrections on top.

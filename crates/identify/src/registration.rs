@@ -98,21 +98,3 @@ pub fn initial_frames(
     }
     Ok(start)
 }
-
-/// The starting registration of a tracker-frame model: Kabsch between the nominal predictions and the
-/// measurements.
-pub fn initial_registration(robot: &Robot, data: &Dataset, rows: &[usize]) -> Result<Isometry3<f64>, IdentifyError> {
-    let model = Model::new(robot, vec![])?;
-    let zeros = vec![0.0; robot.chain().dof()];
-    let inputs = PoseInputs { temp_rise: &zeros, sin_cos: None };
-    let mut a = Vec::new();
-    let mut b = Vec::new();
-    for &i in rows {
-        let m = &data.measurements[i];
-        if let Ok((p, _)) = model.predict(robot, &[], m, &inputs, None, &mut None) {
-            a.push(p);
-            b.push(m.position_mm);
-        }
-    }
-    Ok(kabsch(&a, &b))
-}
