@@ -127,7 +127,7 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
                         "gravity never loads joint {} (its largest gravity torque over the joint space is {bound:.1e} N·m): a compliance there moves nothing",
                         j + 1
                     ),
-                    remedy: "nothing to measure: the axis is vertical in every pose, or the masses beyond it are missing from the robot description".into(),
+                    remedy: "nothing to measure: the axis is vertical in every pose, or the masses beyond it sit on its axis or are missing from the robot description".into(),
                 });
             }
             let fraction = (hi - lo) / (2.0 * bound);
