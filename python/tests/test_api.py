@@ -267,7 +267,7 @@ def test_dataframes_when_pandas_is_installed(irb140, root):
         (lambda r: r.ik(np.eye(3)), InputError, "pose: expected shape (4, 4)"),
         (lambda r: r.ik(np.diag([1.0, 2.0, 1.0, 1.0])), InputError, "pose"),
         (lambda r: r.fk(Q, time_min=float("nan")), InputError, "time_min"),
-        (lambda r: thermokin.simulate(r, ["joint_offset:0"]), InputError, "joint_offset:0: joints are numbered from 1"),
+        (lambda r: thermokin.simulate(r, ["joint_offset:0"]), InputError, "joint_offset:0: joint `0`: joints are numbered from 1"),
         (lambda r: thermokin.simulate(r, ["no_such_effect"]), InputError, "unknown effect `no_such_effect`"),
         (lambda r: thermokin.simulate(r, poses=0), InputError, "poses must be at least 1"),
         (lambda r: thermokin.diagnose(r, thermokin.simulate(r, poses=40), folds=1), InputError, "folds"),

@@ -145,6 +145,8 @@ fn bench(json: bool) -> Result<()> {
         "thermokin-compensate",
         "--package",
         "thermokin-diagnose",
+        "--package",
+        "thermokin-planner",
         "--bench",
         "kinematics",
         "--bench",
@@ -155,6 +157,8 @@ fn bench(json: bool) -> Result<()> {
         "diagnose",
         "--bench",
         "tracker_scale",
+        "--bench",
+        "plan",
     ]))?;
     let stream: serde_json::Value = std::fs::read_to_string("target/criterion/program_stream.json")
         .ok()
@@ -281,6 +285,18 @@ fn bench(json: bool) -> Result<()> {
             300.0,
         ),
         (
+            "plan_60_of_3000_s",
+            mean_ns("plan/60_of_3000").map(|n| n / 1e9),
+            "plan 60 poses of 3,000 sampled IRB 140 candidates (tracker, unknown tool)",
+            2.0,
+        ),
+        (
+            "plan_growth_6000_over_3000",
+            ratio(mean_ns("plan/60_of_6000"), mean_ns("plan/60_of_3000")),
+            "the plan's cost, 6,000 candidates over 3,000 (linear: 2)",
+            2.2,
+        ),
+        (
             "diagnose_wam_real_s",
             scale["real_wam"]["seconds"].as_f64(),
             "the real Barrett WAM: 216 grid poses nested, 20 random held out",
@@ -339,6 +355,8 @@ const ALLOWED: &[(&str, &[&str])] = &[
     ("thermokin-identify", &["thermokin-chain", "thermokin-deform"]),
     // The diagnosis stands on identification; it reads no file (the front ends do).
     ("thermokin-diagnose", &["thermokin-chain", "thermokin-deform", "thermokin-identify"]),
+    // The planner shares identification's model and Jacobians with the diagnosis, beside it, not on it.
+    ("thermokin-planner", &["thermokin-chain", "thermokin-deform", "thermokin-identify"]),
     // The compensation's writers put results in degrees through io's one unit boundary.
     (
         "thermokin-compensate",

@@ -9,6 +9,7 @@ use thermokin_deform::{SemanticsKind, TimeProfile};
 use thermokin_diagnose::{Config, FoldGrouping, Outliers, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
+use thermokin_planner::{Criterion, Params};
 
 /// A value parser for a library setting with named values (its `CHOICES`): `--help` lists each name with
 /// its help, and the name parses into the library's own value.
@@ -78,6 +79,11 @@ pub enum Command {
         after_help = "Examples:\n  thermokin diagnose --robot configs/irb140.toml --measurements M.csv --json report.json --plot plots/\n  thermokin diagnose --robot robot.toml --measurements tracker.csv --frame tracker --tool unknown\n\nMeasurements CSV: time_min (optional), q1..qn (degrees), x,y,z (mm), optional rx,ry,rz (degrees),\noptional temp_<name> (°C). The authors' results files are accepted too."
     )]
     Diagnose(DiagnoseArgs),
+    /// Plan which poses to measure: the N that make the diagnosis' parameters identifiable and precise.
+    #[command(
+        after_help = "Examples:\n  thermokin plan --robot fixtures/urdf/ur10.urdf --tip tool0 --frame tracker --tool unknown \\\n      --candidates taught.csv --poses 60 --out plan.csv --program plan.script\n  thermokin plan --robot configs/irb140.toml --samples 3000 --box -200,-800,0,900,800,1200 --poses 30 --out plan.csv\n  thermokin plan --robot robot.toml --candidates taught.csv --measured done.csv --poses 12 --out next.csv\n\nCandidates CSV: q1..qn (degrees; other columns ignored) — the poses you can reach. The plan CSV keeps\ntheir values and lines, in a measuring order that keeps joint motion short, with where the tracker should\nsee the tool (nominal, base frame). The report: every parameter's predicted σ at --noise, and the\ncondition number and O1–O5 against random poses of the same candidates (docs/planner.md)."
+    )]
+    Plan(PlanArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
     #[command(
         after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
@@ -378,6 +384,62 @@ pub struct DiagnoseArgs {
     /// otherwise).
     #[arg(long, short)]
     pub quiet: bool,
+}
+
+/// `plan` arguments.
+#[derive(Args, Debug)]
+pub struct PlanArgs {
+    #[command(flatten)]
+    pub robot: RobotArgs,
+    /// The poses the robot can reach (taught, collision-free): a CSV with q1..qn; the plan is a subset.
+    #[arg(long, value_name = "FILE", conflicts_with_all = ["samples", "workspace"])]
+    pub candidates: Option<PathBuf>,
+    /// Without --candidates: configurations sampled within the joint limits (seeded).
+    #[arg(long, value_name = "N", default_value_t = 3000)]
+    pub samples: usize,
+    /// Keep sampled configurations whose tool point lies in this box of the base frame, mm.
+    #[arg(long = "box", value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true)]
+    pub workspace: Option<String>,
+    /// Poses already measured (q1..qn): plan the next ones that add the most to them.
+    #[arg(long, value_name = "FILE")]
+    pub measured: Option<PathBuf>,
+    /// Plan for these effects only, `KIND[:JOINT]` (repeat); default: every pose-dependent effect of the
+    /// diagnosis' catalogue.
+    #[arg(long = "effect", value_name = "SPEC")]
+    pub effects: Vec<String>,
+    /// Poses to plan.
+    #[arg(long, default_value_t = Params::default().poses)]
+    pub poses: usize,
+    /// The tracker noise per axis (mm) the predicted σ are stated at.
+    #[arg(long, value_name = "MM", default_value_t = Params::default().noise_mm)]
+    pub noise: f64,
+    /// What the poses optimise.
+    #[arg(long, value_parser = choice(Criterion::CHOICES), default_value_t = Params::default().criterion)]
+    pub criterion: Criterion,
+    /// Frame the poses will be measured in.
+    #[arg(long, value_parser = choice(FrameMode::CHOICES), default_value_t = Params::default().frame)]
+    pub frame: FrameMode,
+    /// Tool point.
+    #[arg(long, value_parser = choice(ToolMode::CHOICES), default_value_t = Params::default().tool)]
+    pub tool: ToolMode,
+    /// Unit of the candidates' and measured poses' revolute joint columns.
+    #[arg(long, value_parser = choice(JointUnits::CHOICES), default_value_t = JointUnits::default())]
+    pub joint_units: JointUnits,
+    /// Seed (sampled candidates, the random poses the plan is compared with).
+    #[arg(long, default_value_t = Params::default().seed)]
+    pub seed: u64,
+    /// The plan CSV (written atomically).
+    #[arg(short, long, value_name = "FILE")]
+    pub out: PathBuf,
+    /// Also a robot program visiting the poses: ABB RAPID (.mod), KUKA KRL (.src) or URScript (.script).
+    #[arg(long, value_name = "FILE")]
+    pub program: Option<PathBuf>,
+    /// Controller language of --program (default: from its extension).
+    #[arg(long, value_parser = choice(Controller::CHOICES))]
+    pub controller: Option<Controller>,
+    /// Write the report as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
 }
 
 /// `simulate` arguments.

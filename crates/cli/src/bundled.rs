@@ -64,6 +64,7 @@ pub fn check_inputs(cli: &Cli) -> Result<(), Failure> {
         Command::Urdf(UrdfCommand::Export { robot, .. }) => robot.as_ref(),
         Command::Diagnose(a) => &a.robot,
         Command::Simulate(a) => &a.robot,
+        Command::Plan(a) => &a.robot,
         Command::Urdf(UrdfCommand::Import { .. }) | Command::ReproducePaper(_) => return Ok(()),
     };
     if thermokin_io::file_exists(&robot.robot) {

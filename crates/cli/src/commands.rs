@@ -24,6 +24,7 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
         Command::Urdf(c) => urdf(c),
         Command::Diagnose(a) => crate::diagnosis::diagnose(a),
         Command::Simulate(a) => crate::diagnosis::simulate(a),
+        Command::Plan(a) => crate::planning::plan(a),
         Command::ReproducePaper(a) => reproduce::run(a),
     }
 }

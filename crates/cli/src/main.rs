@@ -16,6 +16,7 @@ mod compensation;
 mod diagnosis;
 mod input;
 mod out;
+mod planning;
 mod reproduce;
 
 use std::process::ExitCode;

@@ -25,8 +25,8 @@ pub use model_run::{
 };
 pub use plan::{Plan, PlanError, Request};
 pub use program::{
-    AbbTargets, ArmConfiguration, BranchOut, Controller, Program, ProgramError, ProgramSettings, SolutionRow,
-    arm_configuration, confdata, kuka_status, kuka_turn, program_files, programs,
+    AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow,
+    arm_configuration, confdata, kuka_status, kuka_turn, motion_program, program_files, programs,
 };
 pub use run::{
     Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

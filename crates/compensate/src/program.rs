@@ -183,15 +183,54 @@ pub fn programs(run: &RunOutput, nominal: &Chain, settings: &ProgramSettings) ->
                 rows.len(),
                 rows.iter().filter(|r| !r.converged()).count()
             );
-            let text = match settings.controller {
-                Controller::Abb => abb(&name, &header, &rows, nominal, settings),
-                Controller::Kuka => kuka(&name, &header, &rows, nominal, settings),
-                Controller::UniversalRobots => ur(&name, &header, &rows, nominal, settings),
-            };
+            let motions: Vec<Motion<'_>> = rows.iter().map(|r| Motion::of(r)).collect();
+            let text = program_text(&name, &header, &motions, nominal, settings);
             Program { suffix, text }
         })
         .collect::<Vec<_>>();
     Ok(out)
+}
+
+/// One motion of a program: its label, and the joint values to move to (radians, mm for a prismatic
+/// joint) — or why there are none, written as a comment in place of the motion.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Motion<'a> {
+    /// The target's label (made part of an identifier).
+    pub label: &'a str,
+    /// The joints, or the reason the motion is skipped.
+    pub joints: Result<&'a [f64], String>,
+}
+
+impl<'a> Motion<'a> {
+    /// A compensated target: its joints when the IK reached it, skipped with its status otherwise.
+    fn of(r: &'a TargetResult) -> Self {
+        let joints = if r.converged() { Ok(r.joints.as_slice()) } else { Err(format!("not reached ({:?})", r.status)) };
+        Self { label: &r.label, joints }
+    }
+}
+
+/// A program that visits `motions` in order (joint motions; ABB robtargets as in [`programs`]), named
+/// `settings.name`, with `header` as its first comment: the program of any list of joint values — the
+/// poses a measurement plan asks for, as well as a compensation's.
+pub fn motion_program(
+    header: &str,
+    motions: &[Motion<'_>],
+    nominal: &Chain,
+    settings: &ProgramSettings,
+) -> Result<String, ProgramError> {
+    if settings.controller == Controller::Abb && settings.abb_targets == AbbTargets::Robtarget {
+        check_spherical_wrist(nominal)?;
+    }
+    Ok(program_text(&settings.name, header, motions, nominal, settings))
+}
+
+/// The text of one program in the controller's language.
+fn program_text(name: &str, header: &str, motions: &[Motion<'_>], nominal: &Chain, s: &ProgramSettings) -> String {
+    match s.controller {
+        Controller::Abb => abb(name, header, motions, nominal, s),
+        Controller::Kuka => kuka(name, header, motions, nominal, s),
+        Controller::UniversalRobots => ur(name, header, motions, nominal, s),
+    }
 }
 
 /// Joint values written with 6 decimals: 1e-6° is below every controller's resolution (ABB and KUKA
@@ -200,19 +239,23 @@ fn axes(values: &[f64], decimals: usize) -> Vec<String> {
     values.iter().map(|v| format!("{:.*}", decimals, v + 0.0)).collect()
 }
 
-fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
+fn abb(name: &str, header: &str, rows: &[Motion<'_>], nominal: &Chain, s: &ProgramSettings) -> String {
     let module = identifier(name, 32);
     let mut out = format!("MODULE {module}\n  ! {header}\n");
     let mut moves = String::new();
     for r in rows {
         let robtarget = s.abb_targets == AbbTargets::Robtarget;
         let target = identifier(&format!("{}_{}", if robtarget { "p" } else { "jt" }, r.label), 32);
-        let q = &r.joints;
+        let q = match &r.joints {
+            Ok(q) => *q,
+            Err(why) => {
+                out.push_str(&format!("  ! {target}: {why}\n"));
+                moves.push_str(&format!("    ! skipped {}\n", r.label));
+                continue;
+            }
+        };
         let pose = if robtarget { nominal.tool_pose(q).ok() } else { None };
-        if !r.converged() {
-            out.push_str(&format!("  ! {target}: not reached ({:?})\n", r.status));
-            moves.push_str(&format!("    ! skipped {}\n", r.label));
-        } else if let Some(base_from_tcp) = pose {
+        if let Some(base_from_tcp) = pose {
             let p = base_from_tcp.translation.vector;
             let quat = quaternion_wxyz(&base_from_tcp.rotation).map(|v| format!("{v:.9}"));
             let [cf1, cf4, cf6, cfx] = confdata(nominal, q);
@@ -225,7 +268,7 @@ fn abb(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pr
             ));
             moves.push_str(&format!("    MoveJ {target}, {}, {}, {};\n", s.speed, s.zone, s.tool));
         } else {
-            let mut a = axes(&controller_joints(nominal, &r.joints), 6);
+            let mut a = axes(&controller_joints(nominal, q), 6);
             a.resize(6, "0".into());
             out.push_str(&format!("  CONST jointtarget {target}:=[[{}],[9E9,9E9,9E9,9E9,9E9,9E9]];\n", a.join(",")));
             moves.push_str(&format!("    MoveAbsJ {target}\\NoEOffs, {}, {}, {};\n", s.speed, s.zone, s.tool));
@@ -339,33 +382,34 @@ pub fn kuka_turn(q: &[f64]) -> u8 {
     q.iter().take(6).enumerate().fold(0u8, |t, (i, &v)| if v < 0.0 { t | (1 << i) } else { t })
 }
 
-fn kuka(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
+fn kuka(name: &str, header: &str, rows: &[Motion<'_>], nominal: &Chain, s: &ProgramSettings) -> String {
     let program = identifier(name, 24);
     let approx = if s.zone.eq_ignore_ascii_case("fine") { String::new() } else { format!(" {}", s.zone) };
     let mut out = format!("DEF {program}( )\n; {header}\nBAS(#INITMOV, 0)\nBAS(#VEL_PTP, {})\n", s.speed);
     for r in rows {
-        if r.converged() {
-            let a = axes(&controller_joints(nominal, &r.joints), 6);
-            let named: Vec<String> = a.iter().enumerate().take(6).map(|(i, v)| format!("A{} {v}", i + 1)).collect();
-            out.push_str(&format!("PTP {{E6AXIS: {}}}{approx} ; {}\n", named.join(", "), r.label));
-        } else {
-            out.push_str(&format!("; skipped {}: not reached ({:?})\n", r.label, r.status));
+        match &r.joints {
+            Ok(q) => {
+                let a = axes(&controller_joints(nominal, q), 6);
+                let named: Vec<String> = a.iter().enumerate().take(6).map(|(i, v)| format!("A{} {v}", i + 1)).collect();
+                out.push_str(&format!("PTP {{E6AXIS: {}}}{approx} ; {}\n", named.join(", "), r.label));
+            }
+            Err(why) => out.push_str(&format!("; skipped {}: {why}\n", r.label)),
         }
     }
     out.push_str("END\n");
     out
 }
 
-fn ur(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &ProgramSettings) -> String {
+fn ur(name: &str, header: &str, rows: &[Motion<'_>], nominal: &Chain, s: &ProgramSettings) -> String {
     let program = identifier(name, 64);
     let mut out = format!("def {program}():\n  # {header}\n");
     for r in rows {
-        if r.converged() {
+        if let Ok(q) = &r.joints {
             // URScript takes radians and metres: the library's radians, its millimetres / 1000.
             let si: Vec<f64> = nominal
                 .joints()
                 .iter()
-                .zip(&r.joints)
+                .zip(q.iter())
                 .map(|(j, &v)| if j.kind == JointKind::Prismatic { thermokin_chain::units::metres(v) } else { v })
                 .collect();
             out.push_str(&format!(
@@ -375,8 +419,8 @@ fn ur(name: &str, header: &str, rows: &[&TargetResult], nominal: &Chain, s: &Pro
                 s.zone,
                 r.label
             ));
-        } else {
-            out.push_str(&format!("  # skipped {}: not reached ({:?})\n", r.label, r.status));
+        } else if let Err(why) = &r.joints {
+            out.push_str(&format!("  # skipped {}: {why}\n", r.label));
         }
     }
     out.push_str("end\n");

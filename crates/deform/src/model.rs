@@ -160,7 +160,7 @@ fn row_name(row: Row) -> String {
 
 /// The largest `|Δq(c) − Δq(c′)| / |c − c′|` for which [`RobotModel::commanded_for`]'s fixed point is
 /// trusted; beyond it (a correction of the order of the joint motion itself) the model is refused.
-const MAX_CORRECTION_SLOPE: f64 = 0.1;
+pub const MAX_CORRECTION_SLOPE: f64 = 0.1;
 /// Iterations of the fixed point: each gains a factor of at least 1/[`MAX_CORRECTION_SLOPE`]; in practice
 /// (slopes ~1e-3) three or four reach machine precision.
 const MAX_FIXED_POINT_ITERATIONS: usize = 60;

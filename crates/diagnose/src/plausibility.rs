@@ -4,6 +4,7 @@
 //! effect in disguise, not a property of the robot.
 
 use thermokin_chain::{Dataset, Robot, units};
+use thermokin_deform::MAX_CORRECTION_SLOPE;
 use thermokin_identify::{DriftShape, Effect, max_gravity_torques};
 
 use crate::config::Plausibility;
@@ -177,6 +178,24 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
                     ("the deflection at the largest gravity torque", deg(deflection), "°", deflection)
                 }
             };
+            // A gear-ratio or cyclic error changes the joint value by at most its slope per unit of motion
+            // (`|s|`, and `2 Σ|aₖ|` bounding the twice-per-revolution terms' derivative as the robot model
+            // does): beyond the robot model's bound it is not a correction of the joint but another joint,
+            // whatever little it moves a tool point that sits near the axis.
+            let slope = match effect {
+                Effect::JointScale(_) => v[0].abs(),
+                Effect::Periodic(_) => 2.0 * v[..4].iter().map(|a| a.abs()).sum::<f64>(),
+                _ => 0.0,
+            };
+            if slope > MAX_CORRECTION_SLOPE {
+                return Some(Implausible::Beyond {
+                    what: "its slope (joint-value change per unit of joint motion)",
+                    value: slope,
+                    bound: MAX_CORRECTION_SLOPE,
+                    unit: "",
+                    scale: "the largest a robot file's joint correction may have".into(),
+                });
+            }
             let moved = if revolute { motion * lever } else { motion };
             over(what, value, moved, lever, unit)
         }

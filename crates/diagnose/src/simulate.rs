@@ -72,17 +72,7 @@ impl HiddenEffect {
                 }
                 None => (spec, None),
             };
-        let (name, joint) = match head.split_once(':') {
-            Some((k, j)) => {
-                let j: usize = j.trim().parse().map_err(|_| bad(format!("joint `{j}` is not a number")))?;
-                if j == 0 {
-                    return Err(bad("joints are numbered from 1".to_string()));
-                }
-                (k, Some(j - 1))
-            }
-            None => (head, None),
-        };
-        let effect = Effect::named(robot, name.trim(), joint).map_err(|e| bad(e.to_string()))?;
+        let effect = Effect::parse(robot, head).map_err(|e| bad(e.to_string()))?;
         match values {
             Some(v) => Self::from_report_units(effect, v).map_err(|e| bad(e.to_string())),
             None => Ok(Self::typical(effect, rng)),

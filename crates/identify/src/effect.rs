@@ -148,6 +148,19 @@ impl Effect {
         }
     }
 
+    /// The effect a flag or a script names: `KIND[:JOINT]`, the joint numbered from 1 (`joint_offset:2`,
+    /// `base_frame`).
+    pub fn parse(robot: &Robot, spec: &str) -> Result<Self, IdentifyError> {
+        let (name, joint) = match spec.split_once(':') {
+            Some((k, j)) => match j.trim().parse::<usize>() {
+                Ok(n) if n >= 1 => (k, Some(n - 1)),
+                _ => return Err(IdentifyError::JointNumber { given: j.trim().to_string() }),
+            },
+            None => (spec, None),
+        };
+        Effect::named(robot, name.trim(), joint)
+    }
+
     /// The joint the effect acts on, if it acts on one.
     pub fn joint(&self) -> Option<JointIndex> {
         match *self {

@@ -26,6 +26,12 @@ pub enum IdentifyError {
         /// Joints of the robot.
         dof: usize,
     },
+    /// A joint that is not a number from 1.
+    #[error("joint `{given}`: joints are numbered from 1")]
+    JointNumber {
+        /// The text given.
+        given: String,
+    },
     /// A per-joint effect given without its joint.
     #[error("{effect} needs a joint")]
     JointNeeded {

@@ -5,18 +5,18 @@ use std::process::{Command, Output};
 
 use thermokin_testdata::workspace;
 
-fn thermokin(args: &[&str]) -> Output {
+pub fn thermokin(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_thermokin")).args(args).current_dir(workspace("")).output().expect("runs")
 }
 
-fn stdout(o: &Output) -> String {
+pub fn stdout(o: &Output) -> String {
     String::from_utf8_lossy(&o.stdout).into_owned()
 }
-fn stderr(o: &Output) -> String {
+pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-fn tmp(name: &str) -> PathBuf {
+pub fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("thermokin-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)

@@ -4,4 +4,5 @@
 mod bad_inputs;
 mod citizen;
 mod cli;
+mod plan;
 mod warmup_loop;

@@ -1,0 +1,89 @@
+//! `thermokin plan`: which poses to measure next.
+
+use anyhow::anyhow;
+use thermokin_chain::Robot;
+use thermokin_compensate::{Controller, Motion, ProgramSettings, motion_program};
+use thermokin_identify::Effect;
+use thermokin_io::{read_joint_rows, write_atomic, write_atomic_with};
+use thermokin_planner::{Candidates, Params, WorkspaceBox};
+
+use crate::args::{PlanArgs, parse_list};
+use crate::input::{load, working_chain};
+use crate::{Failure, exit};
+
+/// The configurations of a joints file (radians), with their lines; a bad row is an error naming it.
+fn configurations(path: &std::path::Path, robot: &Robot, a: &PlanArgs) -> Result<(Vec<Vec<f64>>, Vec<usize>), Failure> {
+    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+    let rows = read_joint_rows(path, &kinds, a.joint_units).map_err(Failure::input)?;
+    let mut joints = Vec::with_capacity(rows.len());
+    let mut lines = Vec::with_capacity(rows.len());
+    for r in rows {
+        joints.push(r.values.map_err(Failure::input)?.0);
+        lines.push(r.line);
+    }
+    Ok((joints, lines))
+}
+
+pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
+    let loaded = load(&a.robot)?;
+    let chain = working_chain(&a.robot, &loaded)?;
+    let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
+    let named = |e| Failure::input(anyhow!("{}: {e}", a.candidates.as_deref().unwrap_or(&a.out).display()));
+    let candidates = match &a.candidates {
+        Some(path) => {
+            let (joints, lines) = configurations(path, &robot, &a)?;
+            Candidates::new(&robot, joints, lines).map_err(named)?
+        }
+        None => {
+            let corners = a.workspace.as_deref().map(|s| parse_list("box", s)).transpose().map_err(Failure::input)?;
+            let workspace = match corners.as_deref() {
+                Some([x0, y0, z0, x1, y1, z1]) => {
+                    Some(WorkspaceBox::new([*x0, *y0, *z0].into(), [*x1, *y1, *z1].into()).map_err(Failure::input)?)
+                }
+                Some(_) => return Err(Failure::input(anyhow!("--box takes six numbers: X0,Y0,Z0,X1,Y1,Z1 (mm)"))),
+                None => None,
+            };
+            Candidates::sampled(&robot, a.samples, a.seed, workspace.as_ref()).map_err(Failure::input)?
+        }
+    };
+    let measured = match &a.measured {
+        Some(path) => configurations(path, &robot, &a)?.0,
+        None => Vec::new(),
+    };
+    let effects = a.effects.iter().map(|s| Effect::parse(&robot, s).map_err(|e| anyhow!("--effect {s}: {e}")));
+    let effects = effects.collect::<anyhow::Result<Vec<_>>>().map_err(Failure::input)?;
+    let params = Params {
+        poses: a.poses,
+        noise_mm: a.noise,
+        criterion: a.criterion,
+        frame: a.frame,
+        tool: a.tool,
+        effects: (!effects.is_empty()).then_some(effects),
+        seed: a.seed,
+        ..Params::default()
+    };
+    let plan = thermokin_planner::plan(&robot, &candidates, &measured, &params).map_err(named)?;
+    say!("{}", plan.text().trim_end());
+    write_atomic_with(&a.out, |w| plan.write_csv(w)).map_err(Failure::internal)?;
+    if let Some(path) = &a.program {
+        let by_extension = path.extension().and_then(|e| e.to_str()).and_then(Controller::from_extension);
+        let controller = a
+            .controller
+            .or(by_extension)
+            .ok_or_else(|| Failure::input(anyhow!("--program {}: say --controller abb, kuka or ur", path.display())))?;
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plan").to_string();
+        let labels: Vec<String> = (1..=plan.poses.len()).map(|k| format!("pose_{k}")).collect();
+        let motions: Vec<Motion<'_>> =
+            plan.poses.iter().zip(&labels).map(|(p, l)| Motion { label: l, joints: Ok(&p.joints_rad) }).collect();
+        let header = format!("thermokin plan: {} poses to measure, in this order", motions.len());
+        let settings = ProgramSettings { name, ..ProgramSettings::new(controller) };
+        let text = motion_program(&header, &motions, robot.chain(), &settings).map_err(Failure::input)?;
+        write_atomic(path, text.as_bytes()).map_err(Failure::internal)?;
+    }
+    if let Some(p) = &a.json {
+        let text = serde_json::to_string_pretty(&plan).map_err(Failure::internal)?;
+        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+    }
+    say!("\nplan → {}", a.out.display());
+    Ok(exit::OK)
+}

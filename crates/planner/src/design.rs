@@ -1,0 +1,166 @@
+//! The design problem: the identification Jacobian of the diagnosis' model at every candidate and
+//! measured pose — the same [`Model`] and analytic Jacobian the diagnosis fits (`thermokin-identify`),
+//! evaluated at the nominal robot, since a plan is made before anything is measured — reduced to the
+//! columns the candidates can identify and scaled.
+
+use faer::Mat;
+use nalgebra::Vector3;
+use rayon::prelude::*;
+use thermokin_chain::{Dataset, Measurement, Robot};
+use thermokin_identify::{Effect, FixedParameter, Model, PoseTerms, Setup, identifiable, residuals_and_jacobian};
+
+use crate::error::PlanError;
+use crate::params::Params;
+
+/// Poses per chunk of the Jacobian's parallel evaluation.
+const CHUNK: usize = 256;
+
+/// The model a plan is made for, and its Jacobian at the candidates and at the measured poses.
+pub(crate) struct Design {
+    /// The model: the blocks always estimated (registration, unknown tool), then the effects.
+    pub model: Model,
+    /// The columns the candidates and measured poses together can identify (model column indices).
+    pub free: Vec<usize>,
+    /// The model's columns they cannot, each with its reason.
+    pub not_identifiable: Vec<FixedParameter>,
+    /// Per free column, its root-mean-square per candidate (the scale the criterion is taken in).
+    pub scale: Vec<f64>,
+    /// Rows `3i..3i+3`: candidate `i`'s position rows on the free columns, divided by `scale`.
+    pub candidates: Mat<f64>,
+    /// The measured poses' rows, the same way.
+    pub measured: Mat<f64>,
+    /// Nominal tool positions of the candidates, mm (the robot's base frame).
+    pub positions: Vec<Vector3<f64>>,
+    /// `W`: the mean over the candidates of `M̃ᵢᵀ M̃ᵢ`, `M̃ᵢ` candidate `i`'s rows without the registration's
+    /// columns — so that `trace(W Σ)` is the mean variance of the predicted tool position over the
+    /// candidates, in the robot's base frame, of a parameter covariance `Σ` (scaled columns).
+    pub use_weight: Mat<f64>,
+}
+
+/// A data set of configurations at their nominal tool positions (the Jacobian needs no measurement).
+fn nominal_set(robot: &Robot, joints: &[Vec<f64>]) -> Result<Dataset, PlanError> {
+    let measurements = joints
+        .iter()
+        .map(|q| {
+            Ok(Measurement {
+                time_min: 0.0,
+                q: q.clone(),
+                position_mm: robot
+                    .chain()
+                    .tool_pose(q)
+                    .map_err(thermokin_identify::IdentifyError::from)?
+                    .translation
+                    .vector,
+                orientation: None,
+                position_std_mm: None,
+                temps: Vec::new(),
+            })
+        })
+        .collect::<Result<Vec<_>, PlanError>>()?;
+    Ok(Dataset { measurements, ..Dataset::default() })
+}
+
+/// The effects a plan is made for: the setup's always-estimated blocks, then the given effects or the
+/// catalogue's pose-dependent ones.
+fn effects(robot: &Robot, data: &Dataset, params: &Params) -> Result<Vec<Effect>, PlanError> {
+    let setup = Setup { frame: params.frame, tool: params.tool, orientation_lever_mm: 0.0 };
+    let mut effects = setup.always_estimated(data);
+    let chosen = match &params.effects {
+        Some(e) => e.clone(),
+        None => setup.candidates(robot, data)?,
+    };
+    for e in chosen {
+        if !effects.contains(&e) {
+            effects.push(e);
+        }
+    }
+    Ok(effects)
+}
+
+/// The Jacobian of the model's predicted positions at `data`'s poses (3 rows each), in parallel chunks.
+fn jacobian(robot: &Robot, model: &Model, data: &Dataset) -> Result<Mat<f64>, PlanError> {
+    let terms = PoseTerms::of(robot, data, 0.0);
+    let theta = model.initial();
+    let n = data.len();
+    let chunks: Vec<(usize, Mat<f64>)> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| {
+            let rows: Vec<usize> = (c * CHUNK..((c + 1) * CHUNK).min(n)).collect();
+            residuals_and_jacobian(robot, model, &theta, data, &rows, &terms).map(|(_, j)| (c * CHUNK, j))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut jac = Mat::zeros(3 * n, model.len());
+    for (start, block) in chunks {
+        for r in 0..block.nrows() {
+            for c in 0..block.ncols() {
+                jac[(3 * start + r, c)] = block[(r, c)];
+            }
+        }
+    }
+    Ok(jac)
+}
+
+impl Design {
+    /// The design for `candidates` after `measured` poses.
+    pub fn new(
+        robot: &Robot,
+        candidates: &[Vec<f64>],
+        measured: &[Vec<f64>],
+        params: &Params,
+    ) -> Result<Self, PlanError> {
+        let pool = nominal_set(robot, candidates)?;
+        let done = nominal_set(robot, measured)?;
+        let model = Model::new(robot, effects(robot, &pool, params)?)?;
+        let jac_pool = jacobian(robot, &model, &pool)?;
+        let jac_done = jacobian(robot, &model, &done)?;
+        // Identifiable from everything that may be measured: the candidates and the poses already measured.
+        let mut all = Mat::zeros(jac_pool.nrows() + jac_done.nrows(), model.len());
+        all.as_mut().submatrix_mut(0, 0, jac_pool.nrows(), model.len()).copy_from(&jac_pool);
+        all.as_mut().submatrix_mut(jac_pool.nrows(), 0, jac_done.nrows(), model.len()).copy_from(&jac_done);
+        let ident = identifiable(&all, &vec![true; model.len()]);
+        let free: Vec<usize> = (0..model.len()).filter(|&c| ident.free[c]).collect();
+        let n = candidates.len().max(1) as f64;
+        let scale: Vec<f64> = free
+            .iter()
+            .map(|&c| {
+                ((0..jac_pool.nrows()).map(|r| jac_pool[(r, c)].powi(2)).sum::<f64>() / n).sqrt().max(f64::MIN_POSITIVE)
+            })
+            .collect();
+        let reduce = |j: &Mat<f64>| Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])] / scale[k]);
+        let candidates_rows = reduce(&jac_pool);
+        let used = Mat::from_fn(candidates_rows.nrows(), free.len(), |r, k| {
+            if matches!(model.parameter(free[k]), Some((Effect::Registration, _))) {
+                0.0
+            } else {
+                candidates_rows[(r, k)]
+            }
+        });
+        let mut use_weight = Mat::zeros(free.len(), free.len());
+        faer::linalg::matmul::matmul(
+            use_weight.as_mut(),
+            faer::Accum::Replace,
+            used.as_ref().transpose(),
+            used.as_ref(),
+            1.0 / n,
+            faer::Par::Seq,
+        );
+        Ok(Self {
+            not_identifiable: model.fixed_parameters(&ident.fixed),
+            use_weight,
+            candidates: candidates_rows,
+            measured: reduce(&jac_done),
+            positions: pool.measurements.iter().map(|m| m.position_mm).collect(),
+            free,
+            scale,
+            model,
+        })
+    }
+
+    /// The scaled rows of candidates `rows`, after the measured poses' rows.
+    pub fn rows_with_measured(&self, rows: &[usize]) -> Mat<f64> {
+        let m = self.measured.nrows();
+        Mat::from_fn(m + 3 * rows.len(), self.free.len(), |r, c| {
+            if r < m { self.measured[(r, c)] } else { self.candidates[(3 * rows[(r - m) / 3] + (r - m) % 3, c)] }
+        })
+    }
+}

@@ -1,0 +1,128 @@
+//! The settings of a plan.
+
+use nalgebra::Vector3;
+use serde::Serialize;
+use thermokin_identify::{Effect, FrameMode, ToolMode};
+
+use crate::error::PlanError;
+
+/// What the chosen poses optimise ([`crate::plan`]; the choice and its reasons are in the `select`
+/// module's documentation).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Criterion {
+    /// D-optimal: the smallest volume of the parameters' confidence ellipsoid (`log det` of the
+    /// information, as FIGAROH and most of the literature).
+    #[default]
+    Parameters,
+    /// I-optimal: the smallest mean variance of the predicted tool position over the candidates — the
+    /// accuracy the calibrated model would have where the robot works if the model were the robot.
+    Prediction,
+}
+
+thermokin_chain::choices!(
+    Criterion,
+    "criterion",
+    [
+        ("parameters", "D-optimal: the largest log det of the parameters' information", Criterion::Parameters),
+        (
+            "prediction",
+            "I-optimal: the smallest mean variance of the predicted tool position over the candidates",
+            Criterion::Prediction
+        ),
+    ]
+);
+
+/// The settings of a plan ([`crate::plan`]), with the diagnosis' defaults where they mean the same thing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Params {
+    /// Poses to plan (after the measured ones). Default 30.
+    pub poses: usize,
+    /// What the poses optimise. Default: the parameters (D-optimal).
+    pub criterion: Criterion,
+    /// The tracker's noise, mm (one standard deviation per coordinate): the predicted standard deviation
+    /// of every parameter is stated at it. Default 0.02 mm — a laser tracker's repeatability at a few
+    /// metres. The choice of poses does not depend on it.
+    pub noise_mm: f64,
+    /// The frame the poses will be measured in: a tracker's registration is estimated with every model,
+    /// so the plan makes it identifiable too. Default: the robot's base frame, as `diagnose`.
+    pub frame: FrameMode,
+    /// Whether the tool point is known; an unknown one is estimated with every model. Default: known.
+    pub tool: ToolMode,
+    /// The effects to plan for; `None`: the catalogue's for the robot (every pose-dependent effect the
+    /// diagnosis considers — base and tool frames where not estimated anyway, per joint its offset and
+    /// link deviation, a gravity compliance where the joint carries mass, a gear-ratio scale and a
+    /// cyclic error of a revolute joint).
+    pub effects: Option<Vec<Effect>>,
+    /// Seed of every random choice (sampled candidates, the random poses the plan is compared with).
+    pub seed: u64,
+    /// How many random sets of the same size the plan is compared with (their median is reported).
+    pub random_draws: usize,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Self {
+            poses: 30,
+            criterion: Criterion::Parameters,
+            noise_mm: 0.02,
+            frame: FrameMode::Base,
+            tool: ToolMode::Known,
+            effects: None,
+            seed: 0x91a7,
+            random_draws: 5,
+        }
+    }
+}
+
+impl Params {
+    /// Checks the settings: at least one pose, a positive finite noise, at least one random draw, no
+    /// effect that poses cannot plan for.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        if self.poses == 0 {
+            return Err(PlanError::NoPoses);
+        }
+        if !(self.noise_mm.is_finite() && self.noise_mm > 0.0) {
+            return Err(PlanError::Setting {
+                setting: "noise_mm",
+                value: self.noise_mm.to_string(),
+                rule: "must be a positive number of millimetres",
+            });
+        }
+        if self.random_draws == 0 {
+            return Err(PlanError::Setting { setting: "random_draws", value: "0".into(), rule: "must be at least 1" });
+        }
+        if let Some(e) = self.effects.iter().flatten().find(|e| e.is_time_dependent()) {
+            return Err(PlanError::TimeDependent { effect: e.label() });
+        }
+        Ok(())
+    }
+}
+
+/// A box of the robot's base frame the tool point must stay in, mm: where candidates are sampled when
+/// the user gives none (a cell's free space, a tracker's line of sight).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct WorkspaceBox {
+    /// The lowest x, y, z, mm.
+    pub min_mm: Vector3<f64>,
+    /// The highest x, y, z, mm.
+    pub max_mm: Vector3<f64>,
+}
+
+impl WorkspaceBox {
+    /// The box between two corners (in any order per axis); every coordinate finite.
+    pub fn new(a: Vector3<f64>, b: Vector3<f64>) -> Result<Self, PlanError> {
+        if !(a.iter().chain(b.iter()).all(|v| v.is_finite())) {
+            return Err(PlanError::Setting {
+                setting: "box",
+                value: format!("{a:?} {b:?}"),
+                rule: "every corner coordinate must be a finite number of millimetres",
+            });
+        }
+        Ok(Self { min_mm: a.inf(&b), max_mm: a.sup(&b) })
+    }
+
+    /// Whether `p` (base frame, mm) is inside.
+    pub fn contains(&self, p: &Vector3<f64>) -> bool {
+        (0..3).all(|k| p[k] >= self.min_mm[k] && p[k] <= self.max_mm[k])
+    }
+}

@@ -1,0 +1,249 @@
+//! The plan as a value: the poses in measuring order, what they are predicted to give against random
+//! poses of the same pool, and what stays unidentifiable — in report units (mm, degrees), serialisable,
+//! and as text ([`Plan::text`]).
+
+use serde::Serialize;
+use thermokin_identify::{FixedParameter, Observability};
+
+use crate::params::Criterion;
+
+/// A measurement plan.
+#[derive(Clone, Debug, Serialize)]
+pub struct Plan {
+    /// What the poses optimise.
+    pub criterion: Criterion,
+    /// Candidates the plan chose from.
+    pub candidates: usize,
+    /// Poses already measured.
+    pub measured: usize,
+    /// The tracker noise the predictions are stated at, mm.
+    pub noise_mm: f64,
+    /// The model's effects (always-estimated blocks first), by label.
+    pub effects: Vec<String>,
+    /// The planned poses, in measuring order.
+    pub poses: Vec<PlannedPose>,
+    /// The criterion after each pose in measuring order (the first value: the measured poses alone); it
+    /// never decreases.
+    pub criterion_by_pose: Vec<f64>,
+    /// The plan against random poses of the same pool.
+    pub comparison: Comparison,
+    /// Every parameter's predicted standard deviation, planned and random.
+    pub parameters: Vec<ParameterPrecision>,
+    /// Parameters the candidates can identify but the planned poses (with the measured ones) cannot.
+    pub not_identifiable: Vec<FixedParameter>,
+    /// Parameters no candidate (with the measured poses) can identify, whatever is chosen.
+    pub never_identifiable: Vec<FixedParameter>,
+    /// The arc each joint covers over the planned and measured poses.
+    pub coverage: Vec<JointCoverage>,
+    /// The largest-joint motion along the measuring order, and along the order the poses were chosen in,
+    /// degrees (mm for a prismatic joint).
+    pub motion: Motion,
+}
+
+/// One planned pose.
+#[derive(Clone, Debug, Serialize)]
+pub struct PlannedPose {
+    /// The candidate's 0-based index.
+    pub candidate: usize,
+    /// Its 1-based line in the candidates file (none when sampled).
+    pub line: Option<usize>,
+    /// Joint values, degrees (mm for a prismatic joint) — the candidate's values.
+    pub joints: Vec<f64>,
+    /// Joint values in the library's units, radians (mm for a prismatic joint).
+    #[serde(skip)]
+    pub joints_rad: Vec<f64>,
+    /// Where the tracker should see the tool, on the nominal robot in its base frame, mm.
+    pub nominal_position_mm: [f64; 3],
+    /// The effects whose remaining variance this pose halves or more, measured in this order after the
+    /// poses before it (reported effects only: not the registration or an unknown tool).
+    pub helps: Vec<String>,
+}
+
+/// The plan against random poses.
+#[derive(Clone, Debug, Serialize)]
+pub struct Comparison {
+    /// Random draws of the same size from the same pool (with the same measured poses).
+    pub random_draws: usize,
+    /// The criterion of the plan.
+    pub planned_criterion: f64,
+    /// The median criterion of the random draws.
+    pub random_criterion: f64,
+    /// The observability indices of the plan.
+    pub planned: Option<Observability>,
+    /// The median of each index over the random draws.
+    pub random: Option<Observability>,
+}
+
+/// A parameter's predicted standard deviation, report units.
+#[derive(Clone, Debug, Serialize)]
+pub struct ParameterPrecision {
+    /// The parameter, with its unit (`joint_offset[2].offset_deg`).
+    pub parameter: String,
+    /// From the planned poses; `None` when they cannot identify it.
+    pub planned: Option<f64>,
+    /// The median over the random draws; `None` when most cannot identify it.
+    pub random: Option<f64>,
+}
+
+/// The arc a joint covers.
+#[derive(Clone, Debug, Serialize)]
+pub struct JointCoverage {
+    /// 1-based joint.
+    pub joint: usize,
+    /// Lowest and highest value, degrees (mm for a prismatic joint).
+    pub arc: [f64; 2],
+    /// Fraction of the joint's travel between its limits (of a revolution without limits).
+    pub fraction_of_travel: f64,
+}
+
+/// Joint motion along the plan.
+#[derive(Clone, Debug, Serialize)]
+pub struct Motion {
+    /// In measuring order.
+    pub ordered: f64,
+    /// In the order chosen.
+    pub as_chosen: f64,
+}
+
+/// One observability index, read from the indices.
+type Index = fn(&Observability) -> f64;
+
+/// A number in a table: `—` when absent, three significant digits otherwise.
+fn cell(x: Option<f64>) -> String {
+    match x {
+        None => "—".into(),
+        Some(v) if v == 0.0 || !v.is_finite() => format!("{v}"),
+        Some(v) if v.abs() >= 1e4 || v.abs() < 1e-3 => format!("{v:.2e}"),
+        Some(v) => {
+            let decimals = (2 - v.abs().log10().floor() as i32).max(0) as usize;
+            format!("{v:.decimals$}")
+        }
+    }
+}
+
+impl Plan {
+    /// The plan as the command line prints it.
+    pub fn text(&self) -> String {
+        let mut out = self.head();
+        out.push_str(&self.pose_table());
+        out.push_str(&self.comparison_table());
+        out.push_str(&self.parameter_table());
+        for (title, list) in [
+            (
+                "Not identifiable from the planned poses (more poses, or candidates that move these):",
+                &self.not_identifiable,
+            ),
+            ("Not identifiable from any candidate, whatever is chosen:", &self.never_identifiable),
+        ] {
+            if !list.is_empty() {
+                out.push_str(&format!("\n{title}\n"));
+                for f in list {
+                    out.push_str(&format!("  {} — {}\n", f.parameter, f.reason));
+                }
+            }
+        }
+        out
+    }
+
+    fn head(&self) -> String {
+        let after = if self.measured > 0 { format!(" after {} measured", self.measured) } else { String::new() };
+        let mut out = format!(
+            "PLAN: {} poses of {} candidates{after}, chosen for the {} ({}) of {}\n",
+            self.poses.len(),
+            self.candidates,
+            self.criterion,
+            match self.criterion {
+                Criterion::Prediction => "I-optimal",
+                Criterion::Parameters => "D-optimal",
+            },
+            self.effects.join(", ")
+        );
+        out.push_str(&format!(
+            "Measuring order: {:.0} of largest-joint motion (as chosen: {:.0})\nCoverage: {}\n\n",
+            self.motion.ordered,
+            self.motion.as_chosen,
+            self.coverage
+                .iter()
+                .map(|c| format!(
+                    "q{} {:.0}…{:.0} ({:.0} %)",
+                    c.joint,
+                    c.arc[0],
+                    c.arc[1],
+                    100.0 * c.fraction_of_travel
+                ))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+        out
+    }
+
+    fn pose_table(&self) -> String {
+        let mut out =
+            String::from("   #   line  joints                                          nominal x, y, z (mm)  helps\n");
+        for (k, p) in self.poses.iter().enumerate() {
+            let joints: Vec<String> = p.joints.iter().map(|v| format!("{v:.2}")).collect();
+            let [x, y, z] = p.nominal_position_mm;
+            out.push_str(&format!(
+                "{:>4}  {:>5}  {:<46}  {x:>8.1} {y:>8.1} {z:>8.1}  {}\n",
+                k + 1,
+                p.line.map_or("—".into(), |l| l.to_string()),
+                joints.join(" "),
+                p.helps.join(", ")
+            ));
+        }
+        out
+    }
+
+    fn comparison_table(&self) -> String {
+        let c = &self.comparison;
+        let mut out = format!(
+            "\nIdentifiability            planned     random ({} draws, median)\n  criterion (log det)  {:>12.2}  {:>12.2}\n",
+            c.random_draws, c.planned_criterion, c.random_criterion
+        );
+        let index = |o: &Option<Observability>, f: fn(&Observability) -> f64| o.as_ref().map(f);
+        let rows: [(&str, Index); 6] = [
+            ("condition number", |o| o.condition_number),
+            ("O1 (geometric mean)", |o| o.o1),
+            ("O2 (1 / condition)", |o| o.o2),
+            ("O3 (smallest σ)", |o| o.o3),
+            ("O4 (noise amplification)", |o| o.o4),
+            ("O5", |o| o.o5),
+        ];
+        for (name, f) in rows {
+            out.push_str(&format!(
+                "  {name:<20} {:>12}  {:>12}\n",
+                cell(index(&c.planned, f)),
+                cell(index(&c.random, f))
+            ));
+        }
+        out
+    }
+
+    fn parameter_table(&self) -> String {
+        let mut out = format!("\nPredicted standard deviation at {} mm noise     planned      random\n", self.noise_mm);
+        for p in &self.parameters {
+            out.push_str(&format!("  {:<44} {:>10}  {:>10}\n", p.parameter, cell(p.planned), cell(p.random)));
+        }
+        out
+    }
+}
+
+impl Plan {
+    /// Writes the plan as CSV, one row per pose in measuring order: `pose` (1, 2, …), `line` (the
+    /// candidate's line in its file, empty when sampled), `q1..qn` (degrees, mm for a prismatic joint —
+    /// the candidate's values, written in full precision), and `x_expected,y_expected,z_expected`: where
+    /// the tracker should see the tool on the nominal robot, in its base frame, mm. The file reads back as
+    /// candidates or as `--measured` poses (the other columns are ignored).
+    pub fn write_csv(&self, out: &mut impl std::io::Write) -> std::io::Result<()> {
+        let n = self.poses.first().map_or(0, |p| p.joints.len());
+        let q: Vec<String> = (1..=n).map(|i| format!("q{i}")).collect();
+        writeln!(out, "pose,line,{},x_expected,y_expected,z_expected", q.join(","))?;
+        for (k, p) in self.poses.iter().enumerate() {
+            let joints: Vec<String> = p.joints.iter().map(|v| format!("{v}")).collect();
+            let [x, y, z] = p.nominal_position_mm;
+            let line = p.line.map_or(String::new(), |l| l.to_string());
+            writeln!(out, "{},{line},{},{x:.4},{y:.4},{z:.4}", k + 1, joints.join(","))?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,110 @@
+//! The plan's own properties: a subset of the candidates, a shorter path, a criterion that only improves,
+//! and predicted standard deviations that the spread of real fits confirms.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use thermokin_chain::{Dataset, Measurement, Robot};
+use thermokin_identify::{Effect, JointIndex, Model, PoseTerms, fit};
+use thermokin_planner::{Candidates, Params, plan};
+
+fn irb140() -> Robot {
+    thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap()
+}
+
+#[test]
+fn the_plan_is_a_subset_of_the_candidates_in_a_shorter_order() {
+    let robot = irb140();
+    let pool = Candidates::sampled(&robot, 400, 11, None).unwrap();
+    let p = plan(&robot, &pool, &[], &Params { poses: 25, ..Params::default() }).unwrap();
+    assert_eq!(p.poses.len(), 25);
+    let mut seen = std::collections::HashSet::new();
+    for pose in &p.poses {
+        // The candidate's values, bit for bit, and each candidate at most once.
+        assert_eq!(pose.joints_rad, pool.joints()[pose.candidate]);
+        assert!(seen.insert(pose.candidate));
+    }
+    assert!(p.motion.ordered <= p.motion.as_chosen, "{:?}", p.motion);
+    // The criterion after each pose in measuring order never decreases, and its last value is the plan's
+    // criterion computed afresh (a Cholesky factorisation of the whole plan's information).
+    assert!(p.criterion_by_pose.windows(2).all(|w| w[1] >= w[0]), "{:?}", p.criterion_by_pose);
+    let last = *p.criterion_by_pose.last().unwrap();
+    assert!((last - p.comparison.planned_criterion).abs() < 1e-6 * last.abs().max(1.0));
+    // Planned beats random of the same pool on the criterion it optimises, and on the condition number.
+    assert!(p.comparison.planned_criterion > p.comparison.random_criterion);
+    let (planned, random) = (p.comparison.planned.as_ref().unwrap(), p.comparison.random.as_ref().unwrap());
+    assert!(planned.condition_number < random.condition_number, "{planned:?} {random:?}");
+}
+
+#[test]
+fn bad_settings_and_candidates_are_refused_with_their_reason() {
+    let robot = irb140();
+    let pool = Candidates::sampled(&robot, 10, 1, None).unwrap();
+    let e = plan(&robot, &pool, &[], &Params { poses: 11, ..Params::default() }).unwrap_err();
+    assert_eq!(e.to_string(), "11 poses asked for, but only 10 candidates");
+    let e = plan(&robot, &pool, &[], &Params { poses: 0, ..Params::default() }).unwrap_err();
+    assert!(e.to_string().contains("at least one pose"), "{e}");
+    let e = Candidates::new(&robot, vec![vec![0.0; 6], vec![0.0, 0.0, 1.0, 0.0, 0.0, 0.0]], vec![2, 3]).unwrap_err();
+    assert_eq!(e.to_string(), "candidate 3: joint 3 is outside its limits");
+    let e = Candidates::new(&robot, vec![vec![0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0]], vec![]).unwrap_err();
+    assert_eq!(e.to_string(), "candidate 1: joint 2 is not a finite number");
+    let drift = Effect::ThermalDrift(JointIndex::of(&robot, 1).unwrap(), thermokin_identify::DriftShape::Linear);
+    let e =
+        plan(&robot, &pool, &[], &Params { poses: 5, effects: Some(vec![drift]), ..Params::default() }).unwrap_err();
+    assert!(e.to_string().starts_with("thermal_drift[2] (linear) is identified over operating time"), "{e}");
+}
+
+/// The predicted σ of every parameter, at the stated noise, against the spread of 300 fits of the same
+/// model to the planned poses measured with that noise. The measurements are the chain's FK plus seeded
+/// Gaussian noise — not the planner's model —, and each fit is the identification's Levenberg–Marquardt.
+/// 300 fits estimate a standard deviation to ±4 % (1/√(2·300)): 20 % is five of those.
+#[test]
+fn the_predicted_sigma_matches_the_spread_of_fits_over_simulated_noise() {
+    let robot = irb140();
+    let j = |k: usize| JointIndex::of(&robot, k).unwrap();
+    let mut effects: Vec<Effect> = (0..6).map(|k| Effect::JointOffset(j(k))).collect();
+    effects.push(Effect::LinkDeviation(j(2)));
+    let pool = Candidates::sampled(&robot, 500, 5, None).unwrap();
+    let params = Params { poses: 20, noise_mm: 0.05, effects: Some(effects.clone()), ..Params::default() };
+    let p = plan(&robot, &pool, &[], &params).unwrap();
+    let model = Model::new(&robot, effects).unwrap();
+    let names = model.parameter_names();
+    let mut rng = ChaCha8Rng::seed_from_u64(77);
+    let fits: Vec<Vec<f64>> = (0..300)
+        .map(|_| {
+            let measurements = p
+                .poses
+                .iter()
+                .map(|pose| {
+                    let truth = robot.chain().tool_pose(&pose.joints_rad).unwrap().translation.vector;
+                    let noise =
+                        nalgebra::Vector3::from_fn(|_, _| params.noise_mm * thermokin_testdata::gauss(&mut rng));
+                    Measurement {
+                        time_min: 0.0,
+                        q: pose.joints_rad.clone(),
+                        position_mm: truth + noise,
+                        orientation: None,
+                        position_std_mm: None,
+                        temps: vec![],
+                    }
+                })
+                .collect();
+            let data = Dataset { measurements, ..Dataset::default() };
+            let rows: Vec<usize> = (0..data.len()).collect();
+            fit(&robot, &model, &data, &rows, &PoseTerms::of(&robot, &data, 0.0)).unwrap().theta
+        })
+        .collect();
+    let mut checked = 0;
+    for (c, name) in names.iter().enumerate() {
+        let Some(predicted) = p.parameters.iter().find(|x| &x.parameter == name).and_then(|x| x.planned) else {
+            continue;
+        };
+        let (effect, k) = model.parameter(c).unwrap();
+        let values: Vec<f64> = fits.iter().map(|t| effect.to_report_units(k, t[c])).collect();
+        let mean = values.iter().sum::<f64>() / values.len() as f64;
+        let spread = (values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (values.len() - 1) as f64).sqrt();
+        eprintln!("{name}: predicted {predicted:.3e}, spread {spread:.3e}");
+        assert!((predicted / spread - 1.0).abs() <= 0.2, "{name}: predicted {predicted}, spread of fits {spread}");
+        checked += 1;
+    }
+    assert!(checked >= 8, "{checked} parameters checked");
+}
