@@ -7,6 +7,7 @@ mod arrays;
 mod convert;
 mod errors;
 mod pipeline;
+mod planning;
 mod robot;
 
 use pyo3::prelude::*;
@@ -22,6 +23,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pipeline::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::compensate, m)?)?;
+    m.add_class::<planning::PyPlan>()?;
+    m.add_function(wrap_pyfunction!(planning::plan, m)?)?;
     m.add_function(wrap_pyfunction!(pipeline::pose_to_xyz_euler, m)?)?;
     Ok(())
 }

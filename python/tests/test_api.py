@@ -300,3 +300,34 @@ def test_a_malformed_file_names_its_line_and_field(irb140, tmp_path):
     assert str(robot) in str(e.value), str(e.value)
     with pytest.raises(ValueError):  # an InputError is a ValueError
         thermokin.Measurements.from_csv(bad, irb140)
+
+
+def test_plan_is_a_subset_in_degrees(irb140):
+    q = configurations(irb140, 300, 3)
+    plan = thermokin.plan(irb140, q, poses=15, seed=1)
+    assert plan.joints.shape == (15, 6)
+    assert len(set(plan.indices)) == 15
+    np.testing.assert_allclose(plan.joints, q[plan.indices], rtol=1e-14, atol=1e-12)
+    assert plan.expected_xyz.shape == (15, 3)
+    np.testing.assert_allclose(plan.expected_xyz[0], irb140.fk(plan.joints[0])[:3, 3], atol=1e-9)
+    assert all(b >= a for a, b in zip(plan.criterion_by_pose, plan.criterion_by_pose[1:]))
+    assert plan.text.startswith("PLAN: 15 poses of 300 candidates")
+    # Sampled candidates within a box of the base frame, and after measured poses.
+    sampled = thermokin.plan(irb140, poses=5, samples=200, box=(-1000, -1000, 0, 1000, 1000, 1500))
+    assert sampled.to_dict()["candidates"] == 200
+    after = thermokin.plan(irb140, q, poses=5, measured=q[:20])
+    assert after.to_dict()["measured"] == 20
+
+
+@pytest.mark.parametrize(
+    "kwargs,message",
+    [
+        ({"poses": 301}, "301 poses asked for, but only 300 candidates"),
+        ({"criterion": "best"}, "criterion"),
+        ({"effects": ["joint_offset:0"]}, "joints are numbered from 1"),
+        ({"effects": ["thermal_drift:2"]}, "identified over operating time"),
+    ],
+)
+def test_plan_bad_input(irb140, kwargs, message):
+    with pytest.raises(InputError, match=message):
+        thermokin.plan(irb140, configurations(irb140, 300, 3), **kwargs)

@@ -117,3 +117,25 @@ def test_diagnose_field_by_field(root, cli, tmp_path, flags, kw):
     robot = thermokin.Robot.from_file(root / "configs/irb140.toml")
     ours = thermokin.diagnose(robot, thermokin.Measurements.from_csv(m, robot), **kw).to_dict()
     assert ours == theirs
+
+
+def test_plan_field_by_field(root, cli, tmp_path):
+    """`thermokin plan` and `thermokin.plan` on the same candidates: the same poses in the same order, the
+    same predictions."""
+    candidates = root / "fixtures" / "real" / "jacobi-wam" / "wam-grid.csv"
+    out, report = tmp_path / "plan.csv", tmp_path / "plan.json"
+    run(cli, root, "plan", "--robot", "fixtures/real/jacobi-wam/wam.urdf", "--candidates", candidates,
+        "--frame", "tracker", "--tool", "unknown", "--poses", 20, "--out", out, "--json", report)
+    theirs = json.loads(report.read_text())
+    robot = thermokin.Robot.from_file(root / "fixtures" / "real" / "jacobi-wam" / "wam.urdf")
+    q = np.loadtxt(candidates, delimiter=",", skiprows=1, usecols=range(7))
+    ours = thermokin.plan(robot, q, poses=20, frame="tracker", tool="unknown")
+    assert ours.indices == [p["candidate"] for p in theirs["poses"]]
+    np.testing.assert_allclose(ours.joints, [p["joints"] for p in theirs["poses"]], atol=1e-9)
+    mine = ours.to_dict()
+    assert mine["comparison"]["planned_criterion"] == pytest.approx(theirs["comparison"]["planned_criterion"], rel=1e-12)
+    assert [p["parameter"] for p in mine["parameters"]] == [p["parameter"] for p in theirs["parameters"]]
+    # The CLI's CSV: the candidates' file lines (header = line 1) and values.
+    rows = np.loadtxt(out, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(rows[:, 1] - 2, ours.indices)
+    np.testing.assert_allclose(rows[:, 2:9], ours.joints, atol=1e-9)

@@ -148,6 +148,22 @@ class Report:
     def to_dataframe(self) -> Any: ...
 
 @final
+class Plan:
+    """A measurement plan: the poses in measuring order and what they are predicted to give."""
+
+    @property
+    def text(self) -> str: ...
+    @property
+    def joints(self) -> _F64: ...
+    @property
+    def indices(self) -> list[int]: ...
+    @property
+    def expected_xyz(self) -> _F64: ...
+    @property
+    def criterion_by_pose(self) -> list[float]: ...
+    def to_dict(self) -> dict[str, Any]: ...
+
+@final
 class Compensation:
     """Per target (and time): the joints to command and how the robot reaches the target with them."""
 
@@ -197,6 +213,21 @@ def diagnose(
     orientation_noise_deg: float | None = None,
     outliers: str | None = None,
 ) -> Report: ...
+def plan(
+    robot: Robot,
+    candidates: _Array | None = None,
+    *,
+    poses: int | None = None,
+    measured: _Array | None = None,
+    samples: int = 3000,
+    box: Sequence[float] | None = None,
+    effects: Sequence[str] | None = None,
+    noise_mm: float | None = None,
+    criterion: str | None = None,
+    frame: str | None = None,
+    tool: str | None = None,
+    seed: int | None = None,
+) -> Plan: ...
 def compensate(
     robot: Robot,
     targets: _Path | _Array,

@@ -400,6 +400,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-compensate",
             "thermokin-identify",
             "thermokin-diagnose",
+            "thermokin-planner",
         ],
     ),
 ];

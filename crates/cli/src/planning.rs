@@ -4,24 +4,17 @@ use anyhow::anyhow;
 use thermokin_chain::Robot;
 use thermokin_compensate::{Controller, Motion, ProgramSettings, motion_program};
 use thermokin_identify::Effect;
-use thermokin_io::{read_joint_rows, write_atomic, write_atomic_with};
+use thermokin_io::{read_configurations, write_atomic, write_atomic_with};
 use thermokin_planner::{Candidates, Params, WorkspaceBox};
 
 use crate::args::{PlanArgs, parse_list};
 use crate::input::{load, working_chain};
 use crate::{Failure, exit};
 
-/// The configurations of a joints file (radians), with their lines; a bad row is an error naming it.
+/// The configurations of a joints file (radians), with their lines.
 fn configurations(path: &std::path::Path, robot: &Robot, a: &PlanArgs) -> Result<(Vec<Vec<f64>>, Vec<usize>), Failure> {
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
-    let rows = read_joint_rows(path, &kinds, a.joint_units).map_err(Failure::input)?;
-    let mut joints = Vec::with_capacity(rows.len());
-    let mut lines = Vec::with_capacity(rows.len());
-    for r in rows {
-        joints.push(r.values.map_err(Failure::input)?.0);
-        lines.push(r.line);
-    }
-    Ok((joints, lines))
+    read_configurations(path, &kinds, a.joint_units).map_err(Failure::input)
 }
 
 pub fn plan(a: PlanArgs) -> Result<u8, Failure> {

@@ -77,6 +77,9 @@ pub(crate) enum Implausible {
     Rising { k_deg_per_nm: f64, deflection_deg: f64 },
     /// An exponential drift whose time constant is shorter than the measurements' spacing.
     Instant { tau_min: f64, spacing_min: f64 },
+    /// A gear-ratio or cyclic error whose slope (joint-value change per unit of joint motion) is beyond
+    /// what a robot file's joint correction may have.
+    Steep { slope: f64 },
 }
 
 /// How a value judged implausible was obtained.
@@ -99,6 +102,11 @@ impl Implausible {
             Implausible::Rising { k_deg_per_nm, deflection_deg } => format!(
                 "the compliance fitted at {k_deg_per_nm:.3e} °/N·m{every}: the joint would rise under its load, not sag ({deflection_deg:.2e}° at its largest gravity torque)"
             ),
+            Implausible::Steep { slope } => format!(
+                "its slope fitted at {slope:.3}{every} (the joint value would change by {:.0}% of the joint's own motion): not a correction of the joint — a robot model bounds one at {:.0}%",
+                100.0 * slope,
+                100.0 * MAX_CORRECTION_SLOPE
+            ),
             Implausible::Instant { tau_min, spacing_min } => format!(
                 "its time constant fitted at {tau_min:.3} min{every}, shorter than the measurements' spacing ({spacing_min:.3} min): a drift over before the next measurement is a static deviation"
             ),
@@ -116,6 +124,9 @@ impl Implausible {
             }
             Implausible::Instant { .. } => {
                 "the static effects explain it; measure more often early in the warm-up to see a fast drift"
+            }
+            Implausible::Steep { .. } => {
+                "the joint barely moves the measured point (typically a tool point near its axis): measure with a tool offset from the axis to see its errors"
             }
         };
         Refusal { effect: effect.label(), reason: self.reason(judged), remedy: remedy.into() }
@@ -188,13 +199,7 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
                 _ => 0.0,
             };
             if slope > MAX_CORRECTION_SLOPE {
-                return Some(Implausible::Beyond {
-                    what: "its slope (joint-value change per unit of joint motion)",
-                    value: slope,
-                    bound: MAX_CORRECTION_SLOPE,
-                    unit: "",
-                    scale: "the largest a robot file's joint correction may have".into(),
-                });
+                return Some(Implausible::Steep { slope });
             }
             let moved = if revolute { motion * lever } else { motion };
             over(what, value, moved, lever, unit)

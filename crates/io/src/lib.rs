@@ -25,8 +25,8 @@ pub use deviation::{
 pub use load::{LoadError, LoadedRobot, RobotRequest};
 pub use measurements::{
     JointRow, JointUnits, MeasurementFormat, PositionUnits, UnitsUnclear, parse_measurements, parse_measurements_with,
-    read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with, settle_units,
-    write_measurements,
+    read_configurations, read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with,
+    settle_units, write_measurements,
 };
 pub use notation::{PoseOut, PoseRow, csv_cell, parse_list, parse_payload, parse_pose, parse_temperatures};
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};

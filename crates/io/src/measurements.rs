@@ -548,6 +548,23 @@ impl<'a> PoseColumns<'a> {
     }
 }
 
+/// The configurations of a joints file ([`read_joint_rows`]: `q1..qn`, other columns ignored), each with
+/// its line; the first bad row is the error (a plan's candidates must all be usable).
+pub fn read_configurations(
+    path: &Path,
+    kinds: &[JointKind],
+    units: JointUnits,
+) -> Result<(Vec<Vec<f64>>, Vec<usize>), IoError> {
+    let rows = read_joint_rows(path, kinds, units)?;
+    let mut joints = Vec::with_capacity(rows.len());
+    let mut lines = Vec::with_capacity(rows.len());
+    for r in rows {
+        joints.push(r.values?.0);
+        lines.push(r.line);
+    }
+    Ok((joints, lines))
+}
+
 /// Writes a measurement set in the format [`read_measurements`] reads (degrees or mm per joint kind, mm).
 pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: &[JointKind]) -> std::io::Result<()> {
     let n = data.measurements.first().map_or(0, |m| m.q.len());

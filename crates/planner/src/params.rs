@@ -121,6 +121,18 @@ impl WorkspaceBox {
         Ok(Self { min_mm: a.inf(&b), max_mm: a.sup(&b) })
     }
 
+    /// The box of six numbers `x0, y0, z0, x1, y1, z1` (two corners, mm), as flags and scripts give it.
+    pub fn from_corners(values: &[f64]) -> Result<Self, PlanError> {
+        match values {
+            [x0, y0, z0, x1, y1, z1] => Self::new(Vector3::new(*x0, *y0, *z0), Vector3::new(*x1, *y1, *z1)),
+            _ => Err(PlanError::Setting {
+                setting: "box",
+                value: format!("{} numbers", values.len()),
+                rule: "six numbers: x0,y0,z0,x1,y1,z1 (two corners, mm)",
+            }),
+        }
+    }
+
     /// Whether `p` (base frame, mm) is inside.
     pub fn contains(&self, p: &Vector3<f64>) -> bool {
         (0..3).all(|k| p[k] >= self.min_mm[k] && p[k] <= self.max_mm[k])

@@ -22,8 +22,9 @@ pub struct Plan {
     pub effects: Vec<String>,
     /// The planned poses, in measuring order.
     pub poses: Vec<PlannedPose>,
-    /// The criterion after each pose in measuring order (the first value: the measured poses alone); it
-    /// never decreases.
+    /// The criterion after each pose in measuring order (the first value: the measured poses alone): the
+    /// log det, which never decreases (D-optimal), or the mean predicted variance `trace(W B)`, which never
+    /// increases (I-optimal).
     pub criterion_by_pose: Vec<f64>,
     /// The plan against random poses of the same pool.
     pub comparison: Comparison,
@@ -64,9 +65,9 @@ pub struct PlannedPose {
 pub struct Comparison {
     /// Random draws of the same size from the same pool (with the same measured poses).
     pub random_draws: usize,
-    /// The criterion of the plan.
+    /// The D-criterion `log det(δI + MᵀM)` of the plan (whichever criterion chose it).
     pub planned_criterion: f64,
-    /// The median criterion of the random draws.
+    /// The median D-criterion of the random draws.
     pub random_criterion: f64,
     /// The observability indices of the plan.
     pub planned: Option<Observability>,

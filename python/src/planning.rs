@@ -1,0 +1,135 @@
+//! `plan`: which poses to measure, from a notebook — the library call `thermokin plan` makes, with its
+//! defaults (`Params::default`) and refusals; joints in degrees (mm for a prismatic joint) in and out.
+
+use numpy::{AllowTypeChange, PyArrayDyn, PyArrayLikeDyn};
+use pyo3::prelude::*;
+use thermokin_identify::Effect;
+use thermokin_io::units::joints_to_internal;
+use thermokin_planner::{Candidates, Params, Plan, WorkspaceBox};
+
+use crate::arrays::{Rows, output};
+use crate::convert::choice;
+use crate::errors::{Kind, input, raise};
+use crate::robot::PyRobot;
+
+/// A measurement plan: the poses in measuring order and what they are predicted to give.
+#[pyclass(module = "thermokin", name = "Plan", frozen)]
+pub struct PyPlan {
+    plan: Plan,
+}
+
+#[pymethods]
+impl PyPlan {
+    /// The plan as `thermokin plan` prints it.
+    #[getter]
+    fn text(&self) -> String {
+        self.plan.text()
+    }
+
+    /// The planned joint values, (N, dof), degrees (mm for a prismatic joint), in measuring order.
+    #[getter]
+    fn joints<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let dof = self.plan.poses.first().map_or(0, |p| p.joints.len());
+        let data = self.plan.poses.iter().flat_map(|p| p.joints.iter().copied()).collect();
+        output(py, data, Some(self.plan.poses.len()), &[dof])
+    }
+
+    /// The planned poses' 0-based rows in the candidates, in measuring order.
+    #[getter]
+    fn indices(&self) -> Vec<usize> {
+        self.plan.poses.iter().map(|p| p.candidate).collect()
+    }
+
+    /// Where the tracker should see the tool, (N, 3), mm: the nominal robot in its base frame.
+    #[getter]
+    fn expected_xyz<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let data = self.plan.poses.iter().flat_map(|p| p.nominal_position_mm).collect();
+        output(py, data, Some(self.plan.poses.len()), &[3])
+    }
+
+    /// The criterion after the measured poses and after each planned pose, in measuring order.
+    #[getter]
+    fn criterion_by_pose(&self) -> Vec<f64> {
+        self.plan.criterion_by_pose.clone()
+    }
+
+    /// The report as a dict (the JSON of `thermokin plan --json`, parsed).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let text = serde_json::to_string(&self.plan).map_err(|e| raise(Kind::Other, e))?;
+        py.import("json")?.call_method1("loads", (text,))
+    }
+
+    fn __repr__(&self) -> String {
+        format!("<thermokin.Plan: {} poses of {} candidates>", self.plan.poses.len(), self.plan.candidates)
+    }
+}
+
+/// Configurations (N, dof) in degrees (mm for a prismatic joint), in the library's units.
+fn configurations(
+    robot: &PyRobot,
+    value: &PyArrayLikeDyn<'_, f64, AllowTypeChange>,
+    what: &str,
+) -> PyResult<Vec<Vec<f64>>> {
+    let chain = robot.chain();
+    let dof = chain.dof();
+    let rows = Rows::read(value, dof, what)?;
+    rows.data
+        .chunks(dof)
+        .map(|row| joints_to_internal(chain, row).ok_or_else(|| input(format!("{what}: {dof} values per row"))))
+        .collect()
+}
+
+/// Plans `poses` poses out of `candidates` ((N, dof) degrees; `None`: `samples` configurations sampled
+/// within the joint limits, kept inside `box` — `(x0, y0, z0, x1, y1, z1)` mm of the base frame — when
+/// given), after the `measured` configurations. `effects`: `"KIND[:JOINT]"` strings (default: the
+/// catalogue's); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
+/// `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
+#[pyfunction]
+#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=3000, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn plan(
+    py: Python<'_>,
+    robot: &PyRobot,
+    candidates: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    poses: Option<usize>,
+    measured: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    samples: usize,
+    r#box: Option<Vec<f64>>,
+    effects: Option<Vec<String>>,
+    noise_mm: Option<f64>,
+    criterion: Option<&str>,
+    frame: Option<&str>,
+    tool: Option<&str>,
+    seed: Option<u64>,
+) -> PyResult<PyPlan> {
+    let defaults = Params::default();
+    let file_robot = robot.model.robot().clone();
+    let effects = effects
+        .map(|list| {
+            list.iter()
+                .map(|s| Effect::parse(&file_robot, s).map_err(|e| input(format!("effects: {s}: {e}"))))
+                .collect::<PyResult<Vec<_>>>()
+        })
+        .transpose()?;
+    let params = Params {
+        poses: poses.unwrap_or(defaults.poses),
+        noise_mm: noise_mm.unwrap_or(defaults.noise_mm),
+        criterion: choice("criterion", criterion, defaults.criterion)?,
+        frame: choice("frame", frame, defaults.frame)?,
+        tool: choice("tool", tool, defaults.tool)?,
+        effects,
+        seed: seed.unwrap_or(defaults.seed),
+        ..defaults
+    };
+    let measured = measured.map(|m| configurations(robot, &m, "measured")).transpose()?.unwrap_or_default();
+    let pool = match candidates {
+        Some(c) => Candidates::new(&file_robot, configurations(robot, &c, "candidates")?, vec![]).map_err(input)?,
+        None => {
+            let workspace = r#box.as_deref().map(WorkspaceBox::from_corners).transpose();
+            let workspace = workspace.map_err(|e| input(format!("box: {e}")))?;
+            Candidates::sampled(&file_robot, samples, params.seed, workspace.as_ref()).map_err(input)?
+        }
+    };
+    let plan = py.detach(|| thermokin_planner::plan(&file_robot, &pool, &measured, &params)).map_err(input)?;
+    Ok(PyPlan { plan })
+}
