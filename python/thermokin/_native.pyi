@@ -10,10 +10,12 @@ __all__ = [
     "Compensation",
     "IKResult",
     "Measurements",
+    "Plan",
     "Report",
     "Robot",
     "compensate",
     "diagnose",
+    "plan",
     "pose_to_xyz_euler",
     "simulate",
 ]
