@@ -23,7 +23,8 @@ pub(crate) struct Design {
     pub free: Vec<usize>,
     /// The model's columns they cannot, each with its reason.
     pub not_identifiable: Vec<FixedParameter>,
-    /// Per free column, its root-mean-square per candidate (the scale the criterion is taken in).
+    /// Per free column, its root-mean-square per pose over the candidates and the measured poses (the
+    /// scale the criterion is taken in).
     pub scale: Vec<f64>,
     /// Rows `3i..3i+3`: candidate `i`'s position rows on the free columns, divided by `scale`.
     pub candidates: Mat<f64>,
@@ -119,12 +120,12 @@ impl Design {
         all.as_mut().submatrix_mut(jac_pool.nrows(), 0, jac_done.nrows(), model.len()).copy_from(&jac_done);
         let ident = identifiable(&all, &vec![true; model.len()]);
         let free: Vec<usize> = (0..model.len()).filter(|&c| ident.free[c]).collect();
-        let n = candidates.len().max(1) as f64;
+        // Over the candidates and the measured poses: a column seen by the measured poses alone keeps a
+        // finite scale (it is free, so its norm over all rows is not zero).
+        let n = (candidates.len() + measured.len()).max(1) as f64;
         let scale: Vec<f64> = free
             .iter()
-            .map(|&c| {
-                ((0..jac_pool.nrows()).map(|r| jac_pool[(r, c)].powi(2)).sum::<f64>() / n).sqrt().max(f64::MIN_POSITIVE)
-            })
+            .map(|&c| ((0..all.nrows()).map(|r| all[(r, c)].powi(2)).sum::<f64>() / n).sqrt().max(f64::MIN_POSITIVE))
             .collect();
         let reduce = |j: &Mat<f64>| Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])] / scale[k]);
         let candidates_rows = reduce(&jac_pool);
@@ -141,7 +142,7 @@ impl Design {
             faer::Accum::Replace,
             used.as_ref().transpose(),
             used.as_ref(),
-            1.0 / n,
+            1.0 / candidates.len().max(1) as f64,
             faer::Par::Seq,
         );
         Ok(Self {
