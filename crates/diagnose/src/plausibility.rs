@@ -207,3 +207,41 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
         _ => None,
     }
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use thermokin_chain::Robot;
+    use thermokin_identify::{Effect, JointIndex};
+
+    use super::{Implausible, RobotScale, implausible};
+    use crate::config::Plausibility;
+
+    /// A 1 m arm whose tool point sits 1 mm from joint 6's axis: a gear-ratio or cyclic error there moves
+    /// the point by almost nothing, so only its slope can say that it is not a correction of the joint.
+    #[test]
+    fn a_joint_correction_steeper_than_a_robot_file_allows_is_refused_however_little_it_moves() {
+        let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
+        let scale = RobotScale {
+            extent_mm: 1000.0,
+            lever_mm: vec![1000.0; 6],
+            axis_lever_mm: vec![1000.0, 1000.0, 800.0, 500.0, 300.0, 1.0],
+            max_torque_nm: vec![0.0; 6],
+            reach: vec![std::f64::consts::PI; 6],
+            revolute: vec![true; 6],
+            time_spacing_min: None,
+        };
+        let j6 = JointIndex::of(&robot, 5).unwrap();
+        let p = Plausibility::default();
+        // A scale of 0.3 (30 % of the joint's motion) moves the point by ~1 mm over ±180°: within 2 % of
+        // the extent, and still refused for its slope.
+        let steep = implausible(&scale, &[0.3], Effect::JointScale(j6), &p);
+        assert!(matches!(steep, Some(Implausible::Steep { slope }) if (slope - 0.3).abs() < 1e-12), "{steep:?}");
+        // Cyclic terms bound by 2 Σ|a|: 0.03 + 0.03 rad → 0.12.
+        let cyclic = implausible(&scale, &[0.03, -0.03, 0.0, 0.0], Effect::Periodic(j6), &p);
+        assert!(matches!(cyclic, Some(Implausible::Steep { .. })), "{cyclic:?}");
+        // A real gear-ratio error (1e-3) is a correction.
+        assert_eq!(implausible(&scale, &[1e-3], Effect::JointScale(j6), &p), None);
+        assert_eq!(implausible(&scale, &[0.02, 0.0, 0.0, 0.01], Effect::Periodic(j6), &p), None);
+    }
+}
