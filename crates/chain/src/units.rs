@@ -29,6 +29,17 @@ pub fn metres(millimetres: f64) -> f64 {
     millimetres / MM_PER_M
 }
 
+/// One joint value from a file or flag (degrees for a revolute joint, mm for a prismatic one) in the
+/// library's radians or mm.
+pub fn joint_value_in(kind: crate::JointKind, value: f64) -> f64 {
+    if kind == crate::JointKind::Revolute { radians(value) } else { value }
+}
+
+/// One joint value of the library (radians, mm) for a file or a terminal (degrees, mm).
+pub fn joint_value_out(kind: crate::JointKind, value: f64) -> f64 {
+    if kind == crate::JointKind::Revolute { degrees(value) } else { value }
+}
+
 /// A torque in N·mm (a force in newtons at a lever in millimetres), in N·m.
 pub fn newton_metres(newton_millimetres: f64) -> f64 {
     newton_millimetres / MM_PER_M

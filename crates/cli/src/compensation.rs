@@ -4,8 +4,8 @@
 use anyhow::{Context, anyhow};
 use thermokin_chain::Chain;
 use thermokin_compensate::{
-    AbbTargets, Controller, Cycle, Plan, PlanError, ProgramSettings, Request, RunOutput, RunSettings, StreamSettings,
-    Summary, SummaryOut, compensate_static_stream, program_files, write_joint_csv,
+    AbbTargets, Cycle, Plan, PlanError, ProgramSettings, Request, RunOutput, RunSettings, StreamSettings, Summary,
+    SummaryOut, compensate_static_stream, program_files, write_joint_csv,
 };
 use thermokin_ik::Params;
 use thermokin_io::{TargetReader, write_atomic, write_atomic_with};
@@ -13,7 +13,7 @@ use thermokin_io::{TargetReader, write_atomic, write_atomic_with};
 use std::path::{Path, PathBuf};
 
 use crate::args::CompensateArgs;
-use crate::input::{joints, load, program, progress_bar, warn_ignored};
+use crate::input::{joints, load, program, program_controller, progress_bar, warn_ignored};
 use crate::{Failure, exit};
 
 /// The summary on standard output, as text or JSON.
@@ -189,14 +189,7 @@ fn robot_programs(
     nominal: &Chain,
     run: &RunOutput,
 ) -> Result<Vec<(PathBuf, String)>, Failure> {
-    let by_extension = path.extension().and_then(|e| e.to_str()).and_then(Controller::from_extension);
-    let Some(controller) = a.controller.or(by_extension) else {
-        return Err(Failure::input(anyhow!(
-            "--program {}: say --controller abb, kuka or ur (or use .mod, .src or .script)",
-            path.display()
-        )));
-    };
-    let mut settings = ProgramSettings::new(controller);
+    let mut settings = ProgramSettings::new(program_controller(path, a.controller)?);
     settings.speed = a.speed.clone().unwrap_or(settings.speed);
     settings.zone = a.zone.clone().unwrap_or(settings.zone);
     settings.tool = a.tooldata.clone().unwrap_or(settings.tool);

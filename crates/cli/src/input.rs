@@ -140,3 +140,18 @@ impl DelayedBar {
         self.bar.finish_and_clear();
     }
 }
+
+/// The controller language of a `--program` file: `--controller` when given, else its extension's.
+pub fn program_controller(
+    path: &Path,
+    flag: Option<thermokin_compensate::Controller>,
+) -> Result<thermokin_compensate::Controller, Failure> {
+    let by_extension =
+        path.extension().and_then(|e| e.to_str()).and_then(thermokin_compensate::Controller::from_extension);
+    flag.or(by_extension).ok_or_else(|| {
+        Failure::input(anyhow!(
+            "--program {}: say --controller abb, kuka or ur (or use .mod, .src or .script)",
+            path.display()
+        ))
+    })
+}

@@ -2,13 +2,13 @@
 
 use anyhow::anyhow;
 use thermokin_chain::Robot;
-use thermokin_compensate::{Controller, Motion, ProgramSettings, motion_program};
+use thermokin_compensate::{Motion, ProgramSettings, motion_program};
 use thermokin_identify::Effect;
 use thermokin_io::{read_configurations, write_atomic, write_atomic_with};
 use thermokin_planner::{Candidates, Params, WorkspaceBox};
 
 use crate::args::{PlanArgs, parse_list};
-use crate::input::{load, working_chain};
+use crate::input::{load, program_controller, working_chain};
 use crate::{Failure, exit};
 
 /// The configurations of a joints file (radians), with their lines.
@@ -59,11 +59,7 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
     say!("{}", plan.text().trim_end());
     write_atomic_with(&a.out, |w| plan.write_csv(w)).map_err(Failure::internal)?;
     if let Some(path) = &a.program {
-        let by_extension = path.extension().and_then(|e| e.to_str()).and_then(Controller::from_extension);
-        let controller = a
-            .controller
-            .or(by_extension)
-            .ok_or_else(|| Failure::input(anyhow!("--program {}: say --controller abb, kuka or ur", path.display())))?;
+        let controller = program_controller(path, a.controller)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plan").to_string();
         let labels: Vec<String> = (1..=plan.poses.len()).map(|k| format!("pose_{k}")).collect();
         let motions: Vec<Motion<'_>> =

@@ -6,7 +6,7 @@
 //! as rounding noise.
 
 use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
-use thermokin_chain::{Chain, ErrorParams, JointKind, xyz_rotation};
+use thermokin_chain::{Chain, ErrorParams, xyz_rotation};
 
 /// How three or four numbers describe an orientation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -137,16 +137,8 @@ pub fn ros_rpy_deg(rotation: &UnitQuaternion<f64>) -> [f64; 3] {
 
 pub use thermokin_chain::quaternion_wxyz;
 
-/// One joint value from a file or flag (degrees for a revolute joint, mm for a prismatic one) in the
-/// library's radians or mm.
-pub fn joint_value_in(kind: JointKind, value: f64) -> f64 {
-    if kind == JointKind::Revolute { radians(value) } else { value }
-}
-
-/// One joint value of the library (radians, mm) for a file or a terminal (degrees, mm).
-pub fn joint_value_out(kind: JointKind, value: f64) -> f64 {
-    if kind == JointKind::Revolute { degrees(value) } else { value }
-}
+// A joint value per joint kind: the core's one conversion, here beside the edge's others.
+pub use thermokin_chain::units::{joint_value_in, joint_value_out};
 
 /// Joint values from a file or flag (degrees for revolute joints, mm for prismatic ones) to the library's
 /// radians and mm. `None` when the count does not match the chain.

@@ -136,15 +136,8 @@ impl Design {
                 candidates_rows[(r, k)]
             }
         });
-        let mut use_weight = Mat::zeros(free.len(), free.len());
-        faer::linalg::matmul::matmul(
-            use_weight.as_mut(),
-            faer::Accum::Replace,
-            used.as_ref().transpose(),
-            used.as_ref(),
-            1.0 / candidates.len().max(1) as f64,
-            faer::Par::Seq,
-        );
+        let mut use_weight = crate::select::product(used.as_ref().transpose(), used.as_ref());
+        use_weight *= faer::Scale(1.0 / candidates.len().max(1) as f64);
         Ok(Self {
             not_identifiable: model.fixed_parameters(&ident.fixed),
             use_weight,

@@ -26,7 +26,7 @@ mod precision;
 mod report;
 mod select;
 
-use thermokin_chain::{JointKind, Robot, units};
+use thermokin_chain::{Robot, units};
 
 pub use candidates::Candidates;
 pub use error::PlanError;
@@ -105,13 +105,7 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
 
 /// Joint values as the controller and the files take them: degrees, mm for a prismatic joint.
 fn external(robot: &Robot, q: &[f64]) -> Vec<f64> {
-    robot
-        .chain()
-        .joints()
-        .iter()
-        .zip(q)
-        .map(|(j, &v)| if j.kind == JointKind::Prismatic { v } else { units::degrees(v) })
-        .collect()
+    robot.chain().joints().iter().zip(q).map(|(j, &v)| units::joint_value_out(j.kind, v)).collect()
 }
 
 /// The reported effects a pose removed at least [`HELPS`] of the remaining variance of (in one of their
@@ -183,7 +177,7 @@ fn coverage(robot: &Robot, poses: &[Vec<f64>]) -> Vec<JointCoverage> {
             let (lo, hi) =
                 poses.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(q[j]), h.max(q[j])));
             let travel = joint.limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower);
-            let ext = |v: f64| if joint.kind == JointKind::Prismatic { v } else { units::degrees(v) };
+            let ext = |v: f64| units::joint_value_out(joint.kind, v);
             JointCoverage { joint: j + 1, arc: [ext(lo), ext(hi)], fraction_of_travel: ((hi - lo) / travel).min(1.0) }
         })
         .collect()

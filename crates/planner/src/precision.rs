@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use thermokin_identify::{FixedParameter, Observability, identifiable, observability};
 
 use crate::design::Design;
-use crate::select::{information, log_det_inverse};
+use crate::select::{information, log_det_inverse, product};
 
 /// What one set of poses gives.
 pub(crate) struct Precision {
@@ -31,15 +31,7 @@ pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
     let cols: Vec<usize> = (0..m.ncols()).filter(|&c| ident.free[c]).collect();
     let mut sigma_per_mm = vec![None; m.ncols()];
     let sub = Mat::from_fn(m.nrows(), cols.len(), |r, k| m[(r, cols[k])]);
-    let mut normal = Mat::zeros(cols.len(), cols.len());
-    faer::linalg::matmul::matmul(
-        normal.as_mut(),
-        faer::Accum::Replace,
-        sub.as_ref().transpose(),
-        sub.as_ref(),
-        1.0,
-        faer::Par::Seq,
-    );
+    let normal = product(sub.as_ref().transpose(), sub.as_ref());
     if let Some((_, inverse)) = log_det_inverse(&normal) {
         for (k, &c) in cols.iter().enumerate() {
             // θ = u / scale: var θ = var u / scale².

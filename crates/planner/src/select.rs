@@ -92,7 +92,7 @@ fn diagonal_blocks(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
 }
 
 /// `a · b` (a new matrix).
-fn product(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
+pub(crate) fn product(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::zeros(a.nrows(), b.ncols());
     matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
     out
