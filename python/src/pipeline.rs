@@ -290,6 +290,13 @@ impl PyReport {
         self.report.completed.iter().map(|e| e.label.clone()).collect()
     }
 
+    /// The strength of the prior toward the nominal robot the model is fitted with, in rows of data per
+    /// parameter (0.0: none — cross-validation preferred none, or the gate did not take it).
+    #[getter]
+    fn shrinkage(&self) -> f64 {
+        self.report.shrinkage
+    }
+
     /// Whether the effects found explain the data.
     #[getter]
     fn verdict(&self) -> String {

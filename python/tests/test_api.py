@@ -147,6 +147,9 @@ def test_diagnose_equals_the_command_lines_json_on_the_real_ur10(root, cli, tmp_
     assert report.to_dict() == json.loads(out.read_text())
     assert report.effects, report.text
     assert report.text.startswith(report.text.splitlines()[0])
+    # The folds chose a prior toward the nominal robot on C (2,773 poses): said as the JSON says it.
+    assert report.shrinkage > 0.0
+    assert report.shrinkage == report.to_dict()["shrinkage"]
     # The export is the model the report scored: its FK differs from the nominal robot's.
     calibrated = report.calibrated
     assert calibrated.dof == 6

@@ -53,6 +53,8 @@ pub struct Config {
     pub completion: Completion,
     /// What becomes of measurements flagged as gross errors ([`Outliers`]).
     pub outliers: Outliers,
+    /// Whether the chosen model is shrunk toward the nominal robot ([`Shrinkage`]).
+    pub shrinkage: Shrinkage,
 }
 
 /// What becomes of measurements the screen for gross errors flags (the module `outliers` gives the rule).
@@ -83,6 +85,17 @@ pub enum Completion {
     #[default]
     GeometryAndCompliance,
     /// The selected effects as chosen (for comparisons: the selection before issue #36).
+    Off,
+}
+
+/// The selection's shrinkage phase ([`crate::Config::shrinkage`]; the module `shrinkage` gives the why).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Shrinkage {
+    /// The default: a Gaussian prior toward the nominal robot on the chosen static effects, as strong
+    /// as cross-validation on the selection's folds asks (none where none predicts best).
+    #[default]
+    CrossValidated,
+    /// The least-squares fit as it is (for comparisons: the selection before it).
     Off,
 }
 
@@ -222,6 +235,7 @@ impl Default for Config {
             screen: Screen::default(),
             completion: Completion::default(),
             outliers: Outliers::default(),
+            shrinkage: Shrinkage::default(),
         }
     }
 }

@@ -113,9 +113,9 @@ pub fn diagnose_with_progress(
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
         Some(h) => {
             let always = config.setup().always_estimated(data);
-            let score = |e: &[thermokin_identify::Effect]| transfer_score(&scorer, h, e, config);
+            let score = |e: &[thermokin_identify::Effect], lambda| transfer_score(&scorer, h, e, lambda, config);
             let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
-            let (nominal, selected) = (score(&always)?, score(&tables.effects)?);
+            let (nominal, selected) = (score(&always, 0.0)?, score(&tables.effects, tables.shrinkage)?);
             let stats = HoldoutStats {
                 nominal: nominal.refitted,
                 selected: selected.refitted,
@@ -144,6 +144,7 @@ pub fn diagnose_with_progress(
         orientation_lever_mm: tables.orientation_lever_mm,
         effects: tables.reports,
         completed: tables.completed,
+        shrinkage: tables.shrinkage,
         additive: tables.additive,
         leave_one_out: tables.leave_one_out,
         identifiability: tables.identifiability,

@@ -6,7 +6,7 @@
 //! from the bottom: its settings ([`Config`]) and errors; the screen for gross errors, which decides the
 //! measurements everything above works on; folds and the held-out scoring of a model, with
 //! the gate that accepts a gain only beyond its own uncertainty; eligibility (what the data cannot pin
-//! down), plausibility and the screen; the selection's phases (forward, backward, parsimony) and the
+//! down), plausibility and the screen; the selection's phases (forward, backward, parsimony, completion, shrinkage) and the
 //! tables of its choice; the validation of the whole procedure on data it never saw (nested, a hold-out
 //! set); the warnings and the verdict; [`diagnose`] assembling the [`Report`], which renders itself
 //! ([`Report::text`]).
@@ -29,13 +29,16 @@ mod scoring;
 mod screen;
 mod select;
 mod selection;
+mod shrinkage;
 mod simulate;
 mod stats;
 mod tables;
 mod validation;
 mod verdict;
 
-pub use config::{Completion, Config, Eligibility, FoldGrouping, Outliers, Plausibility, Screen, Validation};
+pub use config::{
+    Completion, Config, Eligibility, FoldGrouping, Outliers, Plausibility, Screen, Shrinkage, Validation,
+};
 pub use diagnosis::{Progress, diagnose, diagnose_with_progress};
 pub use error::DiagnoseError;
 pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};

@@ -270,6 +270,10 @@ pub struct Report {
     /// the model every score, table and export of this report is of. Empty when the completion was off,
     /// had no row to add or was significantly worse.
     pub completed: Vec<EffectReport>,
+    /// The strength of the Gaussian prior toward the nominal robot the model is fitted with, in rows of
+    /// data per parameter ([`crate::Shrinkage`]): 0 when cross-validation preferred none, or it was off.
+    /// The values, scores and export of this report are those of the shrunk fit.
+    pub shrinkage: f64,
     /// Held-out errors as effects are added, in the order chosen.
     pub additive: Vec<TableRow>,
     /// Held-out errors of the final model with each effect left out.

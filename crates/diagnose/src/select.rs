@@ -13,7 +13,9 @@
 //! 6. **completion** — the model completed for use (every eligible joint row, and every compliance the
 //!    data determine, beside the chosen effects) unless the selected model is significantly better held
 //!    out ([`crate::completion`]);
-//! 7. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
+//! 7. **shrinkage** — the chosen model's static effects shrunk toward the nominal robot, as strongly as
+//!    cross-validation asks ([`crate::shrinkage`]);
+//! 8. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
 
 use thermokin_identify::Effect;
 
@@ -27,6 +29,7 @@ use crate::parsimony::parsimony;
 use crate::report::TableRow;
 use crate::scoring::Scorer;
 use crate::selection::Selection;
+use crate::shrinkage::shrink;
 
 /// What the selection chose, and the catalogue it chose from.
 pub(crate) struct Selected {
@@ -34,7 +37,7 @@ pub(crate) struct Selected {
     pub(crate) catalogue: Vec<Effect>,
 }
 
-/// Phases 1–6 on the scorer's data: candidates chosen by cross-validation on its folds.
+/// Phases 1–7 on the scorer's data: candidates chosen by cross-validation on its folds.
 pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, DiagnoseError> {
     let data = scorer.data;
     let needed = config.minimum_poses();
@@ -59,11 +62,13 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, D
         theta: nominal_fit.theta,
         skipped: Vec::new(),
         refused,
+        shrinkage: 0.0,
     };
-    // 3–6.
+    // 3–7.
     forward(scorer, config, &mut selection, eligible.clone())?;
     backward(scorer, config, &mut selection)?;
     parsimony(scorer, config, &mut selection, &eligible)?;
     complete(scorer, config, &mut selection, &eligible)?;
+    shrink(scorer, config, &mut selection)?;
     Ok(Selected { selection, catalogue })
 }

@@ -83,6 +83,9 @@ pub(crate) struct Selection {
     pub(crate) skipped: Vec<Skipped>,
     /// Candidates refused by eligibility or plausibility.
     pub(crate) refused: Vec<Refusal>,
+    /// The prior's strength the model is fitted with (rows of data per parameter; 0: none —
+    /// [`crate::shrinkage`]).
+    pub(crate) shrinkage: f64,
 }
 
 impl Selection {

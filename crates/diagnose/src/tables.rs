@@ -1,4 +1,4 @@
-//! Phase 6 of the selection: the final model on all data and what the report says of it — the
+//! The selection's last phase: the final model on all data (shrunk as phase 7 chose) and what the report says of it — the
 //! leave-one-out table, each effect with its parameters and relations, the fitted frames, the
 //! identifiability of the final model and where its residuals lie (the selection's own, optimistic
 //! scores).
@@ -23,6 +23,8 @@ use crate::stats::Stats;
 pub(crate) struct Tables {
     /// The effects of the final model (the always-estimated blocks first).
     pub(crate) effects: Vec<Effect>,
+    /// The prior's strength the final model is fitted with ([`crate::shrinkage`]; 0: none).
+    pub(crate) shrinkage: f64,
     /// The reported effects, main cause first (the order of `reports`).
     pub(crate) main_first: Vec<Effect>,
     pub(crate) nominal: Stats,
@@ -50,7 +52,8 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
     let (robot, data) = (scorer.robot, scorer.data);
     let Selected { selection: sel, catalogue } = selected;
     let effects = sel.effects.clone();
-    let (model, final_fit) = scorer.full_fit(&effects)?;
+    let shrinkage = sel.shrinkage;
+    let (model, final_fit) = scorer.fit_shrunk(&effects, &scorer.all(), shrinkage)?;
     let all = scorer.all();
     let (_, jac) = residuals_and_jacobian(robot, &model, &final_fit.theta, data, &all, &scorer.terms)?;
     let observability = observability(&jac, &final_fit.free);
@@ -127,6 +130,7 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
         identified,
         warnings,
         effects,
+        shrinkage,
         main_first,
     })
 }

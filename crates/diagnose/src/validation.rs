@@ -75,14 +75,15 @@ fn outer_fold(
 ) -> Result<OuterOutcome, DiagnoseError> {
     let subset = data.subset(train);
     let scorer = Scorer::new(robot, &subset, inner);
-    let effects = select(&scorer, inner)?.selection.effects;
+    let selection = select(&scorer, inner)?.selection;
+    let (effects, shrinkage) = (selection.effects, selection.shrinkage);
     let always = inner.setup().always_estimated(data);
     let test_set = data.subset(test);
     let test_terms = PoseTerms::against(robot, &test_set, &subset, inner.orientation_lever_mm);
     let rows: Vec<usize> = (0..test.len()).collect();
     let mut fold_norms = Vec::with_capacity(2);
-    for e in [&always, &effects] {
-        let (model, f) = scorer.full_fit(e)?;
+    for (e, lambda) in [(&always, 0.0), (&effects, shrinkage)] {
+        let (model, f) = scorer.fit_shrunk(e, &scorer.all(), lambda)?;
         let r = residuals(robot, &model, &f.theta, &test_set, &rows, &test_terms)?;
         fold_norms.push(norms(&r, test_terms.stride()));
     }
@@ -149,7 +150,8 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
     }
 }
 
-/// The model of `effects` fitted on all of the scorer's data and scored on `holdout`, under both
+/// The model of `effects` fitted on all of the scorer's data (with the prior of strength `shrinkage`,
+/// [`crate::shrinkage`]) and scored on `holdout`, under both
 /// protocols: as fitted (the training frame), and with the always-estimated frame blocks (registration,
 /// tool point) refitted on the hold-out file — which may be in another tracker frame or carry another
 /// probe — the effects kept as fitted.
@@ -157,12 +159,13 @@ pub(crate) fn transfer_score(
     scorer: &Scorer<'_>,
     holdout: &Dataset,
     effects: &[Effect],
+    shrinkage: f64,
     config: &Config,
 ) -> Result<Transfer, DiagnoseError> {
     let robot = scorer.robot;
     let rows: Vec<usize> = (0..holdout.len()).collect();
     let terms = PoseTerms::against(robot, holdout, scorer.data, config.orientation_lever_mm);
-    let (trained, f) = scorer.full_fit(effects)?;
+    let (trained, f) = scorer.fit_shrunk(effects, &scorer.all(), shrinkage)?;
     let score = |model: &Model, theta: &[f64]| -> Result<Stats, DiagnoseError> {
         let r = residuals(robot, model, theta, holdout, &rows, &terms)?;
         Ok(Stats::of(&norms(&r, terms.stride())))
@@ -216,7 +219,7 @@ pub fn evaluate(
             all.push(*e);
         }
     }
-    transfer_score(&scorer, holdout, &all, config)
+    transfer_score(&scorer, holdout, &all, 0.0, config)
 }
 
 #[cfg(test)]

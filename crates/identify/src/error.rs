@@ -62,4 +62,14 @@ pub enum IdentifyError {
         /// Values given.
         got: usize,
     },
+    /// A prior whose lengths are not the model's.
+    #[error("a prior of {centre} centres and {weight} weights for a model of {expected} parameters")]
+    PriorLength {
+        /// The model's parameters.
+        expected: usize,
+        /// Centres given.
+        centre: usize,
+        /// Weights given.
+        weight: usize,
+    },
 }

@@ -75,13 +75,28 @@ pub struct Start {
     pub movable: Vec<bool>,
     /// Iterations per pass before the fit stops unconverged.
     pub max_iterations: usize,
+    /// A Gaussian prior on the parameters (shrinkage), none by default.
+    pub prior: Option<Prior>,
 }
 
 impl Start {
     /// From `theta`, moving the `movable` parameters, at most [`MAX_ITERATIONS`] per pass.
     pub fn new(theta: Vec<f64>, movable: Vec<bool>) -> Self {
-        Self { theta, movable, max_iterations: MAX_ITERATIONS }
+        Self { theta, movable, max_iterations: MAX_ITERATIONS, prior: None }
     }
+}
+
+/// A Gaussian prior on the parameters: the fit minimises `Σ r² + Σₖ wₖ² (θₖ − cₖ)²` — the residuals of
+/// the data and, for each parameter with a weight `wₖ > 0`, one more residual `wₖ (cₖ − θₖ)`
+/// (Tikhonov regularisation; the maximum a posteriori estimate under a normal prior of mean `cₖ` and
+/// standard deviation `σ / wₖ`, `σ` the residuals' noise). Which parameters are identifiable is decided
+/// on the data alone.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prior {
+    /// The prior's mean of each parameter.
+    pub centre: Vec<f64>,
+    /// Each parameter's weight (0: no prior on it), in residual units per unit of the parameter.
+    pub weight: Vec<f64>,
 }
 
 /// What one fit evaluates: a model on some rows of a data set.
@@ -91,17 +106,41 @@ struct Problem<'a> {
     data: &'a Dataset,
     rows: &'a [usize],
     terms: &'a PoseTerms,
+    prior: Option<&'a Prior>,
 }
 
 impl Problem<'_> {
-    /// The weighted residuals at `theta`, and the Jacobian into `jac` when given.
+    /// The weighted residuals at `theta` (the prior's rows after the data's), and the Jacobian into `jac`
+    /// when given.
     fn residuals(&self, theta: &[f64], jac: Option<&mut Mat<f64>>) -> Result<Vec<f64>, IdentifyError> {
-        weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, jac)
+        let Some(prior) = self.prior else {
+            return weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, jac);
+        };
+        let n = self.data_rows();
+        let mut data_jac = jac.as_ref().map(|_| Mat::zeros(n, theta.len()));
+        let mut r = weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, data_jac.as_mut())?;
+        let priored: Vec<usize> = (0..theta.len()).filter(|&k| prior.weight[k] > 0.0).collect();
+        // As the data's rows, `measured − predicted`: the prior's mean is the measurement, `wₖ θₖ` the
+        // prediction (whose derivative the Jacobian holds).
+        r.extend(priored.iter().map(|&k| prior.weight[k] * (prior.centre[k] - theta[k])));
+        if let (Some(jac), Some(d)) = (jac, data_jac) {
+            jac.fill(0.0);
+            jac.as_mut().subrows_mut(0, n).copy_from(&d);
+            for (i, &k) in priored.iter().enumerate() {
+                jac[(n + i, k)] = prior.weight[k];
+            }
+        }
+        Ok(r)
     }
 
-    /// Residual rows.
-    fn rows(&self) -> usize {
+    /// Residual rows of the data.
+    fn data_rows(&self) -> usize {
         self.rows.len() * self.terms.stride()
+    }
+
+    /// Residual rows, the prior's included.
+    fn rows(&self) -> usize {
+        self.data_rows() + self.prior.map_or(0, |p| p.weight.iter().filter(|w| **w > 0.0).count())
     }
 }
 
@@ -144,7 +183,16 @@ pub fn fit_from(
     terms: &PoseTerms,
     start: &Start,
 ) -> Result<Fit, IdentifyError> {
-    let problem = Problem { robot, model, data, rows, terms };
+    if let Some(p) = &start.prior
+        && (p.centre.len() != model.len() || p.weight.len() != model.len())
+    {
+        return Err(IdentifyError::PriorLength {
+            expected: model.len(),
+            centre: p.centre.len(),
+            weight: p.weight.len(),
+        });
+    }
+    let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref() };
     let rates = Rates { columns: model.time_constants() };
     let mut jac = Mat::zeros(problem.rows(), model.len());
     let r = problem.residuals(&start.theta, Some(&mut jac))?;
@@ -161,7 +209,12 @@ pub fn fit_from(
         let norms: Vec<f64> = (0..model.len()).map(|c| it.jac.col(c).norm_l2()).collect();
         let inert_now = inert_columns(&norms);
         inert = (0..model.len()).any(|c| start.movable[c] && inert_now[c]);
-        let decided = identifiable(&it.jac, &start.movable);
+        // Identifiable from the data alone: the prior's rows would make every column so.
+        let decided = if problem.prior.is_some() {
+            identifiable(&it.jac.subrows(0, problem.data_rows()).to_owned(), &start.movable)
+        } else {
+            identifiable(&it.jac, &start.movable)
+        };
         if decided.free == free {
             break;
         }
@@ -382,5 +435,82 @@ mod convergence {
                 full.std[k]
             );
         }
+    }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod prior {
+    use nalgebra::{DMatrix, DVector, Vector3};
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use thermokin_chain::{Dataset, Measurement, Robot};
+    use thermokin_testdata::{gauss, irb140_table9};
+
+    use super::{Prior, Start, fit_from};
+    use crate::{Effect, Model, PoseTerms, residuals_and_jacobian};
+
+    /// The shrunk fit against the closed form of ridge regression: the tool point's position enters the
+    /// prediction affinely (`p = R(q)·t + p₀(q)`), so the penalised least squares has the solution
+    /// `θ* = θ₀ + (JᵀJ + W)⁻¹ (Jᵀ r₀ + W (c − θ₀))` (`W = diag(wₖ²)`, `r₀` the residuals at `θ₀`),
+    /// computed here with nalgebra, not by the iteration. A zero weight leaves the parameter to the
+    /// data; an overwhelming one holds it at the prior's mean.
+    #[test]
+    fn the_prior_gives_the_ridge_solution_of_an_affine_problem() {
+        let chain = irb140_table9();
+        let robot = Robot::new("IRB 140", chain.clone());
+        let mut rng = ChaCha8Rng::seed_from_u64(17);
+        let tool = Vector3::new(0.8, -0.5, 1.2);
+        let measurements: Vec<Measurement> = (0..25)
+            .map(|_| {
+                let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
+                let pose = chain.tool_pose(&q).unwrap();
+                let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * 0.05;
+                Measurement {
+                    time_min: 0.0,
+                    position_mm: (pose * nalgebra::Point3::from(tool)).coords + noise,
+                    q,
+                    orientation: None,
+                    position_std_mm: None,
+                    temps: Vec::new(),
+                }
+            })
+            .collect();
+        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let model = Model::new(&robot, vec![Effect::ToolPoint]).unwrap();
+        let all: Vec<usize> = (0..data.len()).collect();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let theta0 = model.initial();
+        let (r0, jac) = residuals_and_jacobian(&robot, &model, &theta0, &data, &all, &terms).unwrap();
+        let j = DMatrix::from_fn(jac.nrows(), jac.ncols(), |i, k| jac[(i, k)]);
+        let centre = vec![0.3, 0.0, -0.4];
+        for weight in [vec![0.0; 3], vec![2.0, 5.0, 0.0], vec![1e6; 3]] {
+            let w2 = DMatrix::from_diagonal(&DVector::from_iterator(3, weight.iter().map(|w| w * w)));
+            let c_minus = DVector::from_iterator(3, centre.iter().zip(&theta0).map(|(c, t)| c - t));
+            let rhs = j.transpose() * DVector::from_column_slice(&r0) + &w2 * c_minus;
+            let step = (j.transpose() * &j + &w2).lu().solve(&rhs).unwrap();
+            let mut start = Start::new(theta0.clone(), vec![true; 3]);
+            start.prior = Some(Prior { centre: centre.clone(), weight: weight.clone() });
+            let f = fit_from(&robot, &model, &data, &all, &terms, &start).unwrap();
+            assert!(f.converged);
+            for k in 0..3 {
+                // The iteration stops within 1e-9 of the cost: ~1e-5 of a σ of 0.01 mm, far below 1e-6 mm.
+                assert!(
+                    (f.theta[k] - (theta0[k] + step[k])).abs() < 1e-6,
+                    "{weight:?} {k}: {} vs {}",
+                    f.theta[k],
+                    theta0[k] + step[k]
+                );
+            }
+            if weight[0] > 1e5 {
+                assert!((f.theta[0] - centre[0]).abs() < 1e-6);
+            }
+        }
+        // The data decide where the prior has no weight: the tool point found within 0.05 mm (its length:
+        // the parameters are in the last joint's same-orientation frame, turned against the tool's).
+        let free = fit_from(&robot, &model, &data, &all, &terms, &Start::new(theta0.clone(), vec![true; 3])).unwrap();
+        let o = model.offsets()[0];
+        let found = Vector3::new(free.theta[o], free.theta[o + 1], free.theta[o + 2]);
+        assert!((found.norm() - tool.norm()).abs() < 0.05, "{found:?}");
     }
 }

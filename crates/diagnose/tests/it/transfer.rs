@@ -3,7 +3,7 @@
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
 use thermokin_chain::{ErrorParams, Robot};
-use thermokin_diagnose::{Config, FoldGrouping, Validation, diagnose};
+use thermokin_diagnose::{Config, FoldGrouping, Shrinkage, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::workspace;
 
@@ -53,12 +53,21 @@ fn ur10_series_c_transfers_to_series_b() {
     }
     assert!((h.nominal.heldout_mean_mm - 1.025).abs() < 0.01, "nominal on B {:.4}", h.nominal.heldout_mean_mm);
     assert!(h.selected.heldout_mean_mm <= 0.65, "chosen model on B: {:.4} mm mean", h.selected.heldout_mean_mm);
+    // Issue #36: registration and tool refitted on B, no worse than the 0.456 mm before it (0.429 with the
+    // shrinkage). In the training frame (the export through `fk`, nothing refitted) the bound is the
+    // independent full-DH + compliance fit's 0.771 mm: 0.773 — not met, recorded in docs/diagnosis.md.
+    assert!(h.selected.heldout_mean_mm <= 0.456, "chosen model on B, refitted: {:.4}", h.selected.heldout_mean_mm);
+    eprintln!("B in the training frame: {:.4} mm mean", h.same_frame.selected.heldout_mean_mm);
     assert!(n.worse_than_nominal.is_empty(), "outer folds worse than nominal: {:?}", n.worse_than_nominal);
     assert!(report.honest_end.is_none(), "{:?}", report.honest_end);
     // Every reported parameter is identified: one standard deviation under 1 mm or 1° (a final refit that
     // re-decided identifiability at its solution once reported link_deviation[3].dz_mm ± 585 mm — the
     // same fit, parameterised through a nearly dependent rotation).
-    for e in &report.effects {
+    // The completion's rows too, fitted with the shrinkage the folds chose (without it the rows of joints 5
+    // and 6 sat at 1.4 ± 30.7 and 4.2 ± 28.0 mm: a combination the poses barely see, spread over two
+    // rows).
+    assert!(report.shrinkage > 0.0);
+    for e in report.effects.iter().chain(&report.completed) {
         for (name, p) in &e.parameters {
             assert!(p.std.is_none_or(|s| s < 1.0), "{name}: ± {:?}", p.std);
         }
@@ -232,7 +241,10 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
     // An error on one arm configuration of four only (joint 2 off by 0.1° where the elbow is above its
     // median and joint 5 positive): left out, that configuration keeps its error — more than half of all
     // the squared held-out error with a quarter of the poses. The nested figures name that fold and the
-    // verdict says the RMS is mostly it.
+    // verdict says the RMS is mostly it. Without shrinkage: it tests the verdict's naming, on the
+    // nested figures of a least-squares fit (with the prior chosen by cross-validation, the fold's
+    // held-out RMS falls from 0.0129 to 0.0102 mm against 0.0087 of noise — the shrunk geometry carries
+    // part of that configuration's error over — and no fold holds half of the squared error).
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let plain = measure(robot.chain(), 200, 304, <[f64]>::to_vec);
     let mut elbow: Vec<f64> = plain.measurements.iter().map(|m| m.q[2]).collect();
@@ -254,7 +266,8 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
 }
 
 /// Joint 2 off by 0.1° on the poses where `on(commanded)` holds (200 poses of the independent tracker,
-/// seeded), diagnosed with leave-one-configuration-out folds; the outer folds printed.
+/// seeded), diagnosed with leave-one-configuration-out folds and without shrinkage; the outer folds
+/// printed.
 fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_diagnose::Report {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let data = measure(robot.chain(), 200, seed, |q| {
@@ -264,7 +277,7 @@ fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_
         }
         a
     });
-    let config = Config { folds_by: FoldGrouping::JointConfiguration, ..Config::default() };
+    let config = Config { folds_by: FoldGrouping::JointConfiguration, shrinkage: Shrinkage::Off, ..Config::default() };
     let report = diagnose(&robot, &data, None, &config).unwrap();
     for f in &report.nested.as_ref().unwrap().folds {
         eprintln!(
