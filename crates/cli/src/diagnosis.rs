@@ -97,6 +97,29 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
     Ok(())
 }
 
+/// Where the report refused effects for what the poses cover (a joint's arc, a gravity-torque range), the
+/// command that plans the poses to measure next, from these measurements.
+fn next_poses_hint(a: &DiagnoseArgs, report: &Report) -> Result<(), Failure> {
+    let coverage = |r: &&thermokin_diagnose::Refusal| {
+        r.remedy.starts_with("measure joint") || r.remedy.starts_with("measure poses")
+    };
+    let refused: Vec<&str> =
+        report.identifiability.not_identifiable.iter().filter(coverage).map(|r| r.effect.as_str()).collect();
+    if refused.is_empty() {
+        return Ok(());
+    }
+    let tip = a.robot.tip.as_deref().map(|t| format!(" --tip {t}")).unwrap_or_default();
+    say!(
+        "\nnext poses: `thermokin plan --robot {}{tip} --frame {} --tool {} --candidates <the poses you can reach>.csv --measured {} --poses 20 --out next.csv` plans the poses that pin down {} (docs/planner.md)",
+        a.robot.robot.display(),
+        a.frame,
+        a.tool,
+        a.measurements.display(),
+        refused.join(", ")
+    );
+    Ok(())
+}
+
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
@@ -149,6 +172,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     };
     let report = run_with_progress(&a, &fitted_robot, &data, holdout.as_ref(), &config)?;
     say!("{}", report.text().to_string().trim_end());
+    next_poses_hint(&a, &report)?;
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;

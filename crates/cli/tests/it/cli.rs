@@ -434,6 +434,25 @@ fn simulate_then_diagnose() {
     assert!(v["effects"][0]["parameters"]["joint_offset[2].offset_deg"]["value"].as_f64().unwrap() > 0.049);
     assert!(v["identifiability"]["observability"]["condition_number"].as_f64().unwrap() >= 1.0);
     assert!(plots.join("residuals.svg").exists() && plots.join("heldout-per-effect.svg").exists());
+    // Effects refused for what the poses cover come with the command that plans the next poses — a
+    // command that runs (here with the measured poses themselves as the candidates).
+    let coverage = v["identifiability"]["not_identifiable"].as_array().unwrap().iter().any(|r| {
+        let remedy = r["remedy"].as_str().unwrap();
+        remedy.starts_with("measure joint") || remedy.starts_with("measure poses")
+    });
+    assert!(coverage, "the simulated set refuses nothing for coverage: the check below would not run");
+    let out = stdout(&o);
+    let hint = out.lines().find(|l| l.starts_with("next poses: `thermokin plan ")).expect("the next-poses hint");
+    let command = hint.split('`').nth(1).unwrap().replace("<the poses you can reach>.csv", m.to_str().unwrap());
+    let next = tmp("next.csv");
+    let args: Vec<String> = command
+        .split_whitespace()
+        .skip(1)
+        .map(|w| if w == "next.csv" { next.to_str().unwrap().to_string() } else { w.to_string() })
+        .collect();
+    let planned = thermokin(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(planned.status.success(), "{command}: {}", stderr(&planned));
+    assert_eq!(std::fs::read_to_string(&next).unwrap().lines().count(), 21, "20 poses and the header");
     // Bad effect specs and flags.
     for (args, needle) in [
         (
