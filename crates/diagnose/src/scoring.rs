@@ -3,7 +3,7 @@
 //! relate on the data.
 
 use std::collections::HashMap;
-use std::sync::Mutex;
+use std::sync::{Arc, Mutex};
 
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Robot};
@@ -21,6 +21,9 @@ use crate::stats::Stats;
 /// A starting frame's key: the measurement rows, whether a registration and a tool point start.
 type StartKey = (Vec<usize>, bool, bool);
 
+/// One model's fits on the folds, fold by fold: its parameters and which of them were free.
+type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>)>>;
+
 /// What every held-out evaluation of one diagnosis shares: the robot, the data with their per-pose
 /// terms, the selection's folds and the blocks its gate counts.
 pub(crate) struct Scorer<'a> {
@@ -37,6 +40,10 @@ pub(crate) struct Scorer<'a> {
     /// (every model of one fold starts from the same registration and tool point: the alternating
     /// closed form runs once per fold, not once per candidate).
     starts: Mutex<HashMap<StartKey, StartFrames>>,
+    /// The fold fits (parameters, free mask) of the models already scored on `folds`, by their effects
+    /// in order: the phases score some models more than once (a backward step, a replacement, the
+    /// leave-one-out table, the shrinkage's grid), and a fit is deterministic.
+    scored: Mutex<HashMap<Vec<Effect>, FoldFits>>,
 }
 
 /// A model scored on folds ([`Scorer::heldout_fits`]).
@@ -47,6 +54,8 @@ pub(crate) struct HeldOut {
     pub(crate) errors: Vec<f64>,
     /// Each fold's fitted parameters (empty for an empty fold).
     pub(crate) thetas: Vec<Vec<f64>>,
+    /// Each fold's free parameters (empty for an empty fold).
+    pub(crate) free: Vec<Vec<bool>>,
 }
 
 /// What a candidate adds to a model ([`Scorer::new_free`]).
@@ -71,6 +80,7 @@ impl<'a> Scorer<'a> {
             forward: forward_chained(data, config.folds),
             scale: RobotScale::of(robot, data),
             starts: Mutex::new(HashMap::new()),
+            scored: Mutex::new(HashMap::new()),
         }
     }
 
@@ -108,24 +118,41 @@ impl<'a> Scorer<'a> {
         Ok((h.stats, h.errors))
     }
 
-    /// [`Scorer::heldout_errors`] with each fold's fitted parameters.
+    /// [`Scorer::heldout_errors`] with each fold's fitted parameters; on the selection's own folds, a model
+    /// fitted before is not fitted again (its held-out errors are recomputed from its parameters: one
+    /// evaluation per fold, and no copy of every error kept per model).
     pub(crate) fn heldout_fits(&self, effects: &[Effect], folds: &Folds) -> Result<HeldOut, DiagnoseError> {
+        let own = std::ptr::eq(folds, &self.folds);
+        let known = if own { self.scored.lock().ok().and_then(|m| m.get(effects).cloned()) } else { None };
         // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
-        let per_fold: Vec<(Vec<f64>, Vec<f64>)> = folds
+        let per_fold: Vec<(Vec<f64>, Vec<f64>, Vec<bool>)> = folds
             .par_iter()
-            .map(|(train, test)| {
+            .enumerate()
+            .map(|(k, (train, test))| {
                 if train.is_empty() || test.is_empty() {
-                    return Ok((Vec::new(), Vec::new()));
+                    return Ok((Vec::new(), Vec::new(), Vec::new()));
                 }
                 let model = self.model(effects, train)?;
-                let f = fit(self.robot, &model, self.data, train, &self.terms)?;
-                let r = residuals(self.robot, &model, &f.theta, self.data, test, &self.terms)?;
-                Ok((norms(&r, self.terms.stride()), f.theta))
+                let (theta, free) = match &known {
+                    Some(fits) => fits[k].clone(),
+                    None => {
+                        let f = fit(self.robot, &model, self.data, train, &self.terms)?;
+                        (f.theta, f.free)
+                    }
+                };
+                let r = residuals(self.robot, &model, &theta, self.data, test, &self.terms)?;
+                Ok((norms(&r, self.terms.stride()), theta, free))
             })
             .collect::<Result<_, DiagnoseError>>()?;
-        let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _)| e.iter().copied()).collect();
-        let thetas = per_fold.into_iter().map(|(_, t)| t).collect();
-        Ok(HeldOut { stats: Stats::of(&errors), errors, thetas })
+        let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _, _)| e.iter().copied()).collect();
+        let (thetas, free): (Vec<Vec<f64>>, Vec<Vec<bool>>) = per_fold.into_iter().map(|(_, t, f)| (t, f)).unzip();
+        if own
+            && known.is_none()
+            && let Ok(mut m) = self.scored.lock()
+        {
+            m.insert(effects.to_vec(), Arc::new(thetas.iter().cloned().zip(free.iter().cloned()).collect()));
+        }
+        Ok(HeldOut { stats: Stats::of(&errors), errors, thetas, free })
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.

@@ -16,11 +16,11 @@
 //! UR10's 2,773 poses (8,319 rows) the largest `λ` tried is worth 1 % of the data; on 60 poses, 55 %.
 //!
 //! **How strong.** `λ` from [`GRID`] minimising the held-out mean squared error on the selection's
-//! folds (`λ = 0`, no prior, is on the grid: shrinkage is used only where it predicts better). Each
-//! fold is fitted once without the prior; the prior's solution is then one Gauss–Newton step of the
-//! penalised problem from there (exact where the model is linear in its parameters, which a fit's last
-//! steps are), and the held-out residuals are linearised the same way — so the whole grid costs two
-//! Jacobians per fold. The chosen `λ`'s model is then fitted for real (nonlinear, with the prior, from
+//! folds (`λ = 0`, no prior, is on the grid: shrinkage is used only where it predicts better). From
+//! each fold's fit without the prior (the one the phases before scored the model with, not fitted
+//! again) the prior's solution is one Gauss–Newton step of the penalised problem (exact where the model
+//! is linear in its parameters, which a fit's last steps are), and the held-out residuals are linearised
+//! the same way — so the whole grid costs three Jacobians per fold. The chosen `λ`'s model is then fitted for real (nonlinear, with the prior, from
 //! the initial values) on each fold, and kept only if those fits predict the held-out poses
 //! significantly better than the unshrunk ones by the selection's gate (where the unshrunk fit of a fold
 //! stopped short of its minimum, the linearisation can promise what the real fit does not give; and a
@@ -130,21 +130,22 @@ impl Scorer<'_> {
     /// The held-out sum of squared errors and count of `effects` for every strength of [`GRID`], each
     /// fold's prior solution one Gauss–Newton step of the penalised problem from its unshrunk fit.
     fn linearised_grid(&self, effects: &[Effect], folds: &Folds) -> Result<Vec<f64>, DiagnoseError> {
+        // The unshrunk fold fits, as the phases before scored this model (not fitted again).
+        let held = self.heldout_fits(effects, folds)?;
         let per_fold: Vec<Vec<f64>> = folds
             .par_iter()
-            .map(|(train, test)| {
+            .zip(held.thetas.par_iter().zip(&held.free))
+            .map(|((train, test), (theta, free))| {
                 if train.is_empty() || test.is_empty() {
                     return Ok(vec![0.0; GRID.len()]);
                 }
                 let model = self.model(effects, train)?;
-                let f = fit(self.robot, &model, self.data, train, &self.terms)?;
                 let (r_train, j_train) =
-                    residuals_and_jacobian(self.robot, &model, &f.theta, self.data, train, &self.terms)?;
-                let (r_test, j_test) =
-                    residuals_and_jacobian(self.robot, &model, &f.theta, self.data, test, &self.terms)?;
+                    residuals_and_jacobian(self.robot, &model, theta, self.data, train, &self.terms)?;
+                let (r_test, j_test) = residuals_and_jacobian(self.robot, &model, theta, self.data, test, &self.terms)?;
                 let (_, j_initial) =
                     residuals_and_jacobian(self.robot, &model, &model.initial(), self.data, train, &self.terms)?;
-                let cols: Vec<usize> = (0..model.len()).filter(|&c| f.free[c]).collect();
+                let cols: Vec<usize> = (0..model.len()).filter(|&c| free[c]).collect();
                 let p = cols.len();
                 let a = Mat::from_fn(p, p, |i, k| j_train.col(cols[i]).transpose() * j_train.col(cols[k]));
                 let g: Vec<f64> =
@@ -157,7 +158,7 @@ impl Scorer<'_> {
                         for (i, &c) in cols.iter().enumerate() {
                             let w2 = prior.weight[c] * prior.weight[c];
                             m[(i, i)] += w2;
-                            rhs[(i, 0)] = g[i] - w2 * (f.theta[c] - prior.centre[c]);
+                            rhs[(i, 0)] = g[i] - w2 * (theta[c] - prior.centre[c]);
                         }
                         let step = m.partial_piv_lu().solve(&rhs);
                         let stride = self.terms.stride();
