@@ -380,9 +380,10 @@ impl PyReport {
 /// axis), `folds`, `folds_by` (`"neighbourhood"`, `"time"`, `"region"`, `"configuration"`), `frame`
 /// (`"base"` or `"tracker"`: estimate the measurement frame), `tool` (`"known"` or `"unknown"`:
 /// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`, `outliers` (`"exclude"`:
-/// gross errors listed and left out, or `"keep"`). Runs without the GIL.
+/// gross errors listed and left out, or `"keep"`), `shrinkage` (`"cross-validated"` or `"off"`). Runs
+/// without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -399,6 +400,7 @@ pub fn diagnose(
     orientation_lever_mm: Option<f64>,
     orientation_noise_deg: Option<f64>,
     outliers: Option<&str>,
+    shrinkage: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -428,6 +430,7 @@ pub fn diagnose(
         frame: choice("frame", frame, defaults.frame)?,
         tool: choice("tool", tool, defaults.tool)?,
         outliers: choice("outliers", outliers, defaults.outliers)?,
+        shrinkage: choice("shrinkage", shrinkage, defaults.shrinkage)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -216,6 +216,7 @@ def diagnose(
     orientation_lever_mm: float | None = None,
     orientation_noise_deg: float | None = None,
     outliers: str | None = None,
+    shrinkage: str | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,

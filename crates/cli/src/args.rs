@@ -6,7 +6,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use thermokin_compensate::{Accumulation, Controller, Cycle, ResultsFormat};
 use thermokin_deform::{SemanticsKind, TimeProfile};
-use thermokin_diagnose::{Config, FoldGrouping, Outliers, SimulationConfig};
+use thermokin_diagnose::{Config, FoldGrouping, Outliers, Shrinkage, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
 use thermokin_planner::{Criterion, Params};
@@ -347,6 +347,11 @@ pub struct DiagnoseArgs {
     /// of every fit and figure, or kept.
     #[arg(long, value_parser = choice(Outliers::CHOICES), default_value_t = Config::default().outliers)]
     pub outliers: Outliers,
+    /// A Gaussian prior toward the nominal robot on the chosen model, as strong as cross-validation
+    /// asks and kept only where it passes the gate (few poses: the weakly seen directions pulled back),
+    /// or the least-squares fit as it is.
+    #[arg(long, value_parser = choice(Shrinkage::CHOICES), default_value_t = Config::default().shrinkage)]
+    pub shrinkage: Shrinkage,
     /// Unit of the measurement files' revolute joint columns (default: degrees, refused when every value
     /// lies within ±2π — joints written in radians; give deg to read them as degrees anyway).
     #[arg(long, value_parser = choice(JointUnits::CHOICES))]

@@ -129,6 +129,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let config = Config {
         folds_by: a.folds_by,
         outliers: a.outliers,
+        shrinkage: a.shrinkage,
         noise_mm: a.noise,
         orientation_lever_mm: a.orientation_lever,
         orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),

@@ -99,6 +99,19 @@ pub enum Shrinkage {
     Off,
 }
 
+thermokin_chain::choices!(
+    Shrinkage,
+    "shrinkage",
+    [
+        (
+            "cross-validated",
+            "the chosen model shrunk toward the nominal robot as far as the folds ask, where it passes the gate",
+            Shrinkage::CrossValidated
+        ),
+        ("off", "the least-squares fit as it is", Shrinkage::Off),
+    ]
+);
+
 /// How measurements are grouped into cross-validation folds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub enum FoldGrouping {

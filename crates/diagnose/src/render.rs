@@ -180,9 +180,10 @@ fn effects(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         )?;
     }
     if !r.effects.is_empty() && !r.completed.is_empty() {
+        let shrunk = if r.shrinkage > 0.0 { ", shrunk toward the nominal robot" } else { "" };
         writeln!(
             f,
-            "  (their values as fitted without the completion's rows, which share them out; the export carries the completed fit)"
+            "  (their values as fitted without the completion's rows, which share them out; the export carries the completed fit{shrunk})"
         )?;
     }
     for e in &r.effects {
