@@ -437,12 +437,97 @@ fn deps() -> Result<()> {
             }
         }
     }
+    let root = workspace_root();
+    let mut modules = 0;
+    for dir in crate_dirs(&root)? {
+        let (count, circles) = module_circles(&dir.join("src"))?;
+        modules += count;
+        let shown = dir.strip_prefix(&root).unwrap_or(&dir).display().to_string();
+        bad.extend(circles.into_iter().map(|c| format!("{shown}: modules in a circle: {}", c.join(" → "))));
+    }
     if bad.is_empty() {
-        println!("deps: dependency direction ok ({} crates checked)", ALLOWED.len());
+        println!(
+            "deps: dependency direction ok ({} crates checked; {modules} modules, none in a circle)",
+            ALLOWED.len()
+        );
         Ok(())
     } else {
         bail!("dependency direction broken:\n  {}", bad.join("\n  "))
     }
+}
+
+/// The modules `crate::NAME` names in one source file's text, tests (everything after `#[cfg(test)]`)
+/// and comments excepted.
+fn crate_references(text: &str) -> std::collections::BTreeSet<String> {
+    let mut out = std::collections::BTreeSet::new();
+    for line in text.lines() {
+        let code = line.trim_start();
+        if code.starts_with("#[cfg(test)]") {
+            break;
+        }
+        if code.starts_with("//") {
+            continue;
+        }
+        for piece in code.split("crate::").skip(1) {
+            let name: String = piece.chars().take_while(|c| c.is_alphanumeric() || *c == '_').collect();
+            if !name.is_empty() {
+                out.insert(name);
+            }
+        }
+    }
+    out
+}
+
+/// Within one crate's flat `src/` (each module a file), the circles of `crate::` references between
+/// modules: dependencies inside a crate point one way too (`lib.rs`/`main.rs`, the roots, excepted).
+/// Returns the module count and each circle found, as module names.
+fn module_circles(src: &Path) -> Result<(usize, Vec<Vec<String>>)> {
+    let mut graph: std::collections::BTreeMap<String, Vec<String>> = std::collections::BTreeMap::new();
+    if !src.is_dir() {
+        return Ok((0, Vec::new()));
+    }
+    let mut texts = Vec::new();
+    for entry in std::fs::read_dir(src)? {
+        let path = entry?.path();
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()).map(str::to_string) else { continue };
+        if path.extension().is_some_and(|e| e == "rs") && stem != "lib" && stem != "main" {
+            texts.push((stem, std::fs::read_to_string(&path)?));
+        }
+    }
+    let names: std::collections::BTreeSet<String> = texts.iter().map(|(n, _)| n.clone()).collect();
+    for (name, text) in &texts {
+        let refs = crate_references(text).into_iter().filter(|r| r != name && names.contains(r)).collect();
+        graph.insert(name.clone(), refs);
+    }
+    // Depth-first search: a reference back to a module on the current path closes a circle.
+    fn visit(
+        node: &str,
+        graph: &std::collections::BTreeMap<String, Vec<String>>,
+        path: &mut Vec<String>,
+        done: &mut std::collections::BTreeSet<String>,
+        circles: &mut Vec<Vec<String>>,
+    ) {
+        if let Some(at) = path.iter().position(|p| p == node) {
+            let mut circle = path[at..].to_vec();
+            circle.push(node.to_string());
+            circles.push(circle);
+            return;
+        }
+        if done.contains(node) {
+            return;
+        }
+        path.push(node.to_string());
+        for next in graph.get(node).into_iter().flatten() {
+            visit(next, graph, path, done, circles);
+        }
+        path.pop();
+        done.insert(node.to_string());
+    }
+    let (mut done, mut circles) = (std::collections::BTreeSet::new(), Vec::new());
+    for node in graph.keys() {
+        visit(node, &graph, &mut Vec::new(), &mut done, &mut circles);
+    }
+    Ok((graph.len(), circles))
 }
 
 /// The one module allowed to convert units.

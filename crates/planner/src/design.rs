@@ -3,7 +3,8 @@
 //! evaluated at the nominal robot, since a plan is made before anything is measured — reduced to the
 //! columns the candidates can identify and scaled.
 
-use faer::Mat;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par};
 use nalgebra::Vector3;
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Measurement, Robot};
@@ -136,7 +137,7 @@ impl Design {
                 candidates_rows[(r, k)]
             }
         });
-        let mut use_weight = crate::select::product(used.as_ref().transpose(), used.as_ref());
+        let mut use_weight = product(used.as_ref().transpose(), used.as_ref());
         use_weight *= faer::Scale(1.0 / candidates.len().max(1) as f64);
         Ok(Self {
             not_identifiable: model.fixed_parameters(&ident.fixed),
@@ -157,4 +158,11 @@ impl Design {
             if r < m { self.measured[(r, c)] } else { self.candidates[(3 * rows[(r - m) / 3] + (r - m) % 3, c)] }
         })
     }
+}
+
+/// `a · b` (a new matrix).
+pub(crate) fn product(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::zeros(a.nrows(), b.ncols());
+    matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    out
 }

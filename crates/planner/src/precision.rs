@@ -8,7 +8,8 @@ use rand_chacha::ChaCha8Rng;
 use thermokin_identify::{FixedParameter, Observability, identifiable, observability};
 
 use crate::design::Design;
-use crate::select::{information, log_det_inverse, product};
+use crate::design::product;
+use crate::select::{information, log_det_inverse};
 
 /// What one set of poses gives.
 pub(crate) struct Precision {

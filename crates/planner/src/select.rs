@@ -31,7 +31,7 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::{Accum, Mat, Par};
 use nalgebra::Matrix3;
 
-use crate::design::Design;
+use crate::design::{Design, product};
 use crate::params::Criterion;
 
 /// The ridge `δ` of the criterion, in the scaled columns (where one pose adds about 1 to each column's
@@ -89,13 +89,6 @@ fn diagonal_blocks(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
         let i = r / 3;
         (0..a.ncols()).map(|k| a[(r, k)] * b[(3 * i + c, k)]).sum::<f64>()
     })
-}
-
-/// `a · b` (a new matrix).
-pub(crate) fn product(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat<f64> {
-    let mut out = Mat::zeros(a.nrows(), b.ncols());
-    matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
-    out
 }
 
 /// `trace(a · b)` of two square matrices.
