@@ -758,6 +758,28 @@ fn documents(root: &Path) -> Result<Vec<PathBuf>> {
     Ok(docs)
 }
 
+/// The source files a document names, as workspace paths with their 1-based line: `crates/X/src/Y.rs`
+/// (or `…/tests/…`, `…/benches/…`) written out, and `thermokin-X/src/Y.rs` for the crate of that name.
+fn source_paths(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        for (prefix, replace) in [("crates/", "crates/"), ("thermokin-", "crates/")] {
+            for piece in line.split(prefix).skip(1) {
+                let path: String =
+                    piece.chars().take_while(|c| c.is_alphanumeric() || matches!(c, '_' | '-' | '/' | '.')).collect();
+                let path = path.trim_end_matches('.');
+                let mut parts = path.splitn(2, '/');
+                let (Some(krate), Some(rest)) = (parts.next(), parts.next()) else { continue };
+                let kept = ["src/", "tests/", "benches/"].iter().any(|d| rest.starts_with(d));
+                if kept && rest.ends_with(".rs") {
+                    out.push((i + 1, format!("{replace}{krate}/{rest}")));
+                }
+            }
+        }
+    }
+    out
+}
+
 fn tidy() -> Result<()> {
     let root = workspace_root();
     let mut bad = Vec::new();
@@ -795,8 +817,22 @@ fn tidy() -> Result<()> {
             stale.join("\n  ")
         )
     }
+    let mut maps = documents(&root)?;
+    maps.extend(["ARCHITECTURE.md", "README.md"].map(|f| root.join(f)));
+    let mut missing = Vec::new();
+    for doc in &maps {
+        let text = std::fs::read_to_string(doc).with_context(|| format!("reading {}", doc.display()))?;
+        for (line, path) in source_paths(&text) {
+            if !root.join(&path).is_file() {
+                missing.push(format!("{}:{line}: {path}", doc.strip_prefix(&root).unwrap_or(doc).display()));
+            }
+        }
+    }
+    if !missing.is_empty() {
+        bail!("source files the documents name that do not exist (moved or renamed?):\n  {}", missing.join("\n  "))
+    }
     println!(
-        "tidy: every unit conversion goes through {UNITS_MODULE}, no function over {MAX_FUNCTION_LINES} lines ({} files checked), every figure in docs/ recorded or checked",
+        "tidy: every unit conversion goes through {UNITS_MODULE}, no function over {MAX_FUNCTION_LINES} lines ({} files checked), every figure in docs/ recorded or checked, every source file the documents name exists",
         files.len()
     );
     Ok(())
@@ -807,6 +843,20 @@ mod tests {
     #![allow(clippy::unwrap_used, clippy::panic)]
 
     use std::collections::BTreeSet;
+
+    #[test]
+    fn source_paths_are_read_in_both_spellings() {
+        let text = "see `crates/chain/src/units.rs` and\nthe identification (`thermokin-identify/src/fit.rs`), `crates/io/tests/it/main.rs`.";
+        let paths: Vec<(usize, String)> = super::source_paths(text);
+        assert_eq!(
+            paths,
+            vec![
+                (1, "crates/chain/src/units.rs".to_string()),
+                (2, "crates/io/tests/it/main.rs".to_string()),
+                (2, "crates/identify/src/fit.rs".to_string())
+            ]
+        );
+    }
 
     #[test]
     fn a_figure_without_a_record_is_caught_and_a_recorded_or_checked_one_is_not() {
