@@ -36,11 +36,16 @@ pub struct JointCorrection {
     pub cyclic_rad: [f64; 4],
     /// Gravity compliance `k`, radians per N·m (revolute joints only).
     pub compliance_rad_per_nm: f64,
+    /// The coupling `c` of this joint's compliance with the next joint's, radians per N·m: this joint
+    /// moves by `c · τ_next` and the next by `c · τ_this` (a drive the two share; revolute joints only,
+    /// zero on the last joint).
+    pub coupling_rad_per_nm: f64,
 }
 
 impl JointCorrection {
     /// No correction.
-    pub const NONE: JointCorrection = JointCorrection { scale: 0.0, cyclic_rad: [0.0; 4], compliance_rad_per_nm: 0.0 };
+    pub const NONE: JointCorrection =
+        JointCorrection { scale: 0.0, cyclic_rad: [0.0; 4], compliance_rad_per_nm: 0.0, coupling_rad_per_nm: 0.0 };
 
     /// `true` when every coefficient is zero.
     pub fn is_none(&self) -> bool {
@@ -223,12 +228,19 @@ impl RobotModel {
         }
         for (j, (c, joint)) in joints.iter().zip(chain.joints()).enumerate() {
             let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
-            let all = [c.scale, c.compliance_rad_per_nm].into_iter().chain(c.cyclic_rad);
+            let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm].into_iter().chain(c.cyclic_rad);
             if all.clone().any(|v| !v.is_finite()) {
                 return bad("every coefficient must be finite".into());
             }
-            if joint.kind == JointKind::Prismatic && (c.cyclic_rad != [0.0; 4] || c.compliance_rad_per_nm != 0.0) {
+            if joint.kind == JointKind::Prismatic
+                && (c.cyclic_rad != [0.0; 4] || c.compliance_rad_per_nm != 0.0 || c.coupling_rad_per_nm != 0.0)
+            {
                 return bad("cyclic terms and gravity compliance are for revolute joints".into());
+            }
+            if c.coupling_rad_per_nm != 0.0
+                && chain.joints().get(j + 1).is_none_or(|next| next.kind != JointKind::Revolute)
+            {
+                return bad("a compliance coupling is with the next joint, which must be revolute".into());
             }
             if c.scale.abs() + c.cyclic_rad.iter().map(|a| a.abs() * 2.0).sum::<f64>() > MAX_CORRECTION_SLOPE {
                 return bad(format!(
@@ -427,6 +439,9 @@ impl RobotModel {
             if c.compliance_rad_per_nm != 0.0 {
                 out.push(format!("joint {} ({}): gravity compliance", j + 1, names[j]));
             }
+            if c.coupling_rad_per_nm != 0.0 {
+                out.push(format!("joints {} and {}: compliance coupling", j + 1, j + 2));
+            }
         }
         for d in &self.drift {
             out.push(format!("{}: thermal drift, {}", row_name(d.row), d.law.describe()));
@@ -476,12 +491,19 @@ impl RobotModel {
         if self.joints.iter().all(JointCorrection::is_none) {
             return Ok(commanded.to_vec());
         }
-        let torques = if self.joints.iter().any(|c| c.compliance_rad_per_nm != 0.0) {
+        let torques = if self.joints.iter().any(|c| c.compliance_rad_per_nm != 0.0 || c.coupling_rad_per_nm != 0.0) {
             self.torques(commanded, state)?
         } else {
             vec![0.0; commanded.len()]
         };
-        Ok(commanded.iter().zip(&self.joints).zip(&torques).map(|((&c, k), &t)| c + k.delta(c, t)).collect())
+        let mut actual: Vec<f64> =
+            commanded.iter().zip(&self.joints).zip(&torques).map(|((&c, k), &t)| c + k.delta(c, t)).collect();
+        // A coupling moves both joints of its pair, each by the other's torque.
+        for (j, k) in self.joints.iter().enumerate().filter(|(_, k)| k.coupling_rad_per_nm != 0.0) {
+            actual[j] += k.coupling_rad_per_nm * torques[j + 1];
+            actual[j + 1] += k.coupling_rad_per_nm * torques[j];
+        }
+        Ok(actual)
     }
 
     /// The commanded values that make the chain see `actual` in `state`: the inverse of

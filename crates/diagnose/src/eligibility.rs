@@ -148,6 +148,21 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
                 ),
             })
         }
+        Effect::ComplianceCoupling(j) => {
+            // Each joint of the pair moves with the other's torque: both torques must span what a
+            // compliance of either joint needs; the first refusal of the two is the coupling's.
+            let next = thermokin_identify::JointIndex::of(robot, j.index() + 1).ok()?;
+            [j, next].into_iter().find_map(|k| coverage(scorer, Effect::JointCompliance(k), rules)).map(|r| Refusal {
+                effect: e.label(),
+                reason: format!(
+                    "it moves joints {} and {} with each other's torque; {}",
+                    j.number(),
+                    next.number(),
+                    r.reason
+                ),
+                remedy: r.remedy,
+            })
+        }
         Effect::ThermalDrift(j, DriftShape::Temperature) => {
             let j = j.index();
             let (lo, hi) = span(scorer.terms.rise.iter().map(|r| r[j]));

@@ -168,6 +168,25 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let lever = lever_of(j);
             over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
         }
+        Effect::ComplianceCoupling(j) => {
+            // The larger of the two deflections it causes, each at its own joint's lever (no sign rule:
+            // an off-diagonal compliance may take either).
+            let (a, b) = (j.index(), j.index() + 1);
+            let moved =
+                |from: usize, at: usize| (v[0] * scale.max_torque_nm[from]).abs() * scale.axis_lever_mm[at].max(1.0);
+            let (deflection, lever) = if moved(b, a) >= moved(a, b) {
+                (v[0] * scale.max_torque_nm[b], scale.axis_lever_mm[a].max(1.0))
+            } else {
+                (v[0] * scale.max_torque_nm[a], scale.axis_lever_mm[b].max(1.0))
+            };
+            over(
+                "the coupled deflection at the largest gravity torque",
+                deg(deflection),
+                deflection.abs() * lever,
+                lever,
+                "°",
+            )
+        }
         Effect::JointOffset(j) | Effect::JointScale(j) | Effect::Periodic(j) | Effect::JointCompliance(j) => {
             let lever = scale.axis_lever_mm[j.index()].max(1.0);
             let revolute = scale.revolute[j.index()];

@@ -80,7 +80,8 @@ impl HiddenEffect {
     }
 
     /// The effect at a random size typical of a calibrated industrial arm, drawn from `rng`: a zero
-    /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m, a gear-ratio error of 2e-4–6e-4,
+    /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m (a coupling of two: 3e-4–1e-3
+    /// either way), a gear-ratio error of 2e-4–6e-4,
     /// cyclic amplitudes within ±0.03°, an exponential drift's τ of 30–90 min, translations within
     /// ±0.4 mm and rotations within ±0.02° otherwise.
     pub fn typical(effect: Effect, rng: &mut impl Rng) -> Self {
@@ -90,6 +91,9 @@ impl HiddenEffect {
                     rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }
                 (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
+                (Effect::ComplianceCoupling(_), _) => {
+                    rng.random_range(3e-4..1e-3) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
+                }
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
                 (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),

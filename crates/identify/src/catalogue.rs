@@ -6,6 +6,7 @@ use thermokin_chain::{Dataset, JointKind, Robot};
 
 use crate::effect::{DriftShape, Effect, JointIndex};
 use crate::error::IdentifyError;
+use crate::terms::max_gravity_torques;
 
 /// In which frame the measurements are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -75,7 +76,8 @@ impl Setup {
 
     /// The catalogue's candidates for `robot` and `data`, in catalogue order: the base and tool frames
     /// where they are not always estimated; per joint its offset and link deviation, a gravity compliance
-    /// where the joint carries mass, a gear-ratio scale and a cyclic error of a revolute joint; a thermal
+    /// where the joint carries mass, a coupling of two neighbouring joints' compliances where gravity loads
+    /// both, a gear-ratio scale and a cyclic error of a revolute joint; a thermal
     /// drift (linear and exponential) when the data span time, one per kelvin when they carry
     /// temperatures.
     pub fn candidates(&self, robot: &Robot, data: &Dataset) -> Result<Vec<Effect>, IdentifyError> {
@@ -94,6 +96,20 @@ impl Setup {
             let carries_mass = robot.masses().iter().skip(j.index()).any(Option::is_some);
             if carries_mass {
                 c.push(Effect::JointCompliance(j));
+            }
+        }
+        // A compliance coupling of two neighbouring revolute joints that gravity both loads (a drive the
+        // two share): a joint gravity never loads — a vertical first axis — has no torque to couple.
+        if joints.len() > 1 && robot.masses().iter().any(Option::is_some) {
+            let largest = max_gravity_torques(robot);
+            let top = largest.iter().copied().fold(0.0, f64::max);
+            for pair in joints.windows(2) {
+                let revolute = pair.iter().all(|j| robot.chain().joints()[j.index()].kind == JointKind::Revolute);
+                // Rounding leaves ~1e-15 of the largest torque on an axis gravity never loads.
+                let loaded = pair.iter().all(|j| largest[j.index()] > 1e-6 * top);
+                if revolute && loaded {
+                    c.push(Effect::ComplianceCoupling(pair[0]));
+                }
             }
         }
         // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity).

@@ -101,6 +101,10 @@ pub enum Effect {
     LinkDeviation(JointIndex),
     /// Gravity compliance of a joint: Δq = k · τ_gravity(q) (1).
     JointCompliance(JointIndex),
+    /// The coupling of the gravity compliances of joint `j` and the next, `j + 1` — a drive the two
+    /// share (a differential, a cable pair): `Δq_j += c · τ_{j+1}` and `Δq_{j+1} += c · τ_j`, the
+    /// symmetric off-diagonal term of the two joints' compliance matrix (Maxwell–Betti reciprocity) (1).
+    ComplianceCoupling(JointIndex),
     /// A gear-ratio (scale) error of a revolute joint: Δq = s · q (1, dimensionless).
     JointScale(JointIndex),
     /// A cyclic encoder error of a revolute joint, once and twice per revolution:
@@ -111,12 +115,13 @@ pub enum Effect {
 }
 
 /// The effect names of reports and flags, in catalogue order.
-pub const EFFECT_NAMES: [&str; 9] = [
+pub const EFFECT_NAMES: [&str; 10] = [
     "base_frame",
     "tool_frame",
     "joint_offset",
     "link_deviation",
     "joint_compliance",
+    "compliance_coupling",
     "joint_scale",
     "periodic",
     "thermal_drift",
@@ -140,6 +145,12 @@ impl Effect {
             "joint_offset" => Ok(Effect::JointOffset(on(joint)?)),
             "link_deviation" => Ok(Effect::LinkDeviation(on(joint)?)),
             "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
+            "compliance_coupling" => {
+                let j = on(joint)?;
+                // Joint j and the next: the next must exist.
+                JointIndex::of(robot, j.index() + 1)?;
+                Ok(Effect::ComplianceCoupling(j))
+            }
             "joint_scale" => Ok(Effect::JointScale(on(joint)?)),
             "periodic" => Ok(Effect::Periodic(on(joint)?)),
             "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
@@ -167,6 +178,7 @@ impl Effect {
             Effect::JointOffset(j)
             | Effect::LinkDeviation(j)
             | Effect::JointCompliance(j)
+            | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
             | Effect::ThermalDrift(j, _) => Some(j),
@@ -181,6 +193,9 @@ impl Effect {
     pub fn validate(&self, dof: usize) -> Result<(), IdentifyError> {
         match self.joint() {
             Some(j) if j.index() >= dof => Err(IdentifyError::NoSuchJoint { joint: j.number(), dof }),
+            Some(j) if matches!(self, Effect::ComplianceCoupling(_)) && j.index() + 1 >= dof => {
+                Err(IdentifyError::NoSuchJoint { joint: j.number() + 1, dof })
+            }
             _ => Ok(()),
         }
     }
@@ -192,7 +207,10 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
             Effect::ToolPoint | Effect::ToolRotation => 3,
-            Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::JointScale(_) => 1,
+            Effect::JointOffset(_)
+            | Effect::JointCompliance(_)
+            | Effect::ComplianceCoupling(_)
+            | Effect::JointScale(_) => 1,
             Effect::Periodic(_) => 4,
         }
     }
@@ -213,6 +231,7 @@ impl Effect {
             Effect::JointOffset(_) => "joint_offset",
             Effect::LinkDeviation(_) => "link_deviation",
             Effect::JointCompliance(_) => "joint_compliance",
+            Effect::ComplianceCoupling(_) => "compliance_coupling",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
             Effect::ThermalDrift(..) => "thermal_drift",
@@ -242,6 +261,7 @@ impl Effect {
             Effect::ToolRotation => six[3..].iter().map(|n| format!("{prefix}.{n}")).collect(),
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
+            Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
             Effect::Periodic(_) => {
                 ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
@@ -275,7 +295,11 @@ impl Effect {
     pub fn is_static(&self) -> bool {
         !matches!(
             self,
-            Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..)
+            Effect::JointCompliance(_)
+                | Effect::ComplianceCoupling(_)
+                | Effect::JointScale(_)
+                | Effect::Periodic(_)
+                | Effect::ThermalDrift(..)
         )
     }
 
@@ -294,9 +318,14 @@ impl Effect {
     /// sides.
     pub fn is_angle(&self, k: usize) -> bool {
         match (self, k) {
-            (Effect::JointOffset(_) | Effect::JointCompliance(_) | Effect::Periodic(_) | Effect::ToolRotation, _) => {
-                true
-            }
+            (
+                Effect::JointOffset(_)
+                | Effect::JointCompliance(_)
+                | Effect::ComplianceCoupling(_)
+                | Effect::Periodic(_)
+                | Effect::ToolRotation,
+                _,
+            ) => true,
             (Effect::JointScale(_), _) => false,
             (Effect::ToolPoint, _) => false,
             (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,

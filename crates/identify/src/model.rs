@@ -166,6 +166,7 @@ impl Model {
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
+                Effect::ComplianceCoupling(j) => joints[j.index()].coupling_rad_per_nm += theta[o],
                 Effect::JointScale(j) => joints[j.index()].scale += theta[o],
                 Effect::Periodic(j) => {
                     for (c, t) in joints[j.index()].cyclic_rad.iter_mut().zip(&theta[o..o + 4]) {
@@ -236,8 +237,11 @@ impl Model {
                 Effect::ToolFrame => tool_err = tool_err.add(&six(o)),
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
-                Effect::JointCompliance(_) | Effect::JointScale(_) | Effect::Periodic(_) | Effect::ThermalDrift(..) => {
-                }
+                Effect::JointCompliance(_)
+                | Effect::ComplianceCoupling(_)
+                | Effect::JointScale(_)
+                | Effect::Periodic(_)
+                | Effect::ThermalDrift(..) => {}
             }
         }
         let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
@@ -286,6 +290,10 @@ impl Model {
                 Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => rows.joints[j.index()] = true,
                 Effect::JointOffset(j) | Effect::JointCompliance(j) | Effect::JointScale(j) | Effect::Periodic(j) => {
                     rows.zeros[j.index()] = true
+                }
+                Effect::ComplianceCoupling(j) => {
+                    rows.zeros[j.index()] = true;
+                    rows.zeros[j.index() + 1] = true;
                 }
             }
         }

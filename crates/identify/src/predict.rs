@@ -89,7 +89,7 @@ impl Model {
                 let gravity = self
                     .effects()
                     .iter()
-                    .any(|e| matches!(e, Effect::JointCompliance(_)))
+                    .any(|e| matches!(e, Effect::JointCompliance(_) | Effect::ComplianceCoupling(_)))
                     .then(|| (chain.clone(), self.gravity_down(&chain, robot)));
                 cache.insert(ChainCache {
                     chain,
@@ -132,6 +132,11 @@ impl Model {
                 Effect::JointCompliance(j) => {
                     let j = j.index();
                     q[j] += theta[o] * cached.torques[j];
+                }
+                Effect::ComplianceCoupling(j) => {
+                    let j = j.index();
+                    q[j] += theta[o] * cached.torques[j + 1];
+                    q[j + 1] += theta[o] * cached.torques[j];
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) => {
                     let j = j.index();
@@ -248,6 +253,14 @@ impl Model {
                     let j = j.index();
                     let scale = if chain.joints()[j].kind == JointKind::Revolute { cached.torques[j] } else { 0.0 };
                     copy(o, layout.zero(j), scale);
+                }
+                Effect::ComplianceCoupling(j) => {
+                    // Both joints move: ∂p/∂c = ∂p/∂zero_j · τ_{j+1} + ∂p/∂zero_{j+1} · τ_j.
+                    let j = j.index();
+                    let (a, b) = (layout.zero(j), layout.zero(j + 1));
+                    for r in 0..6 {
+                        jac[(r, o)] = pj[(r, a)] * cached.torques[j + 1] + pj[(r, b)] * cached.torques[j];
+                    }
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) => {
                     // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).

@@ -109,3 +109,67 @@ pub(crate) fn weighted(
 pub fn norms(r: &[f64], stride: usize) -> Vec<f64> {
     r.chunks(stride).map(|c| c.iter().map(|x| x * x).sum::<f64>().sqrt()).collect()
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use nalgebra::Vector3;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+    use thermokin_chain::{Dataset, LinkMass, Measurement, Robot};
+    use thermokin_testdata::{gauss, irb140_table9};
+
+    use super::{residuals, residuals_and_jacobian};
+    use crate::{Effect, JointIndex, Model, PoseTerms};
+
+    /// The analytic Jacobian of the joint-level effects that move with gravity — a compliance and a
+    /// compliance coupling of two joints — against central differences of the residuals (which are
+    /// `measured − predicted`: the Jacobian is the prediction's, the negative of the residuals').
+    #[test]
+    fn the_gravity_effects_jacobian_is_the_finite_differences() {
+        let chain = irb140_table9();
+        let masses = (0..6)
+            .map(|j| Some(LinkMass { mass_kg: 10.0 - j as f64, com_mm: Vector3::new(50.0, 20.0 * j as f64, 100.0) }))
+            .collect();
+        let robot = Robot::new("IRB 140", chain).with_masses(masses).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        let measurements = (0..8)
+            .map(|_| Measurement {
+                time_min: 0.0,
+                q: (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect(),
+                position_mm: Vector3::new(500.0, 0.0, 600.0),
+                orientation: None,
+                position_std_mm: None,
+                temps: Vec::new(),
+            })
+            .collect();
+        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let joint = |j| JointIndex::of(&robot, j).unwrap();
+        let model =
+            Model::new(&robot, vec![Effect::JointCompliance(joint(1)), Effect::ComplianceCoupling(joint(1))]).unwrap();
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        // At a non-zero point, so that the coupling's terms interact with the compliance's.
+        let theta = vec![2e-5, -1.5e-5];
+        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        // A step of 1e-9 rad/(N·m) moves a joint by ~1e-7 rad at 100 N·m: small against the curvature,
+        // large against rounding of ~1e-12 mm.
+        let h = 1e-9;
+        for k in 0..theta.len() {
+            let (mut plus, mut minus) = (theta.clone(), theta.clone());
+            plus[k] += h;
+            minus[k] -= h;
+            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
+            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
+            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
+                let numeric = -(p - m) / (2.0 * h);
+                let scale = jac.col(k).norm_max().max(1.0);
+                assert!(
+                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
+                    "column {k}, row {r}: {} vs {numeric}",
+                    jac[(r, k)]
+                );
+            }
+        }
+    }
+}

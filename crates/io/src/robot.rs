@@ -136,6 +136,8 @@ struct JointSpec {
     cyclic_deg: Option<[f64; 4]>,
     /// Gravity compliance, degrees per N·m.
     compliance_deg_per_nm: Option<f64>,
+    /// The coupling of this joint's compliance with the next joint's, degrees per N·m.
+    compliance_coupling_deg_per_nm: Option<f64>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
     /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
@@ -180,7 +182,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -401,6 +403,10 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         if let Some(v) = spec.compliance_deg_per_nm {
             finite(path, line, &field("compliance_deg_per_nm"), &[v])?;
             c.compliance_rad_per_nm = units::radians(v);
+        }
+        if let Some(v) = spec.compliance_coupling_deg_per_nm {
+            finite(path, line, &field("compliance_coupling_deg_per_nm"), &[v])?;
+            c.coupling_rad_per_nm = units::radians(v);
         }
     }
     let mut model = RobotModel::new(robot).with_joint_corrections(joints).map_err(|e| {
@@ -767,6 +773,13 @@ fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorre
     }
     if c.compliance_rad_per_nm != 0.0 {
         s.push_str(&format!("compliance_deg_per_nm = {:e}\n", units::degrees(c.compliance_rad_per_nm)));
+    }
+    if c.coupling_rad_per_nm != 0.0 {
+        s.push_str(&format!(
+            "compliance_coupling_deg_per_nm = {:e}  # with joint {}\n",
+            units::degrees(c.coupling_rad_per_nm),
+            i + 2
+        ));
     }
     if let Some(r) = robot.ratings().get(i) {
         if let Some(v) = r.velocity {

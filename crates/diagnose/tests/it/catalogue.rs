@@ -163,3 +163,23 @@ fn an_effect_identified_over_a_short_arc_is_warned_about() {
     let report = diagnose(&robot, &wide, None, &Config::default()).unwrap();
     assert!(report.warnings.iter().all(|w| !w.contains("may not hold outside")), "{:?}", report.warnings);
 }
+
+#[test]
+fn finds_a_compliance_coupling_of_two_joints() {
+    // Joints 2 and 3 share part of a drive: each sags by 5e-4 °/N·m of the other's gravity torque (the
+    // symmetric off-diagonal term of their compliance matrix). The torques here are the chain's own
+    // (`thermokin_chain::gravity_torques` of the robot file's masses), not the diagnosis's model.
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let c = 5e-4f64.to_radians();
+    let down = -nalgebra::Vector3::z_axis();
+    check(
+        |q| {
+            let tau = thermokin_chain::gravity_torques(robot.chain(), robot.masses(), q, &down).unwrap();
+            let mut a = q.to_vec();
+            a[1] += c * tau[2];
+            a[2] += c * tau[1];
+            a
+        },
+        "compliance_coupling[2]",
+    );
+}

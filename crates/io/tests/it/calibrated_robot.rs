@@ -13,6 +13,7 @@ fn calibrated() -> RobotModel {
     joints[0].scale = 3.5e-4;
     joints[2].cyclic_rad = [0.02f64.to_radians(), 0.0, -0.004f64.to_radians(), 0.001f64.to_radians()];
     joints[1].compliance_rad_per_nm = 0.0021f64.to_radians();
+    joints[1].coupling_rad_per_nm = -0.0008f64.to_radians();
     let drift = vec![
         DriftRow {
             row: Row::Joint(1),
@@ -63,9 +64,12 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
         assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
         assert!(a.rotation.angle_to(&b.rotation) < 1e-12);
     }
+    // The coupling is written with the joint it couples to, and read back.
+    assert!(text.contains("compliance_coupling_deg_per_nm = -8e-4  # with joint 3"), "{text}");
+    assert_eq!(back.joint_corrections()[1].coupling_rad_per_nm, model.joint_corrections()[1].coupling_rad_per_nm);
     // The robot alone would drop the corrections: refused, naming them.
     let e = parse_robot_toml("cal.toml".as_ref(), &text).unwrap_err().to_string();
-    assert!(e.contains("gear-ratio") && e.contains("thermal drift"), "{e}");
+    assert!(e.contains("gear-ratio") && e.contains("thermal drift") && e.contains("compliance coupling"), "{e}");
 }
 
 #[test]
