@@ -27,7 +27,8 @@ use thermokin_chain::{Chain, ErrorParams, JointKind, LinkMass, OperatingState, R
 use crate::{AfterStabilization, DeformError, DeviationTable, Row, StateError, TableSemantics, TimeProfile};
 
 /// Joint-variable corrections of one joint, beyond the zero offset the chain holds: `Δq = s·q + a₁ sin q
-/// + b₁ cos q + a₂ sin 2q + b₂ cos 2q + k·τ` (radians; mm for a prismatic joint's scale).
+/// + b₁ cos q + a₂ sin 2q + b₂ cos 2q + k·τ` (radians; mm for a prismatic joint's scale), and a coupling
+/// with the next joint: `c·τ_next` on this joint, `c·τ_this` on the next ([`RobotModel::joint_values`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct JointCorrection {
     /// Gear-ratio (scale) error `s`, dimensionless.

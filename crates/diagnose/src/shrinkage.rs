@@ -20,19 +20,19 @@
 //! each fold's fit without the prior (the one the phases before scored the model with, not fitted
 //! again) the prior's solution is one Gauss–Newton step of the penalised problem (exact where the model
 //! is linear in its parameters, which a fit's last steps are), and the held-out residuals are linearised
-//! the same way — so the whole grid costs three Jacobians per fold. The chosen `λ`'s model is then fitted for real (nonlinear, with the prior, from
-//! the initial values) on each fold, and kept only if those fits predict the held-out poses
-//! significantly better than the unshrunk ones by the selection's gate (where the unshrunk fit of a fold
-//! stopped short of its minimum, the linearisation can promise what the real fit does not give; and a
-//! prior is a change of the model like an effect); then on all data for the export: what is reported
-//! is what is written.
+//! the same way — so the whole grid costs three Jacobians per fold. The chosen `λ`'s model is then
+//! fitted for real (nonlinear, with the prior, from the initial values) on each fold, and kept only if
+//! those fits predict the held-out poses significantly better than the unshrunk ones by the selection's
+//! gate (where the unshrunk fit of a fold stopped short of its minimum, the linearisation can promise
+//! what the real fit does not give; and a prior is a change of the model like an effect); then on all
+//! data for the export: what is reported is what is written.
 //!
 //! Measured (issue #35): the real UR10's series C, 2,773 poses → series B, a prior worth 3 rows passes
 //! the gate and the export misses B by 0.773 mm in the training frame (0.845 without), 0.429 with
 //! registration and tool refitted (0.453); five draws of 60 poses of C all take one (1–10 rows), none
-//! then worse than the nominal robot on B. On the WAM's grid a prior worth 3 rows improves the folds
-//! within the gate's uncertainty (2.370 → 2.342 mm RMS) and is not taken — it would cost the random
-//! poses 2.53 → 2.66 mm.
+//! then worse than the nominal robot on B. On the WAM's grid (before the compliance coupling joined the
+//! catalogue) a prior worth 3 rows improved the folds within the gate's uncertainty (2.370 → 2.342 mm
+//! RMS) and was not taken — it would have cost the random poses 2.53 → 2.66 mm.
 //!
 //! The standard deviations a shrunk fit reports are the posterior's (the prior's rows are residuals of
 //! the fit like the data's): a parameter the poses barely see is reported as known to about its prior,
@@ -127,8 +127,8 @@ impl Scorer<'_> {
         Ok((Stats::of(&errors), errors))
     }
 
-    /// The held-out sum of squared errors and count of `effects` for every strength of [`GRID`], each
-    /// fold's prior solution one Gauss–Newton step of the penalised problem from its unshrunk fit.
+    /// The held-out sum of squared errors of `effects` for every strength of [`GRID`], each fold's prior
+    /// solution one Gauss–Newton step of the penalised problem from its unshrunk fit.
     fn linearised_grid(&self, effects: &[Effect], folds: &Folds) -> Result<Vec<f64>, DiagnoseError> {
         // The unshrunk fold fits, as the phases before scored this model (not fitted again).
         let held = self.heldout_fits(effects, folds)?;

@@ -62,6 +62,18 @@ pub enum IdentifyError {
         /// Values given.
         got: usize,
     },
+    /// A prior with a weight that is not a finite number ≥ 0, or a centre that is not finite.
+    #[error(
+        "the prior of parameter {index}: weight {weight}, centre {centre} (a weight must be finite and ≥ 0, a centre finite)"
+    )]
+    PriorValue {
+        /// The parameter (0-based).
+        index: usize,
+        /// Its weight.
+        weight: f64,
+        /// Its centre.
+        centre: f64,
+    },
     /// A prior whose lengths are not the model's.
     #[error("a prior of {centre} centres and {weight} weights for a model of {expected} parameters")]
     PriorLength {

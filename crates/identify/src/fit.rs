@@ -192,6 +192,12 @@ pub fn fit_from(
             weight: p.weight.len(),
         });
     }
+    if let Some(p) = &start.prior
+        && let Some(index) =
+            (0..p.weight.len()).find(|&k| !(p.weight[k] >= 0.0 && p.weight[k].is_finite() && p.centre[k].is_finite()))
+    {
+        return Err(IdentifyError::PriorValue { index, weight: p.weight[index], centre: p.centre[index] });
+    }
     let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref() };
     let rates = Rates { columns: model.time_constants() };
     let mut jac = Mat::zeros(problem.rows(), model.len());
@@ -508,6 +514,10 @@ mod prior {
         }
         // The data decide where the prior has no weight: the tool point found within 0.05 mm (its length:
         // the parameters are in the last joint's same-orientation frame, turned against the tool's).
+        // A weight that is not a number is refused, not fitted with.
+        let mut bad = Start::new(theta0.clone(), vec![true; 3]);
+        bad.prior = Some(Prior { centre: centre.clone(), weight: vec![1.0, f64::NAN, 0.0] });
+        assert!(fit_from(&robot, &model, &data, &all, &terms, &bad).is_err());
         let free = fit_from(&robot, &model, &data, &all, &terms, &Start::new(theta0.clone(), vec![true; 3])).unwrap();
         let o = model.offsets()[0];
         let found = Vector3::new(free.theta[o], free.theta[o + 1], free.theta[o + 2]);
