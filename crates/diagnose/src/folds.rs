@@ -23,7 +23,7 @@ pub(crate) struct Partition {
 }
 
 impl Partition {
-    /// The block of each held-out error, in the order [`Ctx::heldout_errors`] returns them.
+    /// The block of each held-out error, in the order [`crate::scoring::Scorer::heldout_errors`] returns them.
     pub(crate) fn test_blocks(&self) -> Vec<usize> {
         self.folds
             .iter()

@@ -1,15 +1,17 @@
-//! Held-out scoring of a model of effects on the selection's folds, the gate that accepts a gain only
+//! The fit of a model of effects on some poses (least squares, or with the shrinkage's prior toward the
+//! nominal robot), its held-out scoring on the selection's folds, the gate that accepts a gain only
 //! when it exceeds its own uncertainty over blocks of poses, and how two blocks' parameter directions
 //! relate on the data.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use faer::Mat;
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Robot};
 use thermokin_identify::{
-    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, StartFrames, fit, identifiable, initial_frames, norms,
-    project_out, residuals, residuals_and_jacobian,
+    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, Prior, Start, StartFrames, fit, fit_from, identifiable,
+    initial_frames, norms, project_out, residuals, residuals_and_jacobian,
 };
 
 use crate::config::Config;
@@ -66,6 +68,28 @@ pub(crate) struct Addition {
     pub(crate) fixed: Vec<FixedParameter>,
 }
 
+/// Whether a parameter of effect `e` is shrunk ([`crate::shrinkage`]): the static effects' parameters (not the frame blocks,
+/// not a time law's).
+pub(crate) fn shrunk(e: Effect) -> bool {
+    e.is_reported() && e.is_static()
+}
+
+/// The prior of strength `lambda` for `model` ([`crate::shrinkage`]), from its Jacobian `jac` at its initial values (the
+/// nominal robot); centred there (zero deviation).
+pub(crate) fn prior(model: &Model, jac: &Mat<f64>, lambda: f64) -> Prior {
+    let n = jac.nrows().max(1) as f64;
+    let mut weight = vec![0.0; model.len()];
+    for (e, &o) in model.effects().iter().zip(model.offsets()) {
+        if !shrunk(*e) {
+            continue;
+        }
+        for k in o..o + e.len() {
+            weight[k] = (lambda * jac.col(k).squared_norm_l2() / n).sqrt();
+        }
+    }
+    Prior { centre: model.initial(), weight }
+}
+
 impl<'a> Scorer<'a> {
     /// The folds and per-measurement quantities of `data`.
     pub(crate) fn new(robot: &'a Robot, data: &'a Dataset, config: &Config) -> Self {
@@ -118,12 +142,23 @@ impl<'a> Scorer<'a> {
         Ok((h.stats, h.errors))
     }
 
-    /// [`Scorer::heldout_errors`] with each fold's fitted parameters; on the selection's own folds, a model
+    /// [`Scorer::heldout_errors`] with each fold's fitted parameters.
+    pub(crate) fn heldout_fits(&self, effects: &[Effect], folds: &Folds) -> Result<HeldOut, DiagnoseError> {
+        self.heldout_fits_with(effects, folds, 0.0)
+    }
+
+    /// [`Scorer::heldout_fits`] of the model fitted with the prior of strength `lambda` on each fold
+    /// ([`Scorer::fit_shrunk`]; 0: least squares). On the selection's own folds, a least-squares model
     /// fitted before is not fitted again (its held-out errors are recomputed from its parameters: one
     /// evaluation per fold, and no copy of every error kept per model).
-    pub(crate) fn heldout_fits(&self, effects: &[Effect], folds: &Folds) -> Result<HeldOut, DiagnoseError> {
-        let own = std::ptr::eq(folds, &self.folds);
-        let known = if own { self.scored.lock().ok().and_then(|m| m.get(effects).cloned()) } else { None };
+    pub(crate) fn heldout_fits_with(
+        &self,
+        effects: &[Effect],
+        folds: &Folds,
+        lambda: f64,
+    ) -> Result<HeldOut, DiagnoseError> {
+        let kept = lambda == 0.0 && std::ptr::eq(folds, &self.folds);
+        let known = if kept { self.scored.lock().ok().and_then(|m| m.get(effects).cloned()) } else { None };
         // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
         let per_fold: Vec<(Vec<f64>, Vec<f64>, Vec<bool>)> = folds
             .par_iter()
@@ -132,12 +167,11 @@ impl<'a> Scorer<'a> {
                 if train.is_empty() || test.is_empty() {
                     return Ok((Vec::new(), Vec::new(), Vec::new()));
                 }
-                let model = self.model(effects, train)?;
-                let (theta, free) = match &known {
-                    Some(fits) => fits[k].clone(),
+                let (model, theta, free) = match &known {
+                    Some(fits) => (self.model(effects, train)?, fits[k].0.clone(), fits[k].1.clone()),
                     None => {
-                        let f = fit(self.robot, &model, self.data, train, &self.terms)?;
-                        (f.theta, f.free)
+                        let (model, f) = self.fit_shrunk(effects, train, lambda)?;
+                        (model, f.theta, f.free)
                     }
                 };
                 let r = residuals(self.robot, &model, &theta, self.data, test, &self.terms)?;
@@ -146,13 +180,35 @@ impl<'a> Scorer<'a> {
             .collect::<Result<_, DiagnoseError>>()?;
         let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _, _)| e.iter().copied()).collect();
         let (thetas, free): (Vec<Vec<f64>>, Vec<Vec<bool>>) = per_fold.into_iter().map(|(_, t, f)| (t, f)).unzip();
-        if own
+        if kept
             && known.is_none()
             && let Ok(mut m) = self.scored.lock()
         {
             m.insert(effects.to_vec(), Arc::new(thetas.iter().cloned().zip(free.iter().cloned()).collect()));
         }
         Ok(HeldOut { stats: Stats::of(&errors), errors, thetas, free })
+    }
+
+    /// The model of `effects` fitted on `rows` with the prior of strength `lambda` ([`prior`]; 0: the
+    /// plain least-squares fit), from the initial values as every fit (a start at the unshrunk fit was
+    /// tried: where that fit had wandered along a nearly flat valley, the shrunk one stayed there).
+    pub(crate) fn fit_shrunk(
+        &self,
+        effects: &[Effect],
+        rows: &[usize],
+        lambda: f64,
+    ) -> Result<(Model, Fit), DiagnoseError> {
+        let model = self.model(effects, rows)?;
+        if lambda == 0.0 {
+            let plain = fit(self.robot, &model, self.data, rows, &self.terms)?;
+            return Ok((model, plain));
+        }
+        let initial = model.initial();
+        let (_, jac) = residuals_and_jacobian(self.robot, &model, &initial, self.data, rows, &self.terms)?;
+        let mut start = Start::new(initial, vec![true; model.len()]);
+        start.prior = Some(prior(&model, &jac, lambda));
+        let shrunk = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
+        Ok((model, shrunk))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
@@ -184,12 +240,9 @@ impl<'a> Scorer<'a> {
         Ok(residuals_and_jacobian(self.robot, model, &model.initial(), self.data, &all, &self.terms)?.1)
     }
 
-    /// The model of `effects` fitted on all measurements.
+    /// The model of `effects` fitted on all measurements (least squares).
     pub(crate) fn full_fit(&self, effects: &[Effect]) -> Result<(Model, Fit), DiagnoseError> {
-        let all = self.all();
-        let model = self.model(effects, &all)?;
-        let f = fit(self.robot, &model, self.data, &all, &self.terms)?;
-        Ok((model, f))
+        self.fit_shrunk(effects, &self.all(), 0.0)
     }
 
     /// The Bayesian information criterion of a fit on all of the data.

@@ -44,89 +44,18 @@
 use faer::Mat;
 use faer::linalg::solvers::Solve;
 use rayon::prelude::*;
-use thermokin_identify::{Effect, Fit, Model, Prior, Start, fit, fit_from, norms, residuals, residuals_and_jacobian};
+use thermokin_identify::{Effect, residuals_and_jacobian};
 
 use crate::config::{Config, Shrinkage};
 use crate::error::DiagnoseError;
 use crate::folds::Folds;
-use crate::scoring::{Scorer, significantly_better};
+use crate::scoring::{Scorer, prior, shrunk, significantly_better};
 use crate::selection::Selection;
-use crate::stats::Stats;
 
 /// The prior strengths tried, in rows of data per parameter (log-spaced; 0: no prior).
 pub(crate) const GRID: [f64; 10] = [0.0, 0.01, 0.03, 0.1, 0.3, 1.0, 3.0, 10.0, 30.0, 100.0];
 
-/// Whether a parameter of effect `e` is shrunk: the static effects' parameters (not the frame blocks,
-/// not a time law's).
-fn shrunk(e: Effect) -> bool {
-    e.is_reported() && e.is_static()
-}
-
-/// The prior of strength `lambda` for `model`, from its Jacobian `jac` at its initial values (the
-/// nominal robot); centred there (zero deviation).
-pub(crate) fn prior(model: &Model, jac: &Mat<f64>, lambda: f64) -> Prior {
-    let n = jac.nrows().max(1) as f64;
-    let mut weight = vec![0.0; model.len()];
-    for (e, &o) in model.effects().iter().zip(model.offsets()) {
-        if !shrunk(*e) {
-            continue;
-        }
-        for k in o..o + e.len() {
-            weight[k] = (lambda * jac.col(k).squared_norm_l2() / n).sqrt();
-        }
-    }
-    Prior { centre: model.initial(), weight }
-}
-
 impl Scorer<'_> {
-    /// The model of `effects` fitted on `rows` with the prior of strength `lambda` ([`prior`]; 0: the
-    /// plain least-squares fit), from the initial values as every fit (a start at the unshrunk fit was
-    /// tried: where that fit had wandered along a nearly flat valley, the shrunk one stayed there).
-    pub(crate) fn fit_shrunk(
-        &self,
-        effects: &[Effect],
-        rows: &[usize],
-        lambda: f64,
-    ) -> Result<(Model, Fit), DiagnoseError> {
-        let model = self.model(effects, rows)?;
-        if lambda == 0.0 {
-            let plain = fit(self.robot, &model, self.data, rows, &self.terms)?;
-            return Ok((model, plain));
-        }
-        let initial = model.initial();
-        let (_, jac) = residuals_and_jacobian(self.robot, &model, &initial, self.data, rows, &self.terms)?;
-        let mut start = Start::new(initial, vec![true; model.len()]);
-        start.prior = Some(prior(&model, &jac, lambda));
-        let shrunk = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
-        Ok((model, shrunk))
-    }
-
-    /// Held-out statistics and errors of `effects` fitted with the prior of strength `lambda` on each
-    /// fold ([`Scorer::fit_shrunk`]), in fold order as [`Scorer::heldout_errors`] gives them.
-    pub(crate) fn heldout_errors_shrunk(
-        &self,
-        effects: &[Effect],
-        folds: &Folds,
-        lambda: f64,
-    ) -> Result<(Stats, Vec<f64>), DiagnoseError> {
-        if lambda == 0.0 {
-            return self.heldout_errors(effects, folds);
-        }
-        let per_fold: Vec<Vec<f64>> = folds
-            .par_iter()
-            .map(|(train, test)| {
-                if train.is_empty() || test.is_empty() {
-                    return Ok(Vec::new());
-                }
-                let (model, f) = self.fit_shrunk(effects, train, lambda)?;
-                let r = residuals(self.robot, &model, &f.theta, self.data, test, &self.terms)?;
-                Ok(norms(&r, self.terms.stride()))
-            })
-            .collect::<Result<_, DiagnoseError>>()?;
-        let errors: Vec<f64> = per_fold.into_iter().flatten().collect();
-        Ok((Stats::of(&errors), errors))
-    }
-
     /// The held-out sum of squared errors of `effects` for every strength of [`GRID`], each fold's prior
     /// solution one Gauss–Newton step of the penalised problem from its unshrunk fit.
     fn linearised_grid(&self, effects: &[Effect], folds: &Folds) -> Result<Vec<f64>, DiagnoseError> {
@@ -197,7 +126,8 @@ pub(crate) fn shrink(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) 
     // The linearised grid proposes; the real shrunk fits of the folds decide, by the selection's own
     // gate: a prior is a change of the model like an effect, kept only where it predicts the held-out
     // poses significantly better than the fits without it.
-    let (stats, errors) = scorer.heldout_errors_shrunk(&sel.effects, &scorer.folds, lambda)?;
+    let held = scorer.heldout_fits_with(&sel.effects, &scorer.folds, lambda)?;
+    let (stats, errors) = (held.stats, held.errors);
     if !significantly_better(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
         return Ok(());
     }

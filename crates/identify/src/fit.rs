@@ -385,8 +385,8 @@ mod convergence {
     use nalgebra::Vector3;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-    use thermokin_chain::{Dataset, ErrorParams, Measurement, Robot};
-    use thermokin_testdata::{gauss, irb140_table9};
+    use thermokin_chain::{Dataset, ErrorParams, Robot};
+    use thermokin_testdata::{gauss, irb140_table9, measured_point};
 
     use super::{Start, fit_from};
     use crate::{Effect, JointIndex, Model, PoseTerms};
@@ -409,15 +409,7 @@ mod convergence {
             .map(|_| {
                 let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
                 let p = truth.tool_pose(&q).unwrap().translation.vector;
-                let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * 0.005;
-                Measurement {
-                    time_min: 0.0,
-                    q,
-                    position_mm: p + noise,
-                    orientation: None,
-                    position_std_mm: None,
-                    temps: Vec::new(),
-                }
+                measured_point(q, p, 0.005, &mut rng)
             })
             .collect();
         let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
@@ -451,7 +443,7 @@ mod prior {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
     use thermokin_chain::{Dataset, Measurement, Robot};
-    use thermokin_testdata::{gauss, irb140_table9};
+    use thermokin_testdata::{gauss, irb140_table9, measured_point};
 
     use super::{Prior, Start, fit_from};
     use crate::{Effect, Model, PoseTerms, residuals_and_jacobian};
@@ -471,15 +463,7 @@ mod prior {
             .map(|_| {
                 let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
                 let pose = chain.tool_pose(&q).unwrap();
-                let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * 0.05;
-                Measurement {
-                    time_min: 0.0,
-                    position_mm: (pose * nalgebra::Point3::from(tool)).coords + noise,
-                    q,
-                    orientation: None,
-                    position_std_mm: None,
-                    temps: Vec::new(),
-                }
+                measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
             })
             .collect();
         let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };

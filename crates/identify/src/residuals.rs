@@ -116,8 +116,8 @@ mod tests {
     use nalgebra::Vector3;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-    use thermokin_chain::{Dataset, LinkMass, Measurement, Robot};
-    use thermokin_testdata::{gauss, irb140_table9};
+    use thermokin_chain::{Dataset, LinkMass, Robot};
+    use thermokin_testdata::{gauss, irb140_table9, measured_point};
 
     use super::{residuals, residuals_and_jacobian};
     use crate::{Effect, JointIndex, Model, PoseTerms};
@@ -134,13 +134,9 @@ mod tests {
         let robot = Robot::new("IRB 140", chain).with_masses(masses).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let measurements = (0..8)
-            .map(|_| Measurement {
-                time_min: 0.0,
-                q: (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect(),
-                position_mm: Vector3::new(500.0, 0.0, 600.0),
-                orientation: None,
-                position_std_mm: None,
-                temps: Vec::new(),
+            .map(|_| {
+                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
+                measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
             })
             .collect();
         let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };

@@ -87,6 +87,26 @@ pub fn gauss(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
 }
 
+/// A static, position-only measurement at commanded joints `q`: `position_mm` with Gaussian noise of
+/// `noise_mm` per axis drawn from `rng` (x, y, z in that order), at time 0, without orientation or
+/// temperatures — what the simulated trackers of the tests record.
+pub fn measured_point(
+    q: Vec<f64>,
+    position_mm: nalgebra::Vector3<f64>,
+    noise_mm: f64,
+    rng: &mut rand_chacha::ChaCha8Rng,
+) -> thermokin_chain::Measurement {
+    let noise = nalgebra::Vector3::new(gauss(rng), gauss(rng), gauss(rng)) * noise_mm;
+    thermokin_chain::Measurement {
+        time_min: 0.0,
+        q,
+        position_mm: position_mm + noise,
+        orientation: None,
+        position_std_mm: None,
+        temps: Vec::new(),
+    }
+}
+
 /// Joint values drawn uniformly 10 % inside each joint's limits (real calibration poses avoid them); every
 /// joint must have limits.
 pub fn random_q(chain: &thermokin_chain::Chain, rng: &mut rand_chacha::ChaCha8Rng) -> Vec<f64> {

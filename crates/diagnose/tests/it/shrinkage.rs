@@ -4,12 +4,11 @@
 //! squares leans on what the few poses barely constrain (issue #35). The data come from the chain built
 //! with the errors (`Chain::with_errors_and_zeros`), not from the diagnosis' model.
 
-use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_chain::{Chain, Dataset, ErrorParams, Measurement, Robot};
+use thermokin_chain::{Chain, Dataset, ErrorParams, Robot};
 use thermokin_diagnose::{Config, Shrinkage, Validation, diagnose};
-use thermokin_testdata::{error_mm_deg, gauss, workspace};
+use thermokin_testdata::{error_mm_deg, gauss, measured_point, workspace};
 
 /// Noise per axis of the small set, mm (a tracker at ten metres, or a portable measuring arm): where the
 /// noise of few poses, not the model, limits the fit.
@@ -31,15 +30,7 @@ fn measure(truth: &Chain, n: usize, seed: u64, fraction: f64, noise_mm: f64) -> 
                 })
                 .collect();
             let p = truth.tool_pose(&q).unwrap().translation.vector;
-            let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * noise_mm;
-            Measurement {
-                time_min: 0.0,
-                q,
-                position_mm: p + noise,
-                orientation: None,
-                position_std_mm: None,
-                temps: Vec::new(),
-            }
+            measured_point(q, p, noise_mm, &mut rng)
         })
         .collect();
     Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }

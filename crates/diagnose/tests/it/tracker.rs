@@ -6,6 +6,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::Chain;
 use thermokin_chain::{Dataset, Measurement};
+use thermokin_testdata::measured_point;
 
 /// Noise per axis, mm.
 pub const NOISE_MM: f64 = 0.005;
@@ -20,15 +21,7 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
         .map(|_| {
             let q = random_q(chain, &mut rng);
             let p = chain.tool_pose(&actual(&q)).unwrap().translation.vector;
-            let noise = Vector3::new(gauss(&mut rng), gauss(&mut rng), gauss(&mut rng)) * NOISE_MM;
-            Measurement {
-                time_min: 0.0,
-                q,
-                position_mm: p + noise,
-                orientation: None,
-                position_std_mm: None,
-                temps: Vec::new(),
-            }
+            measured_point(q, p, NOISE_MM, &mut rng)
         })
         .collect();
     Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
