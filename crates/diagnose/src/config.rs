@@ -257,8 +257,8 @@ impl Default for Config {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Eligibility {
     /// Fraction of a joint's travel (between its limits; a revolution without limits) the data must
-    /// cover for an effect that is a function of the joint's angle — and of the gravity-torque range for
-    /// a compliance. Default 0.25.
+    /// cover for an effect that is a function of the joint's angle. Default 0.25. (A compliance is judged
+    /// by how well its deflection is told from an offset, not by a fraction of its torque range.)
     pub min_travel_fraction: f64,
     /// Temperature span (K) a per-kelvin drift needs. Default 2 K.
     pub min_temperature_span_k: f64,

@@ -183,3 +183,60 @@ fn finds_a_compliance_coupling_of_two_joints() {
         "compliance_coupling[2]",
     );
 }
+
+/// Poses of the IRB 140 with joints 2 and 3 kept within `(centre ± half)` degrees each (the rest as the
+/// tracker draws them), measured with noise on the robot whose joint 2 sags by 1e-3 °/N·m of its gravity
+/// torque (the chain's own torques); the diagnosis' refusal of `joint_compliance[2]`, if any, its chosen
+/// labels, and the fraction of the torque range the poses span.
+fn compliance_over_an_arc(half_deg: f64) -> (Option<String>, Vec<String>, f64) {
+    use rand::{Rng, SeedableRng};
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let chain = robot.chain();
+    let down = -nalgebra::Vector3::z_axis();
+    let torque = |q: &[f64]| thermokin_chain::gravity_torques(chain, robot.masses(), q, &down).unwrap()[1];
+    let k = 1e-3f64.to_radians();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(77);
+    let measurements: Vec<_> = (0..200)
+        .map(|_| {
+            let mut q = crate::tracker::random_q(chain, &mut rng);
+            q[1] = rng.random_range(20.0 - half_deg..20.0 + half_deg).to_radians();
+            q[2] = rng.random_range(-20.0 - half_deg..-20.0 + half_deg).to_radians();
+            let mut a = q.clone();
+            a[1] += k * torque(&q);
+            let p = chain.tool_pose(&a).unwrap().translation.vector;
+            thermokin_testdata::measured_point(q, p, NOISE_MM, &mut rng)
+        })
+        .collect();
+    let (lo, hi) = measurements
+        .iter()
+        .map(|m| torque(&m.q))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), t| (l.min(t), h.max(t)));
+    let fraction = (hi - lo) / (2.0 * thermokin_identify::max_gravity_torques(&robot)[1]);
+    let data = thermokin_chain::Dataset { measurements, ..Default::default() };
+    let config = Config { validation: thermokin_diagnose::Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let refusal = report
+        .identifiability
+        .not_identifiable
+        .iter()
+        .find(|r| r.effect == "joint_compliance[2]")
+        .map(|r| r.reason.clone());
+    (refusal, report.effects.iter().map(|e| e.label.clone()).collect(), fraction)
+}
+
+#[test]
+fn a_compliance_is_judged_by_what_it_can_be_told_from_not_by_a_fraction_of_its_torque_range() {
+    // Joints 2 and 3 within ±15°: the shoulder torque spans well under a quarter of its range, but 200
+    // poses at 5 µm see its change beside its level — the compliance is eligible and found (a rule of a
+    // quarter of the range, the one before 2026-11-25, refused it).
+    let (refusal, labels, fraction) = compliance_over_an_arc(15.0);
+    eprintln!("±15°: {:.0}% of the torque range; {refusal:?}; {labels:?}", 100.0 * fraction);
+    assert!(fraction < 0.25, "{fraction}");
+    assert!(refusal.is_none(), "{refusal:?}");
+    assert_eq!(labels.first().map(String::as_str), Some("joint_compliance[2]"), "{labels:?}");
+    // Within ±0.2°: the torque is nearly constant, the deflection an offset — refused as such.
+    let (refusal, labels, fraction) = compliance_over_an_arc(0.2);
+    eprintln!("±0.2°: {:.2}% of the torque range; {refusal:?}; {labels:?}", 100.0 * fraction);
+    let reason = refusal.expect("a refusal");
+    assert!(reason.contains("joint_offset[2]") && reason.contains("tell a deflection from an offset"), "{reason}");
+}

@@ -3,7 +3,7 @@
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
 use thermokin_chain::{ErrorParams, Robot};
-use thermokin_diagnose::{Config, FoldGrouping, Shrinkage, Validation, diagnose};
+use thermokin_diagnose::{Config, FoldGrouping, Outliers, Shrinkage, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::workspace;
 
@@ -267,7 +267,11 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
 
 /// Joint 2 off by 0.1° on the poses where `on(commanded)` holds (200 poses of the independent tracker,
 /// seeded), diagnosed with leave-one-configuration-out folds and without shrinkage; the outer folds
-/// printed.
+/// printed. The gross-error screen's flags are kept in the data (`Outliers::Keep`): the configuration's
+/// millimetre is what these tests are about, and the screen's full geometry, which cannot bend to it,
+/// flags every pose that carries it (51 of 200 for seed 304). Before they were kept, the verdict test
+/// passed on a bug only — the completion's gate the wrong way round put six rows fitted to noise into
+/// every outer fold, and the fold that held the most of that noise "dominated".
 fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_diagnose::Report {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let data = measure(robot.chain(), 200, seed, |q| {
@@ -277,7 +281,12 @@ fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_
         }
         a
     });
-    let config = Config { folds_by: FoldGrouping::JointConfiguration, shrinkage: Shrinkage::Off, ..Config::default() };
+    let config = Config {
+        folds_by: FoldGrouping::JointConfiguration,
+        shrinkage: Shrinkage::Off,
+        outliers: Outliers::Keep,
+        ..Config::default()
+    };
     let report = diagnose(&robot, &data, None, &config).unwrap();
     for f in &report.nested.as_ref().unwrap().folds {
         eprintln!(
