@@ -20,6 +20,7 @@ mod error;
 mod folds;
 mod forward;
 mod outliers;
+mod pairs;
 mod parsimony;
 mod plausibility;
 mod regions;

@@ -12,7 +12,9 @@
 //!    significantly worse ([`crate::parsimony`]);
 //! 6. **completion** — the model completed for use (every eligible joint row, and every compliance the
 //!    data determine, beside the chosen effects) unless the selected model is significantly better held
-//!    out ([`crate::completion`]);
+//!    out ([`crate::completion`]); then every chosen compliance coupling beside both joints' own
+//!    compliances, refused where the pair's compliance matrix is not positive semidefinite
+//!    ([`crate::pairs`]);
 //! 7. **shrinkage** — the chosen model's static effects shrunk toward the nominal robot, as strongly as
 //!    cross-validation asks ([`crate::shrinkage`]);
 //! 8. **tables** — the final model on all data, its tables and relations ([`crate::tables`]).
@@ -25,6 +27,7 @@ use crate::config::Config;
 use crate::eligibility::check;
 use crate::error::DiagnoseError;
 use crate::forward::forward;
+use crate::pairs::physical_pairs;
 use crate::parsimony::parsimony;
 use crate::report::TableRow;
 use crate::scoring::Scorer;
@@ -69,6 +72,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, D
     backward(scorer, config, &mut selection)?;
     parsimony(scorer, config, &mut selection, &eligible)?;
     complete(scorer, config, &mut selection, &eligible)?;
+    physical_pairs(scorer, &mut selection, &eligible)?;
     shrink(scorer, config, &mut selection)?;
     Ok(Selected { selection, catalogue })
 }

@@ -40,7 +40,8 @@ fn wam_grid_to_random() {
     // At or below the independent DH + gravity compliance fit in both protocols (issue #36: 2.741 same
     // frame, 2.361 refitted; the diagnosis before the issue: 3.779 and 3.535; with the geometry and the
     // determined compliances completed: 2.928 and 2.533; with the compliance coupling of joints 5 and 6 —
-    // the WAM's wrist differential — that the selection now finds: 2.671 and 2.255).
+    // the WAM's wrist differential — that the selection now finds: 2.671 and 2.255; with the pair's own
+    // compliances beside it, its compliance matrix positive semidefinite: 2.688 and 2.292).
     assert!(h.same_frame.selected.heldout_mean_mm <= 2.741, "same frame {:.4}", h.same_frame.selected.heldout_mean_mm);
     assert!(h.selected.heldout_mean_mm <= 2.361, "refitted {:.4}", h.selected.heldout_mean_mm);
     assert!(labels.contains(&"compliance_coupling[5]"), "{labels:?}");

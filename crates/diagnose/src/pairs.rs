@@ -1,0 +1,122 @@
+//! Phase 6b of the selection: a coupled pair made physical. A compliance coupling of joints `j` and
+//! `j+1` ([`Effect::ComplianceCoupling`], `c`) is the off-diagonal term of the pair's compliance matrix
+//!
+//! ```text
+//! ⎡ kⱼ  c   ⎤
+//! ⎣ c   kⱼ₊₁ ⎦
+//! ```
+//!
+//! whose diagonal are the two joints' own gravity compliances ([`Effect::JointCompliance`]). A real
+//! drive stores the work its load does on it: the matrix is positive semidefinite — `kⱼ ≥ 0`,
+//! `kⱼ₊₁ ≥ 0` and `c² ≤ kⱼ·kⱼ₊₁` — and a matrix that is not has a load under which the pair would
+//! rise against it. So the phase puts beside every chosen coupling both joints' own compliances
+//! (eligible ones; a compliance the completion left out as not determined to three standard errors is
+//! still part of the pair), fits the model on all data, and refuses a coupling whose pair is not
+//! positive semidefinite — with the three values fitted — then drops it and the compliances it brought.
+//! Nothing is gated here: the pair is what the coupling means, and the held-out figures are rescored.
+
+use thermokin_chain::units;
+use thermokin_identify::{Effect, JointIndex};
+
+use crate::error::DiagnoseError;
+use crate::report::Refusal;
+use crate::scoring::Scorer;
+use crate::selection::{Joined, Selection, Step};
+
+/// Phase 6b ([module documentation](self)).
+pub(crate) fn physical_pairs(
+    scorer: &Scorer<'_>,
+    sel: &mut Selection,
+    eligible: &[Effect],
+) -> Result<(), DiagnoseError> {
+    let before = sel.effects.clone();
+    loop {
+        let mut effects = before.iter().copied().filter(|e| !refused(sel, *e)).collect::<Vec<_>>();
+        let pairs: Vec<(JointIndex, JointIndex)> = effects
+            .iter()
+            .filter_map(|e| match e {
+                Effect::ComplianceCoupling(j) => JointIndex::of(scorer.robot, j.index() + 1).ok().map(|n| (*j, n)),
+                _ => None,
+            })
+            .collect();
+        for &(j, n) in &pairs {
+            for k in [j, n] {
+                let own = Effect::JointCompliance(k);
+                if !effects.contains(&own) && eligible.contains(&own) {
+                    effects.push(own);
+                }
+            }
+        }
+        if pairs.is_empty() && effects == before {
+            return Ok(());
+        }
+        let (model, full) = scorer.full_fit(&effects)?;
+        let value = |e: Effect| effects.iter().position(|x| *x == e).map(|i| full.theta[model.offsets()[i]]);
+        let broken = pairs.iter().find_map(|&(j, n)| {
+            let c = value(Effect::ComplianceCoupling(j))?;
+            let (kj, kn) =
+                (value(Effect::JointCompliance(j)).unwrap_or(0.0), value(Effect::JointCompliance(n)).unwrap_or(0.0));
+            (kj < 0.0 || kn < 0.0 || c * c > kj * kn).then_some((j, n, kj, kn, c))
+        });
+        match broken {
+            Some((j, n, kj, kn, c)) => sel.refused.push(not_physical(j, n, kj, kn, c)),
+            None => return accept(scorer, sel, &before, effects),
+        }
+    }
+}
+
+/// Whether `e` was refused (by this phase: a coupling whose pair is not positive semidefinite).
+fn refused(sel: &Selection, e: Effect) -> bool {
+    matches!(e, Effect::ComplianceCoupling(_)) && sel.refused.iter().any(|r| r.effect == e.label())
+}
+
+/// The refusal of a coupling whose pair's compliance matrix is not positive semidefinite.
+fn not_physical(j: JointIndex, n: JointIndex, kj: f64, kn: f64, c: f64) -> Refusal {
+    let deg = |x: f64| format!("{:.3e}", units::degrees(x));
+    Refusal {
+        effect: Effect::ComplianceCoupling(j).label(),
+        reason: format!(
+            "beside the joints' own compliances it makes their compliance matrix not positive semidefinite (k{} = {}, k{} = {}, c = {} °/N·m; c² must not exceed k{}·k{}): some load would make the pair rise against it",
+            j.number(),
+            deg(kj),
+            n.number(),
+            deg(kn),
+            deg(c),
+            j.number(),
+            n.number()
+        ),
+        remedy: format!(
+            "measure poses that load joints {} and {} apart from each other (one stretched, the other folded, and the other way round)",
+            j.number(),
+            n.number()
+        ),
+    }
+}
+
+/// The model with the pairs' compliances and without the refused couplings, rescored on the selection's
+/// folds; the compliances that joined recorded as completing the pairs.
+fn accept(
+    scorer: &Scorer<'_>,
+    sel: &mut Selection,
+    before: &[Effect],
+    effects: Vec<Effect>,
+) -> Result<(), DiagnoseError> {
+    if effects == before {
+        return Ok(());
+    }
+    let (stats, errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
+    let joined: Vec<Effect> = effects.iter().copied().filter(|e| !before.contains(e)).collect();
+    let gone: Vec<Effect> = before.iter().copied().filter(|e| !effects.contains(e)).collect();
+    for &e in &joined {
+        sel.steps.push(Step { effect: e, before_mm: None, after_mm: stats.heldout_rms_mm, joined: Joined::Completion });
+    }
+    sel.steps.retain(|s| !gone.contains(&s.effect));
+    let names = |v: &[Effect]| v.iter().map(Effect::label).collect::<Vec<_>>().join(", ");
+    let row = match (joined.is_empty(), gone.is_empty()) {
+        (false, true) => format!("the coupled pairs' own compliances: + {}", names(&joined)),
+        (true, false) => format!("− {} (its pair not positive semidefinite)", names(&gone)),
+        _ => format!("the coupled pairs: + {}, − {} (not positive semidefinite)", names(&joined), names(&gone)),
+    };
+    sel.replace(effects, stats, errors, row);
+    Ok(())
+}
