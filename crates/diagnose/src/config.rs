@@ -253,22 +253,9 @@ impl Default for Config {
     }
 }
 
-/// The thresholds of eligibility ([`crate::Config::eligibility`]).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct Eligibility {
-    /// Fraction of a joint's travel (between its limits; a revolution without limits) the data must
-    /// cover for an effect that is a function of the joint's angle. Default 0.25. (A compliance is judged
-    /// by how well its deflection is told from an offset, not by a fraction of its torque range.)
-    pub min_travel_fraction: f64,
-    /// Temperature span (K) a per-kelvin drift needs. Default 2 K.
-    pub min_temperature_span_k: f64,
-}
-
-impl Default for Eligibility {
-    fn default() -> Self {
-        Self { min_travel_fraction: 0.25, min_temperature_span_k: 2.0 }
-    }
-}
+/// The thresholds of eligibility ([`crate::Config::eligibility`]): `thermokin-identify`'s, which the
+/// measurement planner plans by too.
+pub use thermokin_identify::Eligibility;
 
 /// The bound beyond which a fitted value is not a property of a working robot but a fit running away
 /// (trading against another block, or chasing a few poses), in the robot's own scale: every effect is

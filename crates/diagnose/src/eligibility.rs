@@ -1,14 +1,11 @@
 //! Eligibility, before any selection: a candidate whose parameters these data cannot pin down is not
 //! selectable, and the report says what to measure instead.
 //!
-//! Three rules, each stated with its threshold:
+//! Four rules, each stated with its threshold:
 //! - **Coverage.** An effect that is a function of its joint's own angle (a gear-ratio scale, a cyclic
-//!   encoder error) is identified from how the error changes along the joint's travel. Over a short arc
-//!   its terms trade against a zero offset (`s · q = s · q̄ + s · (q − q̄)`), so the fit follows whatever
-//!   else varies over that arc and extrapolates it elsewhere. Required: a quarter of the travel between
-//!   the limits ([`Eligibility::min_travel_fraction`]; a revolution when the joint has none), and half a
-//!   revolution for the cyclic error, whose once- and twice-per-revolution terms need it to separate
-//!   from an offset and a scale. A gravity compliance needs a joint gravity loads at all (`τ_max`, the
+//!   encoder error) needs the arc [`thermokin_identify::arc_needed`] gives — a quarter of the travel
+//!   ([`Eligibility::min_travel_fraction`]), half a revolution for a cyclic error; the rule, and why, is
+//!   `thermokin-identify`'s, which the measurement planner plans by too. A gravity compliance needs a joint gravity loads at all (`τ_max`, the
 //!   largest gravity torque over the joint space, sampled, above a millionth of the largest joint's).
 //! - **A deflection told from an offset.** A compliance is identified from how the gravity torque changes
 //!   beside its level: where it changes little, `k·τ` is an offset `k·τ̄` and a remainder. Judged in the
@@ -31,8 +28,8 @@
 //!   and the block is scored with the rest.)
 
 use faer::linalg::solvers::DenseSolveCore;
-use thermokin_chain::{Dataset, JointKind, Robot, units};
-use thermokin_identify::{DriftShape, Effect, JointIndex, NEARLY_DEPENDENT, identifiable};
+use thermokin_chain::{Dataset, units};
+use thermokin_identify::{DriftShape, Effect, JointIndex, NEARLY_DEPENDENT, arc_needed, identifiable, travel};
 
 use crate::config::Eligibility;
 use crate::error::DiagnoseError;
@@ -85,26 +82,13 @@ pub(crate) fn arc(data: &Dataset, j: usize) -> (f64, f64) {
     span(data.measurements.iter().map(|m| m.q[j]))
 }
 
-/// The travel of joint `j`: between its limits, a revolution without.
-pub(crate) fn travel(robot: &Robot, j: usize) -> f64 {
-    robot.chain().joints()[j].limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower)
-}
-
-/// The arc an effect of a joint of this `travel` needs: a fraction of the travel, half a revolution (or
-/// the whole travel, if shorter) for a cyclic error.
-pub(crate) fn needed_arc(travel: f64, cyclic: bool, rules: &Eligibility) -> f64 {
-    if cyclic { std::f64::consts::PI.min(travel) } else { rules.min_travel_fraction * travel }
-}
-
 fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
     let robot = scorer.robot;
     match e {
-        Effect::JointScale(j) | Effect::Periodic(j)
-            if robot.chain().joints()[j.index()].kind == JointKind::Revolute =>
-        {
+        Effect::JointScale(j) | Effect::Periodic(j) if arc_needed(robot, e, rules).is_some() => {
             let (lo, hi) = arc(scorer.data, j.index());
             let t = travel(robot, j.index());
-            let need = needed_arc(t, matches!(e, Effect::Periodic(_)), rules);
+            let need = arc_needed(robot, e, rules).map_or(0.0, |(_, need)| need);
             (hi - lo < need).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(
@@ -300,14 +284,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_arc_needed_is_a_fraction_of_the_travel_or_half_a_revolution() {
-        let rules = Eligibility::default();
-        let pi = std::f64::consts::PI;
-        assert!((needed_arc(4.0 * pi, false, &rules) - pi).abs() < 1e-12);
-        assert!((needed_arc(4.0 * pi, true, &rules) - pi).abs() < 1e-12);
-        // A joint shorter than half a revolution needs all of it for a cyclic error.
-        assert!((needed_arc(2.0, true, &rules) - 2.0).abs() < 1e-12);
-        assert!((needed_arc(2.0, false, &rules) - 0.5).abs() < 1e-12);
+    fn a_span_is_the_lowest_and_the_highest() {
         assert_eq!(span([3.0, -1.0, 2.0].into_iter()), (-1.0, 3.0));
     }
 }

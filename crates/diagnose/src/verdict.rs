@@ -3,10 +3,10 @@
 //! verdict against the stated noise.
 
 use thermokin_chain::{Dataset, JointKind, Robot, units};
-use thermokin_identify::{Effect, FrameMode};
+use thermokin_identify::{Effect, FrameMode, needed_arc, travel};
 
 use crate::config::Config;
-use crate::eligibility::{arc, needed_arc, travel};
+use crate::eligibility::arc;
 use crate::report::{HoldoutStats, Nested};
 use crate::tables::Tables;
 

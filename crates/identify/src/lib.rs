@@ -13,6 +13,7 @@
 //! a parameter for reports.
 
 mod catalogue;
+mod coverage;
 mod effect;
 mod error;
 mod fit;
@@ -26,6 +27,7 @@ mod sampling;
 mod terms;
 
 pub use catalogue::{FrameMode, Setup, ToolMode};
+pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
 pub use effect::{DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN};
 pub use error::IdentifyError;
 pub use fit::{CorrelatedPair, Fit, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from};

@@ -7,11 +7,15 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 use nalgebra::Vector3;
 use rayon::prelude::*;
-use thermokin_chain::{Dataset, Measurement, Robot};
-use thermokin_identify::{Effect, FixedParameter, Model, PoseTerms, Setup, identifiable, residuals_and_jacobian};
+use thermokin_chain::{Dataset, Measurement, Robot, units};
+use thermokin_identify::{
+    Effect, Eligibility, FixedParameter, Model, PoseTerms, Setup, arc_needed, identifiable, residuals_and_jacobian,
+    travel,
+};
 
 use crate::error::PlanError;
 use crate::params::Params;
+use crate::report::LeftOut;
 
 /// Poses per chunk of the Jacobian's parallel evaluation.
 const CHUNK: usize = 256;
@@ -37,6 +41,8 @@ pub(crate) struct Design {
     /// columns — so that `trace(W Σ)` is the mean variance of the predicted tool position over the
     /// candidates, in the robot's base frame, of a parameter covariance `Σ` (scaled columns).
     pub use_weight: Mat<f64>,
+    /// The catalogue effects left out: the diagnosis refuses them on any choice of the candidates.
+    pub left_out: Vec<LeftOut>,
 }
 
 /// A data set of configurations at their nominal tool positions (the Jacobian needs no measurement).
@@ -63,20 +69,61 @@ fn nominal_set(robot: &Robot, joints: &[Vec<f64>]) -> Result<Dataset, PlanError>
 }
 
 /// The effects a plan is made for: the setup's always-estimated blocks, then the given effects or the
-/// catalogue's pose-dependent ones.
-fn effects(robot: &Robot, data: &Dataset, params: &Params) -> Result<Vec<Effect>, PlanError> {
+/// catalogue's pose-dependent ones that some choice of the candidates (`pool`, beside the `measured`
+/// poses) can make eligible for the diagnosis — and the catalogue's others, left out with the reason.
+fn effects(
+    robot: &Robot,
+    pool: &Dataset,
+    measured: &Dataset,
+    params: &Params,
+) -> Result<(Vec<Effect>, Vec<LeftOut>), PlanError> {
     let setup = Setup { frame: params.frame, tool: params.tool, orientation_lever_mm: 0.0 };
-    let mut effects = setup.always_estimated(data);
+    let mut effects = setup.always_estimated(pool);
+    let mut left_out = Vec::new();
     let chosen = match &params.effects {
         Some(e) => e.clone(),
-        None => setup.candidates(robot, data)?,
+        None => {
+            let mut kept = Vec::new();
+            for e in setup.candidates(robot, pool)? {
+                match out_of_reach(robot, pool, measured, e, &params.eligibility) {
+                    Some(reason) => left_out.push(LeftOut { effect: e.label(), reason }),
+                    None => kept.push(e),
+                }
+            }
+            kept
+        }
     };
     for e in chosen {
         if !effects.contains(&e) {
             effects.push(e);
         }
     }
-    Ok(effects)
+    Ok((effects, left_out))
+}
+
+/// Why no choice of the candidates can make `e` eligible for the diagnosis: its joint's arc over every
+/// candidate and measured pose is shorter than `e` needs ([`thermokin_identify::arc_needed`]).
+fn out_of_reach(robot: &Robot, pool: &Dataset, measured: &Dataset, e: Effect, rules: &Eligibility) -> Option<String> {
+    let (j, need) = arc_needed(robot, e, rules)?;
+    let (lo, hi) = pool
+        .measurements
+        .iter()
+        .chain(&measured.measurements)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.q[j]), h.max(m.q[j])));
+    let travel = travel(robot, j);
+    (hi - lo < need).then(|| {
+        format!(
+            "joint {} spans {:.1}° … {:.1}° over every candidate{} ({:.0} % of its {:.0}° travel); {} needs {:.0}°",
+            j + 1,
+            units::degrees(lo),
+            units::degrees(hi),
+            if measured.is_empty() { "" } else { " and measured pose" },
+            100.0 * (hi - lo) / travel,
+            units::degrees(travel),
+            e.kind_name(),
+            units::degrees(need)
+        )
+    })
 }
 
 /// The Jacobian of the model's predicted positions at `data`'s poses (3 rows each), in parallel chunks.
@@ -112,7 +159,8 @@ impl Design {
     ) -> Result<Self, PlanError> {
         let pool = nominal_set(robot, candidates)?;
         let done = nominal_set(robot, measured)?;
-        let model = Model::new(robot, effects(robot, &pool, params)?)?;
+        let (effects, left_out) = effects(robot, &pool, &done, params)?;
+        let model = Model::new(robot, effects)?;
         let jac_pool = jacobian(robot, &model, &pool)?;
         let jac_done = jacobian(robot, &model, &done)?;
         // Identifiable from everything that may be measured: the candidates and the poses already measured.
@@ -140,6 +188,7 @@ impl Design {
         let mut use_weight = product(used.as_ref().transpose(), used.as_ref());
         use_weight *= faer::Scale(1.0 / candidates.len().max(1) as f64);
         Ok(Self {
+            left_out,
             not_identifiable: model.fixed_parameters(&ident.fixed),
             use_weight,
             candidates: candidates_rows,

@@ -31,7 +31,7 @@ use thermokin_chain::{Robot, units};
 pub use candidates::Candidates;
 pub use error::PlanError;
 pub use params::{Criterion, Params, WorkspaceBox};
-pub use report::{Comparison, JointCoverage, Motion, ParameterPrecision, Plan, PlannedPose};
+pub use report::{Comparison, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose};
 pub use select::RIDGE;
 
 use crate::design::Design;
@@ -98,6 +98,7 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
         parameters: parameters(&design, &planned, &random, params.noise_mm),
         not_identifiable: planned.not_identifiable.clone(),
         never_identifiable: design.not_identifiable.clone(),
+        left_out: design.left_out.clone(),
         coverage: coverage(robot, &visited),
         motion,
     })

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 use serde::Serialize;
-use thermokin_identify::{Effect, FrameMode, ToolMode};
+use thermokin_identify::{Effect, Eligibility, FrameMode, ToolMode};
 
 use crate::error::PlanError;
 
@@ -57,6 +57,12 @@ pub struct Params {
     pub seed: u64,
     /// How many random sets of the same size the plan is compared with (their median is reported).
     pub random_draws: usize,
+    /// The diagnosis' coverage rule (`thermokin_identify::Eligibility`, the same default): a catalogue
+    /// effect of a joint's angle whose arc no choice of the candidates (with the measured poses) can
+    /// cover is not planned for — the diagnosis would refuse it whatever is measured — and is reported
+    /// as left out ([`crate::Plan::left_out`]). Effects given in [`Params::effects`] are planned for as
+    /// given.
+    pub eligibility: Eligibility,
 }
 
 impl Default for Params {
@@ -70,6 +76,7 @@ impl Default for Params {
             effects: None,
             seed: 0x91a7,
             random_draws: 5,
+            eligibility: Eligibility::default(),
         }
     }
 }

@@ -34,6 +34,9 @@ pub struct Plan {
     pub not_identifiable: Vec<FixedParameter>,
     /// Parameters no candidate (with the measured poses) can identify, whatever is chosen.
     pub never_identifiable: Vec<FixedParameter>,
+    /// Catalogue effects not planned for: the diagnosis refuses them on any choice of these candidates
+    /// (the arc of their joint over every candidate and measured pose is shorter than they need).
+    pub left_out: Vec<LeftOut>,
     /// The arc each joint covers over the planned and measured poses.
     pub coverage: Vec<JointCoverage>,
     /// The largest-joint motion along the measuring order, and along the order the poses were chosen in,
@@ -86,6 +89,15 @@ pub struct ParameterPrecision {
     pub random: Option<f64>,
 }
 
+/// A catalogue effect the plan is not made for, and why.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LeftOut {
+    /// The effect's label (`joint_scale[1]`).
+    pub effect: String,
+    /// What the candidates cover against what it needs.
+    pub reason: String,
+}
+
 /// The arc a joint covers.
 #[derive(Clone, Debug, Serialize)]
 pub struct JointCoverage {
@@ -129,6 +141,12 @@ impl Plan {
         out.push_str(&self.pose_table());
         out.push_str(&self.comparison_table());
         out.push_str(&self.parameter_table());
+        if !self.left_out.is_empty() {
+            out.push_str("\nNot planned for (the diagnosis refuses them on any choice of these candidates):\n");
+            for l in &self.left_out {
+                out.push_str(&format!("  {} — {}\n", l.effect, l.reason));
+            }
+        }
         for (title, list) in [
             (
                 "Not identifiable from the planned poses (more poses, or candidates that move these):",

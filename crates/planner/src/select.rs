@@ -277,6 +277,7 @@ mod tests {
             measured: Mat::from_fn(3 * p, p, |_, _| rng.random_range(-1.0..1.0)),
             positions: vec![],
             use_weight: w,
+            left_out: vec![],
         }
     }
 

@@ -108,3 +108,33 @@ fn the_predicted_sigma_matches_the_spread_of_fits_over_simulated_noise() {
     }
     assert!(checked >= 8, "{checked} parameters checked");
 }
+
+#[test]
+fn effects_no_choice_of_the_candidates_makes_eligible_are_left_out_with_the_reason() {
+    // Joint 1 within ±20° in every candidate (a cell that never turns the base far): no choice of them
+    // gives its gear ratio the quarter of its travel or its cyclic error the half revolution the
+    // diagnosis needs, so the plan is not made for them; nor for joint 2's cyclic error (its travel is
+    // 200°, the candidates keep 10 % inside each limit: 160° < half a revolution); joint 2's gear ratio,
+    // which the candidates cover, stays.
+    let robot = irb140();
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let joints: Vec<Vec<f64>> = (0..400)
+        .map(|_| {
+            let mut q = thermokin_testdata::random_q(robot.chain(), &mut rng);
+            q[0] = rand::Rng::random_range(&mut rng, -20f64.to_radians()..20f64.to_radians());
+            q
+        })
+        .collect();
+    let pool = Candidates::new(&robot, joints, vec![]).unwrap();
+    let p = plan(&robot, &pool, &[], &Params { poses: 25, ..Params::default() }).unwrap();
+    let left: Vec<&str> = p.left_out.iter().map(|l| l.effect.as_str()).collect();
+    assert_eq!(left, ["joint_scale[1]", "periodic[1]", "periodic[2]"], "{:?}", p.left_out);
+    assert!(
+        p.left_out[0].reason.starts_with("joint 1 spans") && p.left_out[0].reason.contains("needs 90°"),
+        "{:?}",
+        p.left_out
+    );
+    assert!(!p.effects.iter().any(|e| e == "joint_scale[1]" || e == "periodic[1]"), "{:?}", p.effects);
+    assert!(p.effects.iter().any(|e| e == "joint_scale[2]"), "{:?}", p.effects);
+    assert!(p.text().contains("Not planned for"), "{}", p.text());
+}

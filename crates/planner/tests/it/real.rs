@@ -40,9 +40,11 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// The WAM: 30 of its 216 grid poses, scored on its 20 random ones. Checked: the first clause,
 /// ≤ 2.95 mm (1.25× the independent whole-grid 2.361). Not met since 2026-11-25, and recorded in
 /// docs/planner.md: the second, ≤ 0.85× the median of random draws of 30 (or within 1.1× of the whole
-/// grid) — the planned 2.817 mm is unchanged, but the diagnosis of the random draws improved (median
-/// 3.518 → 3.296, 0.85 × = 2.802: a compliance judged by the fit it would join, the completion's gate
-/// turned the right way round, a coupled pair made physical).
+/// grid) — the diagnosis of the random draws improved (median 3.518 → 3.296, 0.85 × = 2.802: a
+/// compliance judged by the fit it would join, the completion's gate turned the right way round, a coupled
+/// pair made physical), and the planned 30 went from 2.817 to 2.901 mm once the plan left out the effects
+/// no choice of the grid makes eligible (at 20 and 40 poses that took them from 3.010 to 2.732 and from
+/// 2.973 to 2.761).
 #[test]
 fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
     let options = thermokin_io::RobotOptions::default();
@@ -56,10 +58,10 @@ fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
     assert!(planned <= 2.95, "{planned}");
 }
 
-/// The UR10: 60 of series C's 2,773 poses, scored on series B. Checked: ≤ 0.85× the median of five random
-/// draws of 60 (the second clause: 0.670 against 0.85 × 0.790 = 0.672 on 2026-11-25). Not met, and recorded in docs/planner.md: the first clause,
-/// ≤ 0.57 mm (1.25× the whole of C) — 0.670 mm (0.685 before the diagnosis's shrinkage, 0.584 with it before
-/// the compliance coupling joined the catalogue and the plan's design).
+/// The UR10: 60 of series C's 2,773 poses, scored on series B. The rule, both clauses: ≤ 0.57 mm
+/// (1.25× the whole of C's 0.456) and ≤ 0.85× the median of five random draws of 60. Met since the plan
+/// leaves out the effects no choice of C's poses makes eligible (2026-11-25: 0.670 → 0.478 mm; the random
+/// median 0.790).
 #[test]
 fn ur10_sixty_planned_poses_beat_random_ones() {
     let options = thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) };
@@ -68,7 +70,6 @@ fn ur10_sixty_planned_poses_beat_random_ones() {
         (read(&robot, "fixtures/real/ur10-ipa/series_C.csv"), read(&robot, "fixtures/real/ur10-ipa/series_B.csv"));
     let (planned, random) = planned_and_random(&robot, &c, &b, 60);
     eprintln!("UR10 60 planned {planned:.4}, random {random:?}");
+    assert!(planned <= 0.57, "{planned}");
     assert!(planned <= 0.85 * median(random.clone()), "{planned} vs {random:?}");
-    // Better than the nominal robot (1.025 mm) by a margin.
-    assert!(planned < 0.8, "{planned}");
 }
