@@ -129,6 +129,12 @@ pub fn diagnose_with_progress(
     };
     let mut all_warnings = tables.warnings.clone();
     all_warnings.extend(warnings(robot, data, config, &tables));
+    if let Some(g) = &screened.screen.gathered {
+        all_warnings.push(format!(
+            "{} of the {} measurements flagged as gross errors lie in one neighbourhood of arm configurations ({} poses there; independent gross errors gather so with a chance of {:.1e}): a systematic error there is likelier than gross errors — see the list below, and rerun with `--outliers keep` to let the diagnosis see it",
+            g.flagged, g.flagged_total, g.poses, g.chance
+        ));
+    }
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     Ok(Report {

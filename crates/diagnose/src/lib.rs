@@ -45,8 +45,8 @@ pub use error::DiagnoseError;
 pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};
 pub use render::ReportText;
 pub use report::{
-    Breakdown, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold, Outlier,
-    OutlierScreen, ParameterValue, PoseReport, Refusal, Report, ScaleSource, ScreenModel, Skipped, TableRow,
+    Breakdown, EffectReport, FittedFrames, Gathered, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,
+    Outlier, OutlierScreen, ParameterValue, PoseReport, Refusal, Report, ScaleSource, ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::Stats;

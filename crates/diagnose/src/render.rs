@@ -74,6 +74,23 @@ fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 let at = o.line.map_or(format!("measurement {}", o.measurement), |l| format!("line {l}"));
                 writeln!(f, "  {at:<16} residual {:.4} mm", o.residual_mm)?;
             }
+            if let Some(g) = &s.gathered {
+                let ranges: Vec<String> = g
+                    .joint_ranges
+                    .iter()
+                    .enumerate()
+                    .map(|(j, [lo, hi])| format!("q{} {lo:.0}…{hi:.0}", j + 1))
+                    .collect();
+                writeln!(
+                    f,
+                    "  {} of them lie in one neighbourhood of arm configurations ({} of the {} poses; {}), where independent gross errors gather so with a chance of {:.1e}: likelier a systematic error the screening model lacks",
+                    g.flagged,
+                    g.poses,
+                    g.total,
+                    ranges.join(", "),
+                    g.chance
+                )?;
+            }
             Ok(())
         }
     }

@@ -43,7 +43,7 @@ pub enum ScaleSource {
 }
 
 /// How the screen for gross errors judged.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OutlierScreen {
     /// The model whose residuals were judged.
     pub model: ScreenModel,
@@ -57,6 +57,29 @@ pub struct OutlierScreen {
     pub threshold_mm: f64,
     /// Whether the flagged measurements were left out of everything else in the report.
     pub excluded: bool,
+    /// The flagged measurements gathered in one neighbourhood of arm configurations beyond what
+    /// independent gross errors do — a systematic error the screening model lacks is likelier there.
+    pub gathered: Option<Gathered>,
+}
+
+/// Flagged measurements gathered in one neighbourhood of arm configurations (a k-means block of the
+/// joint values, as the folds use): more of them there than independent gross errors — each pose flagged
+/// with the same chance, wherever it is — would put in any block but with a chance below the screen's
+/// [`crate::FALSE_ALARM`] (binomial upper tail, times the number of blocks).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Gathered {
+    /// Flagged measurements in the block.
+    pub flagged: usize,
+    /// Measurements in the block.
+    pub poses: usize,
+    /// Flagged measurements over all.
+    pub flagged_total: usize,
+    /// Measurements over all.
+    pub total: usize,
+    /// The chance that independent gross errors gather so in some block (Bonferroni over the blocks).
+    pub chance: f64,
+    /// The block's joint ranges, degrees (mm for a prismatic joint), per joint `[lowest, highest]`.
+    pub joint_ranges: Vec<[f64; 2]>,
 }
 
 /// A candidate the data cannot pin down: not selectable, reported with what to measure.

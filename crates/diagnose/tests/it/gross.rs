@@ -62,6 +62,8 @@ fn injected_gross_errors_are_found_at_their_lines_and_left_out() {
     eprintln!("{}", report.text().to_string().lines().take(6).collect::<Vec<_>>().join("\n"));
     assert_eq!(lines, expected);
     assert!(report.outliers.iter().all(|o| o.residual_mm > 1.9), "{:?}", report.outliers);
+    // Four scattered gross errors are not mistaken for a systematic error in one neighbourhood.
+    assert!(report.outlier_screen.gathered.is_none(), "{:?}", report.outlier_screen.gathered);
     // Left out: the offset is found and the model ends at the noise (5 µm per axis), which 2–10 mm
     // residuals in the fit would forbid.
     assert_eq!(report.effects.first().map(|e| e.label.as_str()), Some("joint_offset[2]"));
@@ -121,4 +123,37 @@ fn ur10_series_c_with_one_percent_gross_errors() {
     assert!(found * 10 >= chosen.len() * 9, "{found} of {}", chosen.len());
     assert!(false_flags * 200 <= c.len() - chosen.len(), "{false_flags} clean poses flagged");
     assert!(h.selected.heldout_mean_mm <= 0.47, "{}", h.selected.heldout_mean_mm);
+    // Displaced at random: not gathered in one neighbourhood of configurations.
+    assert!(report.outlier_screen.gathered.is_none(), "{:?}", report.outlier_screen.gathered);
+}
+
+#[test]
+fn flags_gathered_in_one_configuration_are_said_to_be_likelier_a_systematic_error() {
+    // Joint 2 off by 0.1° wherever the elbow is above its median and joint 5 positive (a quarter of the
+    // poses of the independent tracker): no screening model bends to it, so the screen flags those poses
+    // — and says that they gather in one neighbourhood of configurations, which independent gross
+    // errors would not, rather than leaving a quarter of the data out as beam breaks in silence.
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let plain = crate::tracker::measure(robot.chain(), 200, 304, <[f64]>::to_vec);
+    let mut elbow: Vec<f64> = plain.measurements.iter().map(|m| m.q[2]).collect();
+    elbow.sort_by(f64::total_cmp);
+    let median = elbow[elbow.len() / 2];
+    let data = crate::tracker::measure(robot.chain(), 200, 304, |q| {
+        let mut a = q.to_vec();
+        if q[2] > median && q[4] > 0.0 {
+            a[1] += 0.1f64.to_radians();
+        }
+        a
+    });
+    let config = Config { validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let g = report.outlier_screen.gathered.as_ref().expect("flags gathered in one neighbourhood");
+    eprintln!("{} flagged; {g:?}", report.outliers.len());
+    assert!(report.outliers.len() > 20, "{}", report.outliers.len());
+    assert!(g.chance < thermokin_diagnose::FALSE_ALARM, "{g:?}");
+    // The block holds mostly flagged poses, and its joint ranges are said (one per joint).
+    assert!(2 * g.flagged > g.poses, "{g:?}");
+    assert_eq!(g.joint_ranges.len(), 6);
+    assert!(report.warnings.iter().any(|w| w.contains("likelier than gross errors")), "{:?}", report.warnings);
+    assert!(report.text().to_string().contains("likelier a systematic error"));
 }
