@@ -82,7 +82,8 @@ fn configurations(
 /// Plans `poses` poses out of `candidates` ((N, dof) degrees; `None`: `samples` configurations sampled
 /// within the joint limits, kept inside `box` — `(x0, y0, z0, x1, y1, z1)` mm of the base frame — when
 /// given), after the `measured` configurations. `effects`: `"KIND[:JOINT]"` strings (default: the
-/// catalogue's); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
+/// catalogue's that some choice of the candidates can make eligible — the others are in
+/// `to_dict()["left_out"]`); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
 /// `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
 #[pyfunction]
 #[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=3000, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]

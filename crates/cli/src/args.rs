@@ -409,7 +409,8 @@ pub struct PlanArgs {
     #[arg(long, value_name = "FILE")]
     pub measured: Option<PathBuf>,
     /// Plan for these effects only, `KIND[:JOINT]` (repeat); default: every pose-dependent effect of the
-    /// diagnosis' catalogue.
+    /// diagnosis' catalogue that some choice of the candidates can make eligible (a gear ratio or cyclic
+    /// error whose joint no candidate moves far enough is left out, and the report says so).
     #[arg(long = "effect", value_name = "SPEC")]
     pub effects: Vec<String>,
     /// Poses to plan.
