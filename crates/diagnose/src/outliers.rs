@@ -158,11 +158,16 @@ fn binomial_upper_tail(n: usize, k: usize, p: f64) -> f64 {
     if p >= 1.0 {
         return 1.0;
     }
-    let ln_factorial = |m: usize| (1..=m).map(|i| (i as f64).ln()).sum::<f64>();
-    let ln_n = ln_factorial(n);
+    // ln m! for m = 0..=n, once: the sum is then linear in n.
+    let ln_factorial: Vec<f64> = std::iter::once(0.0)
+        .chain((1..=n).scan(0.0, |acc, i| {
+            *acc += (i as f64).ln();
+            Some(*acc)
+        }))
+        .collect();
     (k..=n)
         .map(|i| {
-            let ln_choose = ln_n - ln_factorial(i) - ln_factorial(n - i);
+            let ln_choose = ln_factorial[n] - ln_factorial[i] - ln_factorial[n - i];
             (ln_choose + i as f64 * p.ln() + (n - i) as f64 * (1.0 - p).ln()).exp()
         })
         .sum::<f64>()
