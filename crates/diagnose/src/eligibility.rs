@@ -35,6 +35,7 @@ use crate::config::Eligibility;
 use crate::error::DiagnoseError;
 use crate::report::Refusal;
 use crate::scoring::Scorer;
+use crate::stats::span;
 
 /// Splits `candidates` into the selectable ones and the refused ones. `nuisance` are the always-estimated
 /// blocks.
@@ -70,11 +71,6 @@ fn significant(x: f64) -> String {
     }
     let decimals = (2 - x.abs().log10().floor() as i32).max(0) as usize;
     format!("{x:.decimals$}")
-}
-
-/// The lowest and highest of `values`.
-pub(crate) fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
-    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)))
 }
 
 /// The arc `(lowest, highest)` joint `j` covers in the data.
@@ -129,7 +125,7 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
         Effect::ComplianceCoupling(j) => {
             // Each joint of the pair moves with the other's torque: gravity must load both; the first
             // refusal of the two is the coupling's.
-            let next = JointIndex::of(robot, j.index() + 1).ok()?;
+            let next = j.next(robot)?;
             [j, next].into_iter().find_map(|k| coverage(scorer, Effect::JointCompliance(k), rules)).map(|r| Refusal {
                 effect: e.label(),
                 reason: format!(
@@ -189,9 +185,7 @@ fn nuisance_trade(scorer: &Scorer<'_>, nuisance: &[Effect], c: Effect) -> Result
 fn offset_trade(scorer: &Scorer<'_>, nuisance: &[Effect], c: Effect) -> Result<Option<Refusal>, DiagnoseError> {
     let joints: Vec<JointIndex> = match c {
         Effect::JointCompliance(j) => vec![j],
-        Effect::ComplianceCoupling(j) => {
-            std::iter::once(j).chain(JointIndex::of(scorer.robot, j.index() + 1).ok()).collect()
-        }
+        Effect::ComplianceCoupling(j) => std::iter::once(j).chain(j.next(scorer.robot)).collect(),
         _ => Vec::new(),
     };
     let mut blocks = nuisance.to_vec();
@@ -277,14 +271,4 @@ fn worst_trade(
         }
     }
     Ok(worst.map(|(k, n, rho)| (names[k].clone(), names[n].clone(), rho)))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_span_is_the_lowest_and_the_highest() {
-        assert_eq!(span([3.0, -1.0, 2.0].into_iter()), (-1.0, 3.0));
-    }
 }

@@ -31,6 +31,7 @@ use crate::config::{Config, Outliers};
 use crate::error::DiagnoseError;
 use crate::folds::configuration_clusters;
 use crate::report::{Gathered, Outlier, OutlierScreen, ScaleSource, ScreenModel};
+use crate::stats::span;
 
 /// The chance that a clean set with Gaussian residuals gets one false flag, whatever its size.
 pub const FALSE_ALARM: f64 = 0.01;
@@ -140,7 +141,7 @@ fn gathered(robot: &Robot, data: &Dataset, kept: &[usize], config: &Config) -> O
             let kind = robot.chain().joints()[j].kind;
             let values =
                 (0..total).filter(|&i| blocks[i] == b).map(|i| units::joint_value_out(kind, data.measurements[i].q[j]));
-            let (lo, hi) = values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)));
+            let (lo, hi) = span(values);
             [lo, hi]
         })
         .collect();

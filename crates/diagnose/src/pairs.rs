@@ -35,7 +35,7 @@ pub(crate) fn physical_pairs(
         let pairs: Vec<(JointIndex, JointIndex)> = effects
             .iter()
             .filter_map(|e| match e {
-                Effect::ComplianceCoupling(j) => JointIndex::of(scorer.robot, j.index() + 1).ok().map(|n| (*j, n)),
+                Effect::ComplianceCoupling(j) => j.next(scorer.robot).map(|n| (*j, n)),
                 _ => None,
             })
             .collect();

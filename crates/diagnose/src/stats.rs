@@ -2,6 +2,11 @@
 
 use serde::Serialize;
 
+/// The lowest and highest of `values`.
+pub(crate) fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), v| (l.min(v), h.max(v)))
+}
+
 /// Held-out error statistics of the 3-D position residual, mm.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Stats {
@@ -40,5 +45,13 @@ impl Stats {
             heldout_p95_mm: rank(0.95),
             heldout_count: norms.len(),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn a_span_is_the_lowest_and_the_highest() {
+        assert_eq!(super::span([3.0, -1.0, 2.0].into_iter()), (-1.0, 3.0));
     }
 }

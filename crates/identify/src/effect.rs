@@ -78,6 +78,11 @@ impl JointIndex {
     pub fn number(self) -> usize {
         self.0 + 1
     }
+
+    /// The next joint of `robot` (the second joint of a coupled pair), if it has one.
+    pub fn next(self, robot: &Robot) -> Option<Self> {
+        Self::of(robot, self.0 + 1).ok()
+    }
 }
 
 /// An effect: a block of parameters that can be added to the model, carrying its joint where it has one.

@@ -101,15 +101,16 @@ fn effects(
     Ok((effects, left_out))
 }
 
+/// The lowest and highest value of joint `j` over the configurations `qs`.
+pub(crate) fn arc<'a>(qs: impl Iterator<Item = &'a [f64]>, j: usize) -> (f64, f64) {
+    qs.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(q[j]), h.max(q[j])))
+}
+
 /// Why no choice of the candidates can make `e` eligible for the diagnosis: its joint's arc over every
 /// candidate and measured pose is shorter than `e` needs ([`thermokin_identify::arc_needed`]).
 fn out_of_reach(robot: &Robot, pool: &Dataset, measured: &Dataset, e: Effect, rules: &Eligibility) -> Option<String> {
     let (j, need) = arc_needed(robot, e, rules)?;
-    let (lo, hi) = pool
-        .measurements
-        .iter()
-        .chain(&measured.measurements)
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.q[j]), h.max(m.q[j])));
+    let (lo, hi) = arc(pool.measurements.iter().chain(&measured.measurements).map(|m| m.q.as_slice()), j);
     let travel = travel(robot, j);
     (hi - lo < need).then(|| {
         format!(

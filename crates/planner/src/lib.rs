@@ -175,9 +175,8 @@ fn coverage(robot: &Robot, poses: &[Vec<f64>]) -> Vec<JointCoverage> {
         .iter()
         .enumerate()
         .map(|(j, joint)| {
-            let (lo, hi) =
-                poses.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(q[j]), h.max(q[j])));
-            let travel = joint.limits.map_or(std::f64::consts::TAU, |l| l.upper - l.lower);
+            let (lo, hi) = design::arc(poses.iter().map(Vec::as_slice), j);
+            let travel = thermokin_identify::travel(robot, j);
             let ext = |v: f64| units::joint_value_out(joint.kind, v);
             JointCoverage { joint: j + 1, arc: [ext(lo), ext(hi)], fraction_of_travel: ((hi - lo) / travel).min(1.0) }
         })

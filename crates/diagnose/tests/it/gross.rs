@@ -134,17 +134,8 @@ fn flags_gathered_in_one_configuration_are_said_to_be_likelier_a_systematic_erro
     // — and says that they gather in one neighbourhood of configurations, which independent gross
     // errors would not, rather than leaving a quarter of the data out as beam breaks in silence.
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    let plain = crate::tracker::measure(robot.chain(), 200, 304, <[f64]>::to_vec);
-    let mut elbow: Vec<f64> = plain.measurements.iter().map(|m| m.q[2]).collect();
-    elbow.sort_by(f64::total_cmp);
-    let median = elbow[elbow.len() / 2];
-    let data = crate::tracker::measure(robot.chain(), 200, 304, |q| {
-        let mut a = q.to_vec();
-        if q[2] > median && q[4] > 0.0 {
-            a[1] += 0.1f64.to_radians();
-        }
-        a
-    });
+    let median = crate::tracker::elbow_median(robot.chain(), 304);
+    let data = crate::tracker::joint_two_off_where(robot.chain(), 304, |q| q[2] > median && q[4] > 0.0);
     let config = Config { validation: Validation::SelectionOnly, ..Config::default() };
     let report = diagnose(&robot, &data, None, &config).unwrap();
     let g = report.outlier_screen.gathered.as_ref().expect("flags gathered in one neighbourhood");

@@ -27,6 +27,25 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
     Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
 }
 
+/// 200 poses as [`measure`] draws them with `seed`, on a robot whose joint 2 stands 0.1° off wherever
+/// `on(commanded)` holds — an error of one arm configuration, which no catalogue effect describes.
+pub fn joint_two_off_where(chain: &Chain, seed: u64, on: impl Fn(&[f64]) -> bool) -> Dataset {
+    measure(chain, 200, seed, |q| {
+        let mut a = q.to_vec();
+        if on(q) {
+            a[1] += 0.1f64.to_radians();
+        }
+        a
+    })
+}
+
+/// The median elbow (joint 3) angle of the 200 poses [`measure`] draws with `seed`.
+pub fn elbow_median(chain: &Chain, seed: u64) -> f64 {
+    let mut elbow: Vec<f64> = measure(chain, 200, seed, <[f64]>::to_vec).measurements.iter().map(|m| m.q[2]).collect();
+    elbow.sort_by(f64::total_cmp);
+    elbow[elbow.len() / 2]
+}
+
 /// Orientation noise of [`measure_6d`], degrees per axis.
 pub const ORIENTATION_NOISE_DEG: f64 = 0.002;
 

@@ -246,10 +246,7 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
     // held-out RMS falls from 0.0129 to 0.0102 mm against 0.0087 of noise — the shrunk geometry carries
     // part of that configuration's error over — and no fold holds half of the squared error).
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    let plain = measure(robot.chain(), 200, 304, <[f64]>::to_vec);
-    let mut elbow: Vec<f64> = plain.measurements.iter().map(|m| m.q[2]).collect();
-    elbow.sort_by(f64::total_cmp);
-    let median = elbow[elbow.len() / 2];
+    let median = crate::tracker::elbow_median(robot.chain(), 304);
     let report = nested_by_configuration(304, |q| q[2] > median && q[4] > 0.0);
     let n = report.nested.as_ref().unwrap();
     eprintln!("{}", report.verdict);
@@ -274,13 +271,7 @@ fn an_outer_fold_holding_most_of_the_error_is_named_in_the_verdict() {
 /// every outer fold, and the fold that held the most of that noise "dominated".
 fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_diagnose::Report {
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    let data = measure(robot.chain(), 200, seed, |q| {
-        let mut a = q.to_vec();
-        if on(q) {
-            a[1] += 0.1f64.to_radians();
-        }
-        a
-    });
+    let data = crate::tracker::joint_two_off_where(robot.chain(), seed, on);
     let config = Config {
         folds_by: FoldGrouping::JointConfiguration,
         shrinkage: Shrinkage::Off,
