@@ -31,13 +31,14 @@
 
 use std::ops::Not;
 
-use thermokin_identify::{Effect, JointIndex};
+use thermokin_identify::{Effect, Fit, JointIndex, Model};
 
 use crate::config::{Completion, Config};
 use crate::error::DiagnoseError;
-use crate::plausibility::{Judged, implausible};
+use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
 use crate::selection::{Joined, Selection, Step};
+use crate::shrinkage::strength;
 
 /// How many of its standard errors a compliance's fitted value must be from zero to join the completion
 /// (the conventional three: a rigid joint's value passes it about one time in 370).
@@ -81,45 +82,39 @@ fn complete_geometry(
         .filter(|e| eligible.contains(e) && !sel.effects.contains(e))
         .collect();
     let kept = sel.effects.clone();
-    let effects = loop {
+    let (effects, lambda, stats, errors) = loop {
         let mut effects = kept.clone();
         effects.extend(rows.iter().copied());
-        let (model, full) = scorer.full_fit(&effects)?;
-        let offsets = model.offsets();
-        // A compliance the completed fit does not determine to `SEEN_STANDARD_ERRORS` is not seen in these
-        // data: a rigid robot's would be fitted to noise, and make the export a calibrated robot for
-        // nothing. Judged first: a value indistinguishable from zero says nothing of its sign.
-        let unseen: Vec<Effect> = effects
-            .iter()
-            .zip(offsets)
-            .filter(|(e, _)| rows.contains(e) && matches!(e, Effect::JointCompliance(_)))
-            // A fixed compliance (σ NaN) is not determined either.
-            .filter(|&(_, &o)| (full.theta[o].abs() > SEEN_STANDARD_ERRORS * full.std[o]).not())
-            .map(|(&e, _)| e)
-            .collect();
-        let refused: Vec<(Effect, _)> = effects
-            .iter()
-            .zip(offsets)
-            .filter(|(e, _)| rows.contains(e) && !unseen.contains(e))
-            .filter_map(|(&e, &o)| {
-                implausible(&scorer.scale, &full.theta[o..o + e.len()], e, &config.plausibility).map(|why| (e, why))
-            })
-            .collect();
-        if refused.is_empty() && unseen.is_empty() {
-            break effects;
-        }
-        rows.retain(|r| !unseen.contains(r));
-        for (e, why) in refused {
-            // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
-            sel.refused.retain(|r| r.effect != e.label());
-            sel.refused.push(why.refusal(e, Judged::Fitted));
-            rows.retain(|r| *r != e);
+        // The rows are judged in the fit they would join: the completed model with its own prior, its
+        // strength chosen as any fit's is, by its held-out error on the selection's folds (taken where
+        // the real shrunk fits predict better at all: whether the candidate joins is the gate's
+        // decision against the selected model, below). On a few poses the complete geometry's
+        // least-squares fit trades rows against each other and the probe along directions the poses
+        // barely see — a wrist row 60 mm off where its neighbour cancels it — values no robot has,
+        // which the prior pulls back while the determined combinations stay.
+        let (plain_stats, plain_errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
+        let shrunk = strength(scorer, config, &effects, &plain_errors, 0.0)?;
+        let lambda = shrunk.as_ref().map_or(0.0, |(l, _)| *l);
+        let (model, full) = scorer.fit_shrunk(&effects, &scorer.all(), lambda)?;
+        match judge(scorer, config, &model, &full, &rows) {
+            Judgement::Unseen(unseen) => rows.retain(|r| !unseen.contains(r)),
+            Judgement::Implausible(refused) => {
+                for (e, why) in refused {
+                    // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
+                    sel.refused.retain(|r| r.effect != e.label());
+                    sel.refused.push(why.refusal(e, Judged::Fitted));
+                    rows.retain(|r| *r != e);
+                }
+            }
+            Judgement::Joins => {
+                let (stats, errors) = shrunk.map_or((plain_stats, plain_errors), |(_, h)| (h.stats, h.errors));
+                break (effects, lambda, stats, errors);
+            }
         }
     };
     if rows.is_empty() {
         return Ok(());
     }
-    let (stats, errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
     if !joins(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
         return Ok(());
     }
@@ -127,12 +122,60 @@ fn complete_geometry(
     // the complete geometry, and in the model: its earlier refusal no longer holds.
     sel.refused.retain(|r| !rows.iter().any(|e| e.label() == r.effect));
     let names: Vec<String> = rows.iter().map(Effect::label).collect();
-    let row = format!("completed for use: + {} (not significantly worse)", names.join(", "));
+    let prior = if lambda > 0.0 {
+        format!(", shrunk toward the nominal robot: prior worth {lambda} rows of data per parameter")
+    } else {
+        String::new()
+    };
+    let row = format!("completed for use: + {}{prior} (not significantly worse)", names.join(", "));
     for &e in &rows {
         sel.steps.push(Step { effect: e, before_mm: None, after_mm: stats.heldout_rms_mm, joined: Joined::Completion });
     }
     sel.replace(effects, stats, errors, row);
+    sel.shrinkage = lambda;
     Ok(())
+}
+
+/// What the completed fit says of the rows it proposes.
+enum Judgement {
+    /// Compliances it does not determine: they leave, and the rest is judged again without them.
+    Unseen(Vec<Effect>),
+    /// Rows whose values are implausible, with why.
+    Implausible(Vec<(Effect, Implausible)>),
+    /// Every row is determined and plausible.
+    Joins,
+}
+
+/// The rows of `rows` judged in the completed `model`'s fit `full`.
+///
+/// A compliance the fit does not determine to `SEEN_STANDARD_ERRORS` is not seen in these data: a rigid
+/// robot's would be fitted to noise, and make the export a calibrated robot for nothing. Judged first,
+/// and alone: a value indistinguishable from zero says nothing of its sign, and a compliance fitted to
+/// noise trades with the rows beside it. Then plausibility: rows beyond their bound leave one at a time,
+/// the farthest beyond first — rows trade with each other and the probe, and one running away drags its
+/// neighbours, which may be plausible without it; values wrong in kind (a compliance rising under its
+/// load) leave together.
+fn judge(scorer: &Scorer<'_>, config: &Config, model: &Model, full: &Fit, rows: &[Effect]) -> Judgement {
+    let proposed = || model.effects().iter().zip(model.offsets()).filter(|(e, _)| rows.contains(e));
+    let unseen: Vec<Effect> = proposed()
+        .filter(|(e, _)| matches!(e, Effect::JointCompliance(_)))
+        // A fixed compliance (σ NaN) is not determined either.
+        .filter(|&(_, &o)| (full.theta[o].abs() > SEEN_STANDARD_ERRORS * full.std[o]).not())
+        .map(|(&e, _)| e)
+        .collect();
+    if !unseen.is_empty() {
+        return Judgement::Unseen(unseen);
+    }
+    let mut refused: Vec<(Effect, Implausible)> = proposed()
+        .filter_map(|(&e, &o)| {
+            implausible(&scorer.scale, &full.theta[o..o + e.len()], e, &config.plausibility).map(|why| (e, why))
+        })
+        .collect();
+    let worst = refused.iter().filter_map(|(e, why)| why.excess().map(|x| (*e, x))).max_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some((worst, _)) = worst {
+        refused.retain(|(e, why)| why.excess().is_none() || *e == worst);
+    }
+    if refused.is_empty() { Judgement::Joins } else { Judgement::Implausible(refused) }
 }
 
 #[cfg(test)]

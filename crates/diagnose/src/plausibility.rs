@@ -92,6 +92,15 @@ pub(crate) enum Judged {
 }
 
 impl Implausible {
+    /// How far beyond its bound a value is (value / bound), for [`Implausible::Beyond`]; `None` for the
+    /// others, which are wrong in kind rather than in size.
+    pub(crate) fn excess(&self) -> Option<f64> {
+        match self {
+            Implausible::Beyond { value, bound, .. } => Some(value / bound),
+            _ => None,
+        }
+    }
+
     /// The reason in words.
     pub(crate) fn reason(&self, judged: Judged) -> String {
         let every = if judged == Judged::FittedOnEveryFold { " in the fit of every fold" } else { "" };

@@ -106,9 +106,11 @@ impl Selection {
         self.bic.push(bic);
     }
 
-    /// Replaces the model by `effects` (scored `stats`, `errors`), saying why in the additive table.
+    /// Replaces the model by `effects` (scored `stats`, `errors` by least squares: a prior, if any, is
+    /// set after), saying why in the additive table.
     pub(crate) fn replace(&mut self, effects: Vec<Effect>, stats: Stats, errors: Vec<f64>, row: String) {
         self.effects = effects;
+        self.shrinkage = 0.0;
         self.current = stats;
         self.errors = errors;
         self.additive.push(TableRow { model: row, stats });

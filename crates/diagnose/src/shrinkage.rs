@@ -49,7 +49,7 @@ use thermokin_identify::{Effect, residuals_and_jacobian};
 use crate::config::{Config, Shrinkage};
 use crate::error::DiagnoseError;
 use crate::folds::Folds;
-use crate::scoring::{Scorer, prior, shrunk, significantly_better};
+use crate::scoring::{HeldOut, Scorer, prior, shrunk, significantly_better};
 use crate::selection::Selection;
 
 /// The prior strengths tried, in rows of data per parameter (log-spaced; 0: no prior).
@@ -112,30 +112,51 @@ impl Scorer<'_> {
 
 /// Phase 7 as set by [`Config::shrinkage`]: the strength of [`GRID`] with the lowest (linearised)
 /// held-out error on the selection's folds; a strength above zero is scored for real on the folds and
-/// recorded in the additive table.
+/// recorded in the additive table. A model the completion already shrank ([`crate::completion`]: the
+/// strength chosen for this very model) is left as it is.
 pub(crate) fn shrink(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) -> Result<(), DiagnoseError> {
-    if config.shrinkage == Shrinkage::Off || !sel.chosen().iter().any(|e| shrunk(*e)) {
+    if sel.shrinkage > 0.0 {
         return Ok(());
     }
-    let sums = scorer.linearised_grid(&sel.effects, &scorer.folds)?;
-    let best = (0..GRID.len()).min_by(|&a, &b| sums[a].total_cmp(&sums[b])).unwrap_or(0);
-    let lambda = GRID[best];
-    if lambda == 0.0 {
+    // By the selection's own gate: a prior is a change of the chosen model like an effect, kept only where
+    // it predicts the held-out poses significantly better than the fits without it.
+    let Some((lambda, held)) = strength(scorer, config, &sel.effects, &sel.errors, config.gate_standard_errors)? else {
         return Ok(());
-    }
-    // The linearised grid proposes; the real shrunk fits of the folds decide, by the selection's own
-    // gate: a prior is a change of the model like an effect, kept only where it predicts the held-out
-    // poses significantly better than the fits without it.
-    let held = scorer.heldout_fits_with(&sel.effects, &scorer.folds, lambda)?;
-    let (stats, errors) = (held.stats, held.errors);
-    if !significantly_better(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
-        return Ok(());
-    }
+    };
     let row = format!(
         "shrunk toward the nominal robot (prior worth {lambda} rows of data per parameter, chosen by cross-validation)"
     );
-    sel.shrinkage = lambda;
     let effects = sel.effects.clone();
-    sel.replace(effects, stats, errors, row);
+    sel.replace(effects, held.stats, held.errors, row);
+    sel.shrinkage = lambda;
     Ok(())
+}
+
+/// The prior's strength for the model of `effects` (its least-squares held-out errors `unshrunk` on the
+/// selection's folds) as set by [`Config::shrinkage`], with the held-out fits of the folds at that
+/// strength: `None` where the linearised grid prefers no prior, or the real shrunk fits do not predict
+/// the held-out poses better than `unshrunk` by more than `gate` standard errors of the paired
+/// difference ([`significantly_better`]; 0: better at all).
+pub(crate) fn strength(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    effects: &[Effect],
+    unshrunk: &[f64],
+    gate: f64,
+) -> Result<Option<(f64, HeldOut)>, DiagnoseError> {
+    if config.shrinkage == Shrinkage::Off || !effects.iter().any(|e| shrunk(*e)) {
+        return Ok(None);
+    }
+    let sums = scorer.linearised_grid(effects, &scorer.folds)?;
+    let best = (0..GRID.len()).min_by(|&a, &b| sums[a].total_cmp(&sums[b])).unwrap_or(0);
+    let lambda = GRID[best];
+    if lambda == 0.0 {
+        return Ok(None);
+    }
+    // The linearised grid proposes; the real shrunk fits of the folds decide.
+    let held = scorer.heldout_fits_with(effects, &scorer.folds, lambda)?;
+    if !significantly_better(unshrunk, &held.errors, gate, &scorer.blocks) {
+        return Ok(None);
+    }
+    Ok(Some((lambda, held)))
 }

@@ -3,7 +3,7 @@
 
 use thermokin_chain::{Dataset, Robot};
 use thermokin_diagnose::{Config, diagnose};
-use thermokin_identify::{FrameMode, ToolMode};
+use thermokin_identify::{Effect, FrameMode, JointIndex, ToolMode};
 use thermokin_testdata::workspace;
 
 /// The WAM (URDF, `wam_base` → `wam_flange`) and its grid and random sets.
@@ -64,4 +64,49 @@ fn wam_grid_to_random() {
     assert!(report.identifiability.not_identifiable.iter().all(|r| !r.reason.contains("±0.0 N·m")));
     crate::golden::export_reproduces_the_residuals(&robot, &report, &grid);
     crate::golden::drift_check("wam-grid-holdout-random", &robot, &report);
+}
+
+/// Thirty poses of the grid, as a user with an hour of tracker time measures them (ten seeded draws),
+/// diagnosed and scored on the 20 random poses in both protocols, against the complete geometry with the
+/// gravity compliance of the loaded joints 2, 4, 6 fitted by plain least squares on the same thirty —
+/// the class of the independent reference fit (issue #35: small sets of other robots at their full fit,
+/// within 5 %). Measured on 2026-11-25 (medians of the ten, mm): the full fit 3.418 same frame and 2.952
+/// refitted; the diagnosis 3.438 and 2.891 — 3.798 and 3.427 before the completion was judged in its
+/// shrunk fit (the wrist rows' least-squares values, traded against each other and the probe on thirty
+/// poses, refused the rows, and the partial models did not transfer).
+#[test]
+fn thirty_grid_poses_end_at_the_full_fit() {
+    use rand::SeedableRng;
+    let (robot, grid, random) = wam();
+    let config = Config {
+        frame: FrameMode::Tracker,
+        tool: ToolMode::Unknown,
+        validation: thermokin_diagnose::Validation::SelectionOnly,
+        ..Config::default()
+    };
+    let full: Vec<Effect> = (0..7)
+        .map(|j| Effect::LinkDeviation(JointIndex::of(&robot, j).unwrap()))
+        .chain([1, 3, 5].map(|j| Effect::JointCompliance(JointIndex::of(&robot, j).unwrap())))
+        .collect();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+    for _ in 0..10 {
+        let rows = rand::seq::index::sample(&mut rng, grid.len(), 30).into_vec();
+        let train = grid.subset(&rows);
+        let report = diagnose(&robot, &train, Some(&random), &config).unwrap();
+        let h = report.holdout.as_ref().unwrap();
+        ours.push((h.same_frame.selected.heldout_mean_mm, h.selected.heldout_mean_mm));
+        let f = thermokin_diagnose::evaluate(&robot, &train, &random, &full, &config).unwrap();
+        theirs.push((f.same_frame.heldout_mean_mm, f.refitted.heldout_mean_mm));
+    }
+    let median = |v: &[(f64, f64)], pick: fn(&(f64, f64)) -> f64| {
+        let mut x: Vec<f64> = v.iter().map(pick).collect();
+        x.sort_by(f64::total_cmp);
+        0.5 * (x[4] + x[5])
+    };
+    let (same, refit) = (median(&ours, |p| p.0), median(&ours, |p| p.1));
+    let (full_same, full_refit) = (median(&theirs, |p| p.0), median(&theirs, |p| p.1));
+    eprintln!("thirty grid poses, medians: ours {same:.3} / {refit:.3}, full fit {full_same:.3} / {full_refit:.3}");
+    assert!(same <= 1.05 * full_same, "same frame {same:.3} vs full fit {full_same:.3}");
+    assert!(refit <= 1.05 * full_refit, "refitted {refit:.3} vs full fit {full_refit:.3}");
 }
