@@ -69,25 +69,33 @@ impl Scorer<'_> {
                     return Ok(vec![0.0; GRID.len()]);
                 }
                 let model = self.model(effects, train)?;
-                let (r_train, j_train) =
-                    residuals_and_jacobian(self.robot, &model, theta, self.data, train, &self.terms)?;
-                let (r_test, j_test) = residuals_and_jacobian(self.robot, &model, theta, self.data, test, &self.terms)?;
-                let (_, j_initial) =
-                    residuals_and_jacobian(self.robot, &model, &model.initial(), self.data, train, &self.terms)?;
+                // One Jacobian alive at a time (each is poses × 3 × parameters: ~17 MB at 12,000 poses):
+                // the prior's weights at unit strength (a strength λ scales them by √λ), then the
+                // training part's normal equations, then the test part's Jacobian.
+                let unit = {
+                    let (_, j_initial) =
+                        residuals_and_jacobian(self.robot, &model, &model.initial(), self.data, train, &self.terms)?;
+                    prior(&model, &j_initial, 1.0)
+                };
                 let cols: Vec<usize> = (0..model.len()).filter(|&c| free[c]).collect();
                 let p = cols.len();
-                let a = Mat::from_fn(p, p, |i, k| j_train.col(cols[i]).transpose() * j_train.col(cols[k]));
-                let g: Vec<f64> =
-                    cols.iter().map(|&c| j_train.col(c).iter().zip(&r_train).map(|(x, y)| x * y).sum()).collect();
+                let (a, g) = {
+                    let (r_train, j_train) =
+                        residuals_and_jacobian(self.robot, &model, theta, self.data, train, &self.terms)?;
+                    let a = Mat::from_fn(p, p, |i, k| j_train.col(cols[i]).transpose() * j_train.col(cols[k]));
+                    let g: Vec<f64> =
+                        cols.iter().map(|&c| j_train.col(c).iter().zip(&r_train).map(|(x, y)| x * y).sum()).collect();
+                    (a, g)
+                };
+                let (r_test, j_test) = residuals_and_jacobian(self.robot, &model, theta, self.data, test, &self.terms)?;
                 GRID.iter()
                     .map(|&lambda| {
-                        let prior = prior(&model, &j_initial, lambda);
                         let mut m = a.clone();
                         let mut rhs = Mat::zeros(p, 1);
                         for (i, &c) in cols.iter().enumerate() {
-                            let w2 = prior.weight[c] * prior.weight[c];
+                            let w2 = lambda * unit.weight[c] * unit.weight[c];
                             m[(i, i)] += w2;
-                            rhs[(i, 0)] = g[i] - w2 * (theta[c] - prior.centre[c]);
+                            rhs[(i, 0)] = g[i] - w2 * (theta[c] - unit.centre[c]);
                         }
                         let step = m.partial_piv_lu().solve(&rhs);
                         let stride = self.terms.stride();
