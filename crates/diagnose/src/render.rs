@@ -49,8 +49,13 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let s = &r.outlier_screen;
     let model = match s.model {
-        ScreenModel::FullGeometry => "the full geometry with gravity compliance",
-        ScreenModel::FrameOnly => "the registration and tool freedoms alone (too few poses for the full geometry)",
+        ScreenModel::FullGeometry => "the full geometry with gravity compliance".to_string(),
+        ScreenModel::ShrunkGeometry { effective_parameters, prior_rows } => format!(
+            "the full geometry with gravity compliance, shrunk toward the nominal robot to {effective_parameters:.1} effective parameters (a prior worth {prior_rows:.2} rows of data per parameter: too few poses for it unshrunk)"
+        ),
+        ScreenModel::FrameOnly => {
+            "the registration and tool freedoms alone (too few poses for the full geometry, even shrunk)".to_string()
+        }
     };
     let scale = match s.scale_from {
         ScaleSource::StatedNoise => {

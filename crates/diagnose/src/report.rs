@@ -24,12 +24,20 @@ pub struct Outlier {
 }
 
 /// Which model screened for gross errors.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub enum ScreenModel {
     /// The always-estimated blocks, every joint row and every loaded joint's gravity compliance.
     FullGeometry,
-    /// The always-estimated blocks alone: too few measurements for the full geometry to leave residual
-    /// freedom.
+    /// The same, fitted with a prior toward the nominal robot strong enough for its effective
+    /// parameters to leave the residual freedom its parameters would not (too few measurements for it
+    /// unshrunk).
+    ShrunkGeometry {
+        /// Its effective parameters (the trace of its hat matrix).
+        effective_parameters: f64,
+        /// The prior's strength, in rows of data per parameter.
+        prior_rows: f64,
+    },
+    /// The always-estimated blocks alone: too few measurements even for the shrunk geometry.
     FrameOnly,
 }
 
