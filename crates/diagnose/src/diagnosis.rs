@@ -12,7 +12,7 @@ use crate::scoring::Scorer;
 use crate::select::select;
 use crate::tables::tables;
 use crate::validation::{nested, nested_folds, transfer_score};
-use crate::verdict::{honest_end, verdict, warnings};
+use crate::verdict::{honest_end, not_shown, verdict, warnings};
 
 /// Runs the diagnosis of `data` against `robot`.
 ///
@@ -127,7 +127,9 @@ pub fn diagnose_with_progress(
         }
         None => None,
     };
-    let mut all_warnings = tables.warnings.clone();
+    // A transfer the poses cannot show is said first.
+    let mut all_warnings: Vec<String> = not_shown(&tables, nested.as_ref()).into_iter().collect();
+    all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
     if let Some(g) = &screened.screen.gathered {
         all_warnings.push(format!(

@@ -219,6 +219,12 @@ pub struct Nested {
     pub worse_than_nominal: Vec<usize>,
     /// The outer fold (1-based) holding more than half of the squared held-out error, if one does.
     pub dominated_by: Option<usize>,
+    /// The mean over the outer folds' test poses of (selected − nominal) error, mm, and its standard
+    /// error (paired, over the poses): how far the procedure is from the nominal model, and how well
+    /// these poses can tell.
+    pub mean_difference_mm: f64,
+    /// The standard error of [`Nested::mean_difference_mm`], mm.
+    pub mean_difference_se_mm: f64,
 }
 
 /// One outer fold of the nested validation.

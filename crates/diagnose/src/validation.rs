@@ -117,6 +117,24 @@ fn significantly_worse(nominal: &[f64], selected: &[f64]) -> bool {
     mean > WORSE_STANDARD_ERRORS * (var / n).sqrt()
 }
 
+/// The mean of `selected − nominal` (the same poses) and its standard error over the poses.
+fn paired_difference(nominal: &[f64], selected: &[f64]) -> (f64, f64) {
+    let d: Vec<f64> = selected.iter().zip(nominal).map(|(s, n)| s - n).collect();
+    let n = d.len() as f64;
+    if d.len() < 2 {
+        return (d.first().copied().unwrap_or(0.0), f64::INFINITY);
+    }
+    let mean = d.iter().sum::<f64>() / n;
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    (mean, (var / n).sqrt())
+}
+
+/// Whether the procedure's mean error over the outer folds is worse than the nominal model's beyond the
+/// uncertainty of their paired difference ([`WORSE_STANDARD_ERRORS`], as for one fold).
+pub(crate) fn worse_beyond_uncertainty(n: &Nested) -> bool {
+    n.mean_difference_mm > WORSE_STANDARD_ERRORS * n.mean_difference_se_mm
+}
+
 /// The outer folds' outcomes as the report gives them: pooled statistics, each fold, the folds worse
 /// than nominal, and a fold holding more than half of the squared error with at most twice its share of
 /// the poses.
@@ -139,7 +157,10 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
             share > 0.5 && f.poses * folds.len() <= 2 * selected_norms.len().max(1)
         })
         .map(|f| f.fold);
+    let (mean_difference_mm, mean_difference_se_mm) = paired_difference(&nominal_norms, &selected_norms);
     Nested {
+        mean_difference_mm,
+        mean_difference_se_mm,
         outer_folds: outer,
         nominal: Stats::of(&nominal_norms),
         selected: Stats::of(&selected_norms),

@@ -9,6 +9,7 @@ use crate::config::Config;
 use crate::eligibility::arc;
 use crate::report::{HoldoutStats, Nested};
 use crate::tables::Tables;
+use crate::validation::worse_beyond_uncertainty;
 
 /// Signs that the data were read with the wrong units or frame: the diagnosis would otherwise absorb a
 /// radians-for-degrees mix-up or an unregistered tracker frame into hundreds of millimetres of "error".
@@ -68,12 +69,12 @@ pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Opti
     let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
     let mut out = Vec::new();
     if let Some(n) = nested {
-        if n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
-            || (chose && n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm)
-        {
+        // Worse beyond the uncertainty of the paired difference: a few poses of one outer fold far off
+        // do not decide alone (not better within it is said first among the warnings, `not_shown`).
+        if worse_beyond_uncertainty(n) {
             out.push(format!(
-                "on outer folds the selection never saw, its choices' mean error {:.4} mm does not beat the nominal model's {:.4} mm",
-                n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm
+                "on outer folds the selection never saw, its choices' mean error {:.4} mm is worse than the nominal model's {:.4} mm (by {:.4} ± {:.4} mm, paired over the poses)",
+                n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm, n.mean_difference_mm, n.mean_difference_se_mm
             ));
         }
         if !n.worse_than_nominal.is_empty() {
@@ -95,6 +96,22 @@ pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Opti
         ));
     }
     (!out.is_empty()).then(|| format!("the diagnosis does not transfer: {}", out.join("; ")))
+}
+
+/// Said first among the warnings when the procedure does not beat the nominal model on the outer folds
+/// but is not worse beyond the uncertainty of their paired difference ([`honest_end`] refuses then): the
+/// poses cannot show that the calibration transfers.
+pub(crate) fn not_shown(tables: &Tables, nested: Option<&Nested>) -> Option<String> {
+    let n = nested?;
+    let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
+    let not_better = n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
+        || (chose && n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm);
+    (not_better && !worse_beyond_uncertainty(n)).then(|| {
+        format!(
+            "on outer folds the selection never saw, its choices' mean error {:.4} mm does not beat the nominal model's {:.4} mm, within the uncertainty of their difference ({:.4} ± {:.4} mm, paired over the poses): these poses cannot show that the calibration transfers — measure more, or the poses `thermokin plan` chooses",
+            n.selected.heldout_mean_mm, n.nominal.heldout_mean_mm, n.mean_difference_mm, n.mean_difference_se_mm
+        )
+    })
 }
 
 /// Whether what the effects leave is the noise: the nested held-out RMS (or the selection's own CV
