@@ -17,7 +17,11 @@
 //! the other way round — and unless a row's fitted value is implausible on all data, which leaves that
 //! row out with its refusal (a compliance of the wrong sign — the joint rising under its load — is such a
 //! value), and a compliance joins only where the completed fit determines it (three standard errors from
-//! zero; a rigid robot's would be noise). On the real WAM (grid → random) the compliances take the refitted hold-out from 2.626 to 2.492
+//! zero; a rigid robot's would be noise). The completed fit is the one the rows would join: with its own
+//! prior toward the nominal robot ([`crate::shrinkage`], the strength chosen by its held-out error) —
+//! on thirty poses of the real WAM the least-squares fit of the complete geometry put two wrist rows 64
+//! and 73 mm off, cancelling, which refused them, and the partial model left did not transfer
+//! (`docs/diagnosis.md`, "Small sets"). On the real WAM (grid → random) the compliances take the refitted hold-out from 2.626 to 2.492
 //! mm and the same-frame one from 3.042 to 2.897; on the UR10 none is added (joints 3 and 4 fit with the
 //! wrong sign, 5 and 6 carry no gravity torque). The rows are reported apart from the diagnosed effects: they are what the
 //! identified robot needs to be used in its training frame, not causes found
@@ -83,6 +87,9 @@ fn complete_geometry(
         .collect();
     let kept = sel.effects.clone();
     let (effects, lambda, stats, errors) = loop {
+        if rows.is_empty() {
+            return Ok(());
+        }
         let mut effects = kept.clone();
         effects.extend(rows.iter().copied());
         // The rows are judged in the fit they would join: the completed model with its own prior, its
@@ -112,9 +119,6 @@ fn complete_geometry(
             }
         }
     };
-    if rows.is_empty() {
-        return Ok(());
-    }
     if !joins(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
         return Ok(());
     }
