@@ -63,8 +63,9 @@ pub(crate) fn warnings(robot: &Robot, data: &Dataset, config: &Config, tables: &
 }
 
 /// The sentence said first when the diagnosis does not beat the nominal model where it was not fitted:
-/// the nested validation's mean error, any of its outer folds (also when the selection on all data
-/// chose nothing: the procedure itself is then not to be trusted on these data), or the hold-out set's.
+/// the nested validation's mean error worse beyond the uncertainty of the paired difference, any of its
+/// outer folds worse beyond its own (also when the selection on all data chose nothing: the procedure
+/// itself is then not to be trusted on these data), or the hold-out set's mean error not better.
 pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Option<&HoldoutStats>) -> Option<String> {
     let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
     let mut out = Vec::new();
