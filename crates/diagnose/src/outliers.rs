@@ -274,14 +274,14 @@ fn screening_model(
     if unshrunk > budget {
         return Ok((always, ScreenModel::FrameOnly, None));
     }
-    let lambda = std::iter::successors(Some(0.01), |l| Some(l * 2.0))
+    let Some((lambda, effective_parameters)) = std::iter::successors(Some(0.01), |l| Some(l * 2.0))
         .take(64)
-        .find(|&l| effective(l) <= budget)
-        .unwrap_or(f64::MAX);
-    if lambda == f64::MAX {
+        .map(|l| (l, effective(l)))
+        .find(|&(_, e)| e <= budget)
+    else {
         return Ok((always, ScreenModel::FrameOnly, None));
-    }
-    let which = ScreenModel::ShrunkGeometry { effective_parameters: effective(lambda), prior_rows: lambda };
+    };
+    let which = ScreenModel::ShrunkGeometry { effective_parameters, prior_rows: lambda };
     let mut weighted = unit;
     weighted.weight.iter_mut().for_each(|w| *w *= lambda.sqrt());
     Ok((full, which, Some(weighted)))

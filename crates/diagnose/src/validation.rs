@@ -108,18 +108,21 @@ const WORSE_STANDARD_ERRORS: f64 = 2.0;
 /// more than [`WORSE_STANDARD_ERRORS`] standard errors of the mean paired difference of squares.
 fn significantly_worse(nominal: &[f64], selected: &[f64]) -> bool {
     let d: Vec<f64> = selected.iter().zip(nominal).map(|(s, n)| s * s - n * n).collect();
-    let n = d.len() as f64;
     if d.len() < 2 {
         return d.first().is_some_and(|x| *x > 0.0);
     }
-    let mean = d.iter().sum::<f64>() / n;
-    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    mean > WORSE_STANDARD_ERRORS * (var / n).sqrt()
+    let (mean, se) = mean_and_standard_error(&d);
+    mean > WORSE_STANDARD_ERRORS * se
 }
 
 /// The mean of `selected − nominal` (the same poses) and its standard error over the poses.
 fn paired_difference(nominal: &[f64], selected: &[f64]) -> (f64, f64) {
     let d: Vec<f64> = selected.iter().zip(nominal).map(|(s, n)| s - n).collect();
+    mean_and_standard_error(&d)
+}
+
+/// The mean of `d` and its standard error (`∞` with fewer than two values: nothing to judge a spread by).
+fn mean_and_standard_error(d: &[f64]) -> (f64, f64) {
     let n = d.len() as f64;
     if d.len() < 2 {
         return (d.first().copied().unwrap_or(0.0), f64::INFINITY);

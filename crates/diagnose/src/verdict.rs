@@ -62,12 +62,17 @@ pub(crate) fn warnings(robot: &Robot, data: &Dataset, config: &Config, tables: &
     out
 }
 
+/// Whether the selection chose anything: a diagnosed effect or a completion row.
+fn chose_any(tables: &Tables) -> bool {
+    !tables.reports.is_empty() || !tables.completed.is_empty()
+}
+
 /// The sentence said first when the diagnosis does not beat the nominal model where it was not fitted:
 /// the nested validation's mean error worse beyond the uncertainty of the paired difference, any of its
 /// outer folds worse beyond its own (also when the selection on all data chose nothing: the procedure
 /// itself is then not to be trusted on these data), or the hold-out set's mean error not better.
 pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Option<&HoldoutStats>) -> Option<String> {
-    let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
+    let chose = chose_any(tables);
     let mut out = Vec::new();
     if let Some(n) = nested {
         // Worse beyond the uncertainty of the paired difference: a few poses of one outer fold far off
@@ -104,7 +109,7 @@ pub(crate) fn honest_end(tables: &Tables, nested: Option<&Nested>, holdout: Opti
 /// poses cannot show that the calibration transfers.
 pub(crate) fn not_shown(tables: &Tables, nested: Option<&Nested>) -> Option<String> {
     let n = nested?;
-    let chose = !tables.reports.is_empty() || !tables.completed.is_empty();
+    let chose = chose_any(tables);
     let not_better = n.selected.heldout_mean_mm > n.nominal.heldout_mean_mm
         || (chose && n.selected.heldout_mean_mm >= n.nominal.heldout_mean_mm);
     (not_better && !worse_beyond_uncertainty(n)).then(|| {
