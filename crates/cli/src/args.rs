@@ -6,7 +6,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use thermokin_compensate::{Accumulation, Controller, Cycle, ResultsFormat};
 use thermokin_deform::{SemanticsKind, TimeProfile};
-use thermokin_diagnose::{Config, FoldGrouping, Outliers, Shrinkage, SimulationConfig};
+use thermokin_diagnose::{Config, Extrapolation, FoldGrouping, Outliers, Shrinkage, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
 use thermokin_planner::{Criterion, Params};
@@ -352,6 +352,11 @@ pub struct DiagnoseArgs {
     /// or the least-squares fit as it is.
     #[arg(long, value_parser = choice(Shrinkage::CHOICES), default_value_t = Config::default().shrinkage)]
     pub shrinkage: Shrinkage,
+    /// A chosen gear-ratio scale, cyclic error or compliance must hold beyond the poses it was fitted on
+    /// (fitted on one half of each joint's measured arc, scored on the other) at least as well as it
+    /// helps among them, or leave refused; off keeps the effects as the neighbourhood folds chose them.
+    #[arg(long, value_parser = choice(Extrapolation::CHOICES), default_value_t = Config::default().extrapolation)]
+    pub extrapolation: Extrapolation,
     /// Unit of the measurement files' revolute joint columns (default: degrees, refused when every value
     /// lies within ±2π — joints written in radians; give deg to read them as degrees anyway).
     #[arg(long, value_parser = choice(JointUnits::CHOICES))]

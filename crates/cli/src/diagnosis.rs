@@ -130,6 +130,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         folds_by: a.folds_by,
         outliers: a.outliers,
         shrinkage: a.shrinkage,
+        extrapolation: a.extrapolation,
         noise_mm: a.noise,
         orientation_lever_mm: a.orientation_lever,
         orientation_noise_rad: a.orientation_noise.map(thermokin_io::units::radians),

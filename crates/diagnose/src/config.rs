@@ -55,7 +55,36 @@ pub struct Config {
     pub outliers: Outliers,
     /// Whether the chosen model is shrunk toward the nominal robot ([`Shrinkage`]).
     pub shrinkage: Shrinkage,
+    /// Whether a chosen function of a joint's angle or load must hold beyond the poses it was fitted on
+    /// ([`Extrapolation`]).
+    pub extrapolation: Extrapolation,
 }
+
+/// The selection's check beyond the measured poses ([`crate::Config::extrapolation`]; the module
+/// `extrapolation` gives the why).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Extrapolation {
+    /// The default: a chosen scale, cyclic error, compliance or coupling leaves when, fitted on one half
+    /// of a joint's measured arc and scored on the other, the model is significantly worse with it, by
+    /// more than it gains among neighbouring poses.
+    #[default]
+    HalfArcs,
+    /// The effects as the neighbourhood folds chose them (for comparisons: the selection before it).
+    Off,
+}
+
+thermokin_chain::choices!(
+    Extrapolation,
+    "extrapolation check",
+    [
+        (
+            "half-arcs",
+            "a chosen angle- or load-dependent effect must hold from one half of each joint's measured arc to the other",
+            Extrapolation::HalfArcs
+        ),
+        ("off", "the effects as the neighbourhood folds chose them", Extrapolation::Off),
+    ]
+);
 
 /// What becomes of measurements the screen for gross errors flags (the module `outliers` gives the rule).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -249,6 +278,7 @@ impl Default for Config {
             completion: Completion::default(),
             outliers: Outliers::default(),
             shrinkage: Shrinkage::default(),
+            extrapolation: Extrapolation::default(),
         }
     }
 }

@@ -220,6 +220,44 @@ pub(crate) fn forward_chained(data: &Dataset, k: usize) -> Folds {
         .collect()
 }
 
+/// One fold that extrapolates along a joint: the poses on one side of the joint's median fitted, those on
+/// the other side scored ([`joint_halves`]).
+pub(crate) struct Half {
+    /// The joint (0-based).
+    pub(crate) joint: usize,
+    /// Its median over the data (radians, or metres for a prismatic joint): the poses at or above it
+    /// form the upper half.
+    pub(crate) median: f64,
+    /// Whether the lower half is the one scored.
+    pub(crate) lower_scored: bool,
+    /// The fitted poses.
+    pub(crate) train: Vec<usize>,
+    /// The scored poses.
+    pub(crate) test: Vec<usize>,
+}
+
+/// For every joint the data move, two folds: its lower half (below the median) fitted and the upper half
+/// scored, and the other way round. Unlike the selection's folds, whose test poses sit among training
+/// poses, every test pose here lies beyond the fitted poses' range of one joint — as the arm's other
+/// configurations lie beyond the measured ones when a calibration is used.
+pub(crate) fn joint_halves(data: &Dataset) -> Vec<Half> {
+    let dof = data.measurements.first().map_or(0, |m| m.q.len());
+    let mut halves = Vec::new();
+    for joint in 0..dof {
+        let mut q: Vec<f64> = data.measurements.iter().map(|m| m.q[joint]).collect();
+        q.sort_by(f64::total_cmp);
+        let Some(&median) = q.get(q.len() / 2) else { continue };
+        let (lower, upper): (Vec<usize>, Vec<usize>) =
+            (0..data.len()).partition(|&i| data.measurements[i].q[joint] < median);
+        if lower.is_empty() || upper.is_empty() {
+            continue;
+        }
+        halves.push(Half { joint, median, lower_scored: false, train: lower.clone(), test: upper.clone() });
+        halves.push(Half { joint, median, lower_scored: true, train: upper, test: lower });
+    }
+    halves
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
 mod tests {
@@ -272,5 +310,30 @@ mod tests {
         }
         assert!(tested.iter().all(|&c| c == 1));
         assert_eq!(p.test_blocks().len(), 200);
+    }
+    #[test]
+    fn every_scored_half_lies_beyond_the_fitted_one_along_its_joint() {
+        let data = Dataset {
+            measurements: (0..101).map(|i| at(&[(i as f64 * 0.37).sin(), (i as f64 * 0.11).cos(), 0.5])).collect(),
+            ..Dataset::default()
+        };
+        let halves = joint_halves(&data);
+        // Joint 3 never moves: no split along it; joints 1 and 2 each give two folds.
+        assert_eq!(
+            halves.iter().map(|h| (h.joint, h.lower_scored)).collect::<Vec<_>>(),
+            [(0, false), (0, true), (1, false), (1, true)]
+        );
+        for h in &halves {
+            assert_eq!(h.train.len() + h.test.len(), data.len());
+            let q = |i: &usize| data.measurements[*i].q[h.joint];
+            let (train_lo, train_hi) =
+                (h.train.iter().map(q).fold(f64::MAX, f64::min), h.train.iter().map(q).fold(f64::MIN, f64::max));
+            let (test_lo, test_hi) =
+                (h.test.iter().map(q).fold(f64::MAX, f64::min), h.test.iter().map(q).fold(f64::MIN, f64::max));
+            assert!(
+                if h.lower_scored { test_hi < train_lo } else { test_lo > train_hi },
+                "{test_lo}..{test_hi} vs {train_lo}..{train_hi}"
+            );
+        }
     }
 }

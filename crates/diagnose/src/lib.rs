@@ -17,6 +17,7 @@ mod config;
 mod diagnosis;
 mod eligibility;
 mod error;
+mod extrapolation;
 mod folds;
 mod forward;
 mod outliers;
@@ -38,7 +39,7 @@ mod validation;
 mod verdict;
 
 pub use config::{
-    Completion, Config, Eligibility, FoldGrouping, Outliers, Plausibility, Screen, Shrinkage, Validation,
+    Completion, Config, Eligibility, Extrapolation, FoldGrouping, Outliers, Plausibility, Screen, Shrinkage, Validation,
 };
 pub use diagnosis::{Progress, diagnose, diagnose_with_progress};
 pub use error::DiagnoseError;

@@ -35,6 +35,8 @@ pub(crate) struct Scorer<'a> {
     pub(crate) folds: Folds,
     /// The block of each held-out error of `folds`, in order (the gate's unit of evidence).
     pub(crate) blocks: Vec<usize>,
+    /// The block of each measurement, in data order.
+    pub(crate) block_of: Vec<usize>,
     pub(crate) forward: Folds,
     /// The robot's scale over the data, what fitted values are judged against.
     pub(crate) scale: RobotScale,
@@ -101,6 +103,7 @@ impl<'a> Scorer<'a> {
             terms: PoseTerms::of(robot, data, config.orientation_lever_mm),
             folds: partition.folds,
             blocks,
+            block_of: partition.block,
             forward: forward_chained(data, config.folds),
             scale: RobotScale::of(robot, data),
             starts: Mutex::new(HashMap::new()),

@@ -9,7 +9,9 @@
 //!    first ([`crate::backward`]);
 //! 5. **parsimony** — an exponential drift not better than its linear twin becomes linear; each block is
 //!    replaced by the smallest combination of smaller catalogue blocks it contains when that is not
-//!    significantly worse ([`crate::parsimony`]);
+//!    significantly worse ([`crate::parsimony`]); then every chosen function of a joint's angle or load
+//!    that makes the model significantly worse beyond the measured poses — fitted on one half of a
+//!    joint's arc, scored on the other — leaves, refused ([`crate::extrapolation`]);
 //! 6. **completion** — the model completed for use (every eligible joint row, and every compliance the
 //!    data determine, beside the chosen effects) unless the selected model is significantly better held
 //!    out ([`crate::completion`]); then every chosen compliance coupling beside both joints' own
@@ -26,6 +28,7 @@ use crate::completion::complete;
 use crate::config::Config;
 use crate::eligibility::check;
 use crate::error::DiagnoseError;
+use crate::extrapolation::beyond_the_measured_poses;
 use crate::forward::forward;
 use crate::pairs::physical_pairs;
 use crate::parsimony::parsimony;
@@ -71,6 +74,8 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, D
     forward(scorer, config, &mut selection, eligible.clone())?;
     backward(scorer, config, &mut selection)?;
     parsimony(scorer, config, &mut selection, &eligible)?;
+    let beyond = beyond_the_measured_poses(scorer, config, &mut selection)?;
+    let eligible: Vec<Effect> = eligible.into_iter().filter(|e| !beyond.contains(e)).collect();
     complete(scorer, config, &mut selection, &eligible)?;
     physical_pairs(scorer, &mut selection, &eligible)?;
     shrink(scorer, config, &mut selection)?;

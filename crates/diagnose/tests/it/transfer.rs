@@ -3,7 +3,7 @@
 //! `tracker.rs` (narrow joint coverage, two offsets of parallel joints).
 
 use thermokin_chain::{ErrorParams, Robot};
-use thermokin_diagnose::{Config, FoldGrouping, Outliers, Shrinkage, Validation, diagnose};
+use thermokin_diagnose::{Config, Extrapolation, FoldGrouping, Outliers, Shrinkage, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::workspace;
 
@@ -53,11 +53,19 @@ fn ur10_series_c_transfers_to_series_b() {
     }
     assert!((h.nominal.heldout_mean_mm - 1.025).abs() < 0.01, "nominal on B {:.4}", h.nominal.heldout_mean_mm);
     assert!(h.selected.heldout_mean_mm <= 0.65, "chosen model on B: {:.4} mm mean", h.selected.heldout_mean_mm);
-    // Issue #36: registration and tool refitted on B, no worse than the 0.456 mm before it (0.429 with the
-    // shrinkage). In the training frame (the export through `fk`, nothing refitted) the bound is the
-    // independent full-DH + compliance fit's 0.771 mm: 0.773 — not met, recorded in docs/diagnosis.md.
+    // Issue #36: registration and tool refitted on B, no worse than the 0.456 mm before it. In the
+    // training frame (the export through `fk`, nothing refitted) at or below the independent full-DH +
+    // compliance fit's 0.771 mm, the goal FIGAROH's 0.647: 0.773 while joint 3's gear ratio, which gains
+    // 0.0009 mm among C's neighbouring poses, was exported — fitted on one half of joint 2's arc its sign
+    // flips, and it is now refused for what it costs beyond the poses it was fitted on (0.511).
     assert!(h.selected.heldout_mean_mm <= 0.456, "chosen model on B, refitted: {:.4}", h.selected.heldout_mean_mm);
-    eprintln!("B in the training frame: {:.4} mm mean", h.same_frame.selected.heldout_mean_mm);
+    let same_frame = h.same_frame.selected.heldout_mean_mm;
+    eprintln!("B in the training frame: {same_frame:.4} mm mean");
+    assert!(same_frame <= 0.771, "B in the training frame: {same_frame:.4} mm mean");
+    assert!(same_frame < 0.647, "B in the training frame, the goal: {same_frame:.4} mm mean");
+    let scale3 = report.identifiability.not_identifiable.iter().find(|r| r.effect == "joint_scale[3]").unwrap();
+    assert!(scale3.reason.ends_with("it does not hold beyond the poses it was fitted on"), "{}", scale3.reason);
+    assert!(scale3.reason.contains("joint 2's poses"), "{}", scale3.reason);
     assert!(n.worse_than_nominal.is_empty(), "outer folds worse than nominal: {:?}", n.worse_than_nominal);
     assert!(report.honest_end.is_none(), "{:?}", report.honest_end);
     // Every reported parameter is identified: one standard deviation under 1 mm or 1° (a final refit that
@@ -286,4 +294,37 @@ fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_
         );
     }
     report
+}
+
+#[test]
+fn a_shape_that_gains_more_among_the_poses_than_it_costs_beyond_them_stays() {
+    // Joint 3 of the IRB 140 lags by c·q3·(q2 − q2₀), a coupling of two joints that no catalogue effect
+    // describes; the poses cover 80 % of every joint's travel. Fitted on one half of joint 2's arc and
+    // scored on the other, the cyclic error of joint 3 that stands in for part of it makes the model
+    // worse (0.1217 → 0.1285 mm RMS over the half splits) — but among neighbouring poses it takes the
+    // held-out RMS from 0.0854 to 0.0750 mm, and poses drawn anew over the same travel (where this robot
+    // is used) are missed by 0.0817 mm mean with it and 0.0870 when a check on the half splits alone leaves
+    // it out. The phase weighs both: it stays.
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let q20 = (-14.0f64).to_radians();
+    let truth = |q: &[f64]| {
+        let mut a = q.to_vec();
+        a[2] += 2.8e-4 * q[2] * (q[1] - q20);
+        a
+    };
+    let data = measure(robot.chain(), 300, 411, truth);
+    let hold = measure(robot.chain(), 300, 412, truth);
+    let run = |extrapolation| {
+        let config = Config { validation: Validation::SelectionOnly, extrapolation, ..Config::default() };
+        let report = diagnose(&robot, &data, Some(&hold), &config).unwrap();
+        let labels: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
+        (report.holdout.unwrap().same_frame.selected.heldout_mean_mm, labels)
+    };
+    let (judged, judged_labels) = run(Extrapolation::HalfArcs);
+    let (off, off_labels) = run(Extrapolation::Off);
+    eprintln!("judged {judged:.4} {judged_labels:?}; off {off:.4} {off_labels:?}");
+    assert!(off_labels.contains(&"periodic[3]".to_string()), "{off_labels:?}");
+    assert!(judged_labels.contains(&"periodic[3]".to_string()), "{judged_labels:?}");
+    // The same model, the same fit: the same hold-out error (1e-9 mm: arithmetic, not a tolerance).
+    assert!((judged - off).abs() < 1e-9, "{judged} vs {off}");
 }
