@@ -380,10 +380,11 @@ impl PyReport {
 /// axis), `folds`, `folds_by` (`"neighbourhood"`, `"time"`, `"region"`, `"configuration"`), `frame`
 /// (`"base"` or `"tracker"`: estimate the measurement frame), `tool` (`"known"` or `"unknown"`:
 /// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`, `outliers` (`"exclude"`:
-/// gross errors listed and left out, or `"keep"`), `shrinkage` (`"cross-validated"` or `"off"`). Runs
-/// without the GIL.
+/// gross errors listed and left out, or `"keep"`), `shrinkage` (`"cross-validated"` or `"off"`),
+/// `extrapolation` (`"half-arcs"`: a chosen angle- or load-dependent effect must hold beyond the poses it
+/// was fitted on, or `"off"`). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -401,6 +402,7 @@ pub fn diagnose(
     orientation_noise_deg: Option<f64>,
     outliers: Option<&str>,
     shrinkage: Option<&str>,
+    extrapolation: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -431,6 +433,7 @@ pub fn diagnose(
         tool: choice("tool", tool, defaults.tool)?,
         outliers: choice("outliers", outliers, defaults.outliers)?,
         shrinkage: choice("shrinkage", shrinkage, defaults.shrinkage)?,
+        extrapolation: choice("extrapolation", extrapolation, defaults.extrapolation)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

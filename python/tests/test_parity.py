@@ -102,9 +102,9 @@ def test_compensate_field_by_field(root, cli, warm, tmp_path):
     [
         ([], {}),
         (["--frame", "tracker", "--tool", "unknown", "--folds", "4", "--folds-by", "time", "--noise", "0.005",
-          "--outliers", "keep", "--shrinkage", "off"],
+          "--outliers", "keep", "--shrinkage", "off", "--extrapolation", "off"],
          {"frame": "tracker", "tool": "unknown", "folds": 4, "folds_by": "time", "noise_mm": 0.005,
-          "outliers": "keep", "shrinkage": "off"}),
+          "outliers": "keep", "shrinkage": "off", "extrapolation": "off"}),
     ],
 )
 def test_diagnose_field_by_field(root, cli, tmp_path, flags, kw):

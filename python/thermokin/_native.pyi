@@ -217,6 +217,7 @@ def diagnose(
     orientation_noise_deg: float | None = None,
     outliers: str | None = None,
     shrinkage: str | None = None,
+    extrapolation: str | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,

@@ -66,7 +66,7 @@ fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
 /// C's poses makes eligible (2026-11-25: 0.670 → 0.478 mm; the random median 0.790); since the small sets'
 /// completion and gross-error screen improved the random draws (median 0.790 → 0.547, 0.85 × = 0.465), the
 /// planned 0.488 meets the second clause by the whole of C only — and not by today's whole-C figure,
-/// 0.429 (1.1 × = 0.472): recorded in docs/planner.md.
+/// 0.411 (1.1 × = 0.452): recorded in docs/planner.md.
 #[test]
 fn ur10_sixty_planned_poses_beat_random_ones() {
     let options = thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) };
