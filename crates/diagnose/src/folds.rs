@@ -311,6 +311,7 @@ mod tests {
         assert!(tested.iter().all(|&c| c == 1));
         assert_eq!(p.test_blocks().len(), 200);
     }
+
     #[test]
     fn every_scored_half_lies_beyond_the_fitted_one_along_its_joint() {
         let data = Dataset {
