@@ -2,12 +2,11 @@
 //! leaves again.
 
 use rayon::prelude::*;
-use thermokin_identify::Effect;
 
 use crate::config::Config;
 use crate::error::DiagnoseError;
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::Selection;
+use crate::selection::{Selection, without};
 use crate::stats::Stats;
 
 /// Phase 4: backward elimination. While some chosen effect can leave without the gate rejecting the
@@ -18,8 +17,7 @@ pub(crate) fn backward(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection
         let without: Vec<(usize, Stats, Vec<f64>)> = (sel.always..sel.effects.len())
             .into_par_iter()
             .map(|k| {
-                let rest: Vec<Effect> =
-                    sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+                let rest = without(&sel.effects, k);
                 let (s, e) = scorer.heldout_errors(&rest, &scorer.folds)?;
                 Ok((k, s, e))
             })

@@ -46,7 +46,7 @@ use crate::folds::{Folds, Half, joint_halves};
 use crate::outliers::MIN_REDUNDANCY;
 use crate::report::Refusal;
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::Selection;
+use crate::selection::{Selection, without};
 use crate::stats::Stats;
 
 /// Whether `e` is a function of a joint's angle or load (the shapes this phase judges).
@@ -108,10 +108,10 @@ pub(crate) fn beyond_the_measured_poses(
         let folds: Folds = used.iter().map(|h| (h.train.clone(), h.test.clone())).collect();
         let blocks: Vec<usize> = used.iter().flat_map(|h| h.test.iter().map(|&i| scorer.block_of[i])).collect();
         let with = Scored::of(scorer, &sel.effects, &folds)?;
-        let without: Vec<Without> = candidates
+        let scored: Vec<Without> = candidates
             .into_par_iter()
             .map(|k| {
-                let smaller = rest(&sel.effects, k);
+                let smaller = without(&sel.effects, k);
                 Ok(Without {
                     k,
                     beyond: Scored::of(scorer, &smaller, &folds)?,
@@ -125,7 +125,7 @@ pub(crate) fn beyond_the_measured_poses(
             (with.stats.heldout_rms_mm - w.beyond.stats.heldout_rms_mm)
                 - (w.among.stats.heldout_rms_mm - sel.current.heldout_rms_mm)
         };
-        let leaving = without
+        let leaving = scored
             .into_iter()
             .filter(|w| {
                 significantly_better(&with.errors, &w.beyond.errors, config.gate_standard_errors, &blocks)
@@ -136,7 +136,7 @@ pub(crate) fn beyond_the_measured_poses(
         let gone = sel.effects[w.k];
         sel.refused.push(refusal(scorer.robot, gone, sel.current, &with, &w, &used));
         let row = format!("− {} (costs more beyond the poses it was fitted on than it gains among them)", gone.label());
-        sel.replace(rest(&sel.effects, w.k), w.among.stats, w.among.errors, row);
+        sel.replace(without(&sel.effects, w.k), w.among.stats, w.among.errors, row);
         removed.push(gone);
     }
 }
@@ -160,11 +160,6 @@ fn refusal(robot: &Robot, gone: Effect, current: Stats, with: &Scored, w: &Witho
         ),
         remedy: "it follows another cause over these poses, and an export would carry it into the arm's other configurations — measure poses in more of the arm's configurations (other joint ranges, other arm branches) before it can be told".into(),
     }
-}
-
-/// `effects` without its `k`-th.
-fn rest(effects: &[Effect], k: usize) -> Vec<Effect> {
-    effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect()
 }
 
 /// The half split where an effect costs most, with both models' RMS there.

@@ -10,7 +10,7 @@ use thermokin_identify::{DriftShape, Effect};
 use crate::config::Config;
 use crate::error::DiagnoseError;
 use crate::scoring::{Relation, Scorer, significantly_better};
-use crate::selection::{Joined, Selection, Step};
+use crate::selection::{Joined, Selection, Step, without};
 use crate::stats::Stats;
 
 /// Both rules of the phase, in order.
@@ -103,7 +103,7 @@ struct Replacement {
 impl Replacement {
     /// Puts the smaller blocks in the place of the larger one at `k`, their steps taking its step.
     fn apply(self, sel: &mut Selection, k: usize) {
-        let mut with: Vec<Effect> = sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+        let mut with = without(&sel.effects, k);
         with.splice(k..k, self.blocks.iter().copied());
         let names: Vec<String> = self.blocks.iter().map(Effect::label).collect();
         let parameters = |n: usize| if n == 1 { "1 parameter".to_string() } else { format!("{n} parameters") };
@@ -150,7 +150,7 @@ fn smaller_replacement(
         }
     }
     // Combinations of one or two smaller blocks with fewer parameters than the larger.
-    let rest: Vec<Effect> = sel.effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+    let rest = without(&sel.effects, k);
     let mut combos: Vec<Vec<Effect>> = smaller.iter().map(|&c| vec![c]).collect();
     for (a, &x) in smaller.iter().enumerate() {
         for &y in &smaller[a + 1..] {

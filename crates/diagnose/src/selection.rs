@@ -168,3 +168,8 @@ pub(crate) fn score(
         runaway,
     }))
 }
+
+/// `effects` without its `k`-th (the model a removal step scores).
+pub(crate) fn without(effects: &[Effect], k: usize) -> Vec<Effect> {
+    effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect()
+}

@@ -15,7 +15,7 @@ use crate::report::{
 };
 use crate::scoring::{Relation, Scorer};
 use crate::select::Selected;
-use crate::selection::{Joined, Selection};
+use crate::selection::{Joined, Selection, without};
 use crate::stats::Stats;
 
 /// What the selection reports of its choice: everything in a report but the validation of the whole
@@ -146,7 +146,7 @@ fn leave_one_out(
         .collect::<Vec<_>>()
         .into_par_iter()
         .map(|k| {
-            let rest: Vec<Effect> = effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect();
+            let rest = without(effects, k);
             Ok((k, scorer.heldout(&rest, &scorer.folds)?))
         })
         .collect()
