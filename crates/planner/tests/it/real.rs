@@ -46,7 +46,8 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// compliance judged by the fit it would join, the completion's gate turned the right way round, a coupled
 /// pair made physical), and the planned 30 went from 2.817 to 2.901 mm once the plan left out the effects
 /// no choice of the grid makes eligible (at 20 and 40 poses that took them from 3.010 to 2.732 and from
-/// 2.973 to 2.761).
+/// 2.973 to 2.761). Why the plan does not win there while it does on the grid's other half (the test
+/// below): the 20 random poses lie in the grid's core, the D-optimal ones at the ends of its arcs.
 #[test]
 fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
     let options = thermokin_io::RobotOptions::default();
@@ -58,6 +59,31 @@ fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
     let (planned, random) = planned_and_random(&robot, &grid, &random_set, 30);
     eprintln!("WAM 30 planned {planned:.4}, random {random:?}");
     assert!(planned <= 2.95, "{planned}");
+}
+
+/// Where the plan is made for: the poses a user can reach stand for the poses the robot will work in.
+/// Each of three seeded halves of the WAM's grid is the pool, the other half the poses held out; 30 poses
+/// planned from the pool's joints are diagnosed and scored there against five random draws of 30 of the
+/// same pool, on the same held-out half. Measured 2026-11-26: planned 1.936, 2.067, 2.085 mm against
+/// random medians 2.269, 2.236, 2.447 (0.85, 0.92, 0.85 ×) — the test set of the WAM's own rule (its 20
+/// random poses) lies in the grid's core (joint 2 at 37…88° of the grid's −89…89°, joint 4 at 62…118° of
+/// −29…121°), where seven of the 30 planned poses are and half the grid is: there the plan does not win
+/// (docs/planner.md, "Where planned poses help"). Fails if the plan predicts the poses it was chosen
+/// among no better than random ones do.
+#[test]
+fn wam_planned_poses_predict_the_other_half_of_the_grid_better_than_random_ones() {
+    use rand::SeedableRng;
+    let options = thermokin_io::RobotOptions::default();
+    let robot = thermokin_io::read_robot_with(&workspace("fixtures/real/jacobi-wam/wam.urdf"), &options).unwrap();
+    let grid = read(&robot, "fixtures/real/jacobi-wam/wam-grid.csv");
+    for seed in 1..=3 {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let half = rand::seq::index::sample(&mut rng, grid.len(), grid.len() / 2).into_vec();
+        let rest: Vec<usize> = (0..grid.len()).filter(|i| !half.contains(i)).collect();
+        let (planned, random) = planned_and_random(&robot, &grid.subset(&half), &grid.subset(&rest), 30);
+        eprintln!("WAM half {seed}: 30 planned {planned:.4}, random {random:?}");
+        assert!(planned < median(random.clone()), "split {seed}: {planned} vs {random:?}");
+    }
 }
 
 /// The UR10: 60 of series C's 2,773 poses, scored on series B. The rule, both clauses: ≤ 0.57 mm
