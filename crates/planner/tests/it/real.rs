@@ -61,15 +61,15 @@ fn wam_thirty_planned_poses_transfer_as_well_as_the_grid() {
     assert!(planned <= 2.95, "{planned}");
 }
 
-/// Where the plan is made for: the poses a user can reach stand for the poses the robot will work in.
+/// What a plan is for: the poses a user can reach stand for the poses the robot will work in.
 /// Each of three seeded halves of the WAM's grid is the pool, the other half the poses held out; 30 poses
 /// planned from the pool's joints are diagnosed and scored there against five random draws of 30 of the
 /// same pool, on the same held-out half. Measured 2026-11-26: planned 1.936, 2.067, 2.085 mm against
 /// random medians 2.269, 2.236, 2.447 (0.85, 0.92, 0.85 ×) — the test set of the WAM's own rule (its 20
 /// random poses) lies in the grid's core (joint 2 at 37…88° of the grid's −89…89°, joint 4 at 62…118° of
 /// −29…121°), where seven of the 30 planned poses are and half the grid is: there the plan does not win
-/// (docs/planner.md, "Where planned poses help"). Fails if the plan predicts the poses it was chosen
-/// among no better than random ones do.
+/// (docs/planner.md, "Where planned poses help"). Fails if a half's planned poses predict the other half
+/// no better than random ones do.
 #[test]
 fn wam_planned_poses_predict_the_other_half_of_the_grid_better_than_random_ones() {
     use rand::SeedableRng;
