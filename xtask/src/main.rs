@@ -6,6 +6,8 @@ use std::process::Command;
 
 use anyhow::{Context, Result, bail};
 
+mod bench;
+
 const HELP: &str = "\
 cargo xtask <task>
 
@@ -16,8 +18,15 @@ Tasks:
                               fixtures/golden/paper-reproduction.json and fail on drift.
   bless-golden                Regenerate the committed docs/paper-reproduction.md, docs/img/*.svg and
                               fixtures/golden/paper-reproduction.json from a fresh run.
-  bench [--json]              Run the criterion benches and print a summary table (the last line is one
-                              JSON object with --json).
+  bench [--json] [--baseline COMMIT]
+                              Run the criterion benches and print a summary table (the last line is one
+                              JSON object with --json), then the diagnosis's cost phase by phase on the
+                              real UR10 sets (C with B held out; the week of series A). With --baseline,
+                              COMMIT's command line is built in a worktree under target/baseline/ and
+                              both builds run the real sets one after the other: CPU, wall, peak memory
+                              and figures side by side, with the CPU ratio.
+  measure BIN ARGS...         (used by bench --baseline) Run one command and print its CPU seconds, wall
+                              seconds and peak memory as JSON.
   deps                        Check that dependencies point one way (the core never depends on I/O,
                               the CLI or file formats).
   tidy                        Check the unit boundary: no literal unit conversion (/ 1000.0, * 1000.0,
@@ -35,7 +44,11 @@ fn main() -> Result<()> {
     match args.first().map(String::as_str) {
         Some("reproduce-paper") => reproduce(args.iter().any(|a| a == "--check")),
         Some("bless-golden") => bless(),
-        Some("bench") => bench(args.iter().any(|a| a == "--json")),
+        Some("bench") => {
+            let baseline = args.iter().position(|a| a == "--baseline").and_then(|k| args.get(k + 1));
+            bench::bench(args.iter().any(|a| a == "--json"), baseline.map(String::as_str))
+        }
+        Some("measure") => bench::measure_task(&args[1..]),
         Some("deps") => deps(),
         Some("tidy") => tidy(),
         Some("-h" | "--help") | None => {
@@ -46,16 +59,16 @@ fn main() -> Result<()> {
     }
 }
 
-fn workspace_root() -> PathBuf {
+pub(crate) fn workspace_root() -> PathBuf {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     here.parent().map_or_else(|| here.to_path_buf(), Path::to_path_buf)
 }
 
-fn cargo() -> Command {
+pub(crate) fn cargo() -> Command {
     Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
 }
 
-fn run(cmd: &mut Command) -> Result<()> {
+pub(crate) fn run(cmd: &mut Command) -> Result<()> {
     let status = cmd.status().with_context(|| format!("running {cmd:?}"))?;
     if !status.success() {
         bail!("{cmd:?} failed with {status}");
@@ -99,243 +112,6 @@ fn bless() -> Result<()> {
     std::fs::create_dir_all("docs/img")?;
     thermokin("docs/paper-reproduction.md", "docs/img", &["--json", GOLDEN])?;
     println!("blessed: docs/paper-reproduction.md, docs/img/, {GOLDEN}");
-    Ok(())
-}
-
-/// One statistic (`median`, `mean`) of a criterion estimate file, nanoseconds.
-fn estimate_ns(bench: &str, statistic: &str) -> Option<f64> {
-    let p = Path::new("target/criterion").join(bench).join("new/estimates.json");
-    let text = std::fs::read_to_string(p).ok()?;
-    let v: serde_json::Value = serde_json::from_str(&text).ok()?;
-    v[statistic]["point_estimate"].as_f64()
-}
-
-fn median_ns(bench: &str) -> Option<f64> {
-    estimate_ns(bench, "median")
-}
-
-fn mean_ns(bench: &str) -> Option<f64> {
-    estimate_ns(bench, "mean")
-}
-
-/// The processor the figures were taken on (`model name` of /proc/cpuinfo, and the cores): a speed figure
-/// is quoted with it.
-fn processor() -> String {
-    let cores = std::thread::available_parallelism().map_or(0, usize::from);
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|t| {
-            t.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    format!("{model}, {cores} cores")
-}
-
-fn bench(json: bool) -> Result<()> {
-    run(cargo().args([
-        "bench",
-        "--package",
-        "thermokin-chain",
-        "--package",
-        "thermokin-ik",
-        "--package",
-        "thermokin-compensate",
-        "--package",
-        "thermokin-diagnose",
-        "--package",
-        "thermokin-planner",
-        "--bench",
-        "kinematics",
-        "--bench",
-        "ik",
-        "--bench",
-        "program",
-        "--bench",
-        "diagnose",
-        "--bench",
-        "tracker_scale",
-        "--bench",
-        "plan",
-    ]))?;
-    let stream: serde_json::Value = std::fs::read_to_string("target/criterion/program_stream.json")
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or(serde_json::Value::Null);
-    let rate = |file: &str| {
-        std::fs::read_to_string(Path::new("target/criterion").join(file))
-            .ok()
-            .and_then(|s| s.trim().parse::<f64>().ok())
-    };
-    let scale: serde_json::Value = std::fs::read_to_string("target/criterion/diagnose_scale.json")
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok())
-        .unwrap_or(serde_json::Value::Null);
-    let success = rate("ik_random_success.txt");
-    let k_success = rate("k_ik_near_success.txt");
-    let us = |v: Option<f64>| v.map(|n| n / 1e3);
-    let ratio = |a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| a / b);
-    let rows: Vec<(&str, Option<f64>, &str, f64)> = vec![
-        ("fk_us", median_ns("fk_irb140_deformed").map(|n| n / 1e3), "median FK, IRB 140 with error parameters", 0.2),
-        ("jacobian_us", median_ns("jacobian_irb140_deformed").map(|n| n / 1e3), "median pose + Jacobian", 0.3),
-        ("ik_near_us", median_ns("ik_near_seed").map(|n| n / 1e3), "median IK from a seed within 0.25 rad", 5.0),
-        (
-            "ik_near_nalgebra_us",
-            median_ns("ik_near_seed").map(|n| n / 1e3),
-            "same: the default step is nalgebra's fixed-size 6 × 6",
-            5.0,
-        ),
-        (
-            "ik_near_faer_us",
-            median_ns("ik_near_seed_faer").map(|n| n / 1e3),
-            "same, faer's dynamic step (chains of other sizes)",
-            5.0,
-        ),
-        ("ik_random_us", mean_ns("ik_random_seed").map(|n| n / 1e3), "mean IK from random seeds with restarts", 50.0),
-        (
-            "ik_random_random_restarts_us",
-            us(mean_ns("ik_random_seed_random_restarts")),
-            "same, random restarts only (no closed-form branches)",
-            f64::NAN,
-        ),
-        (
-            "branches_ratio",
-            ratio(mean_ns("ik_random_seed"), mean_ns("ik_random_seed_random_restarts")),
-            "random-seed IK with branches / without, same run",
-            f64::NAN,
-        ),
-        ("k_fk_us", us(median_ns("k_fk")), "peer: k crate FK, same robot and configurations", f64::NAN),
-        ("k_jacobian_us", us(median_ns("k_jacobian")), "peer: k crate FK + Jacobian", f64::NAN),
-        ("k_ik_near_us", us(median_ns("k_ik_near_seed")), "peer: k crate Jacobian IK near seed (1e-6 m)", f64::NAN),
-        ("k_fk_ratio", ratio(median_ns("fk_irb140_deformed"), median_ns("k_fk")), "ours / k, FK", 1.0),
-        (
-            "k_jacobian_ratio",
-            ratio(median_ns("jacobian_irb140_deformed"), median_ns("k_jacobian")),
-            "ours / k, pose + Jacobian",
-            1.0,
-        ),
-        (
-            "k_ik_near_ratio",
-            ratio(median_ns("ik_near_seed"), median_ns("k_ik_near_seed")),
-            "ours (1e-9 mm, limits) / k (1e-6 m), IK near seed",
-            1.0,
-        ),
-        ("k_ik_near_success", k_success, "peer: k's success rate near seed", f64::NAN),
-        (
-            "program_1m_s",
-            stream["1000000"]["seconds"].as_f64(),
-            "1,000,000 targets streamed (CSV in and out), every core",
-            10.0,
-        ),
-        (
-            "program_1m_peak_mib",
-            stream["1000000"]["peak_rss_mib"].as_f64(),
-            "peak memory after 1,000,000 targets, MiB",
-            f64::NAN,
-        ),
-        (
-            "program_300k_peak_mib",
-            stream["300000"]["peak_rss_mib"].as_f64(),
-            "peak memory after 300,000 targets, MiB (flat: same as 1M)",
-            f64::NAN,
-        ),
-        (
-            "diagnose_240_s",
-            mean_ns("diagnose/diagnose_240_poses").map(|n| n / 1e9),
-            "diagnosis of 240 poses over 240 min, nested 5×5-fold, every candidate",
-            f64::NAN,
-        ),
-        (
-            "diagnose_selection_60_s",
-            mean_ns("diagnose_scaling/selection/60").map(|n| n / 1e9),
-            "selection alone (5-fold ladder), 60 poses",
-            f64::NAN,
-        ),
-        (
-            "diagnose_selection_480_s",
-            mean_ns("diagnose_scaling/selection/480").map(|n| n / 1e9),
-            "selection alone, 480 poses",
-            f64::NAN,
-        ),
-        (
-            "diagnose_growth_480_over_60",
-            ratio(mean_ns("diagnose_scaling/selection/480"), mean_ns("diagnose_scaling/selection/60")),
-            "cost growth for 8× the poses (8 = linear)",
-            8.0,
-        ),
-        (
-            "diagnose_ur10_3k_s",
-            scale["3000"]["seconds"].as_f64(),
-            "simulated UR10, 3,000 poses with time and temperatures, nested diagnosis",
-            f64::NAN,
-        ),
-        ("diagnose_ur10_12k_s", scale["12000"]["seconds"].as_f64(), "the same, 12,000 poses (a tracker's week)", 30.0),
-        (
-            "diagnose_growth_12k_over_3k",
-            ratio(scale["12000"]["seconds"].as_f64(), scale["3000"]["seconds"].as_f64()),
-            "cost growth for 4× the poses (4 = linear)",
-            4.5,
-        ),
-        (
-            "diagnose_ur10_12k_peak_mib",
-            scale["12000"]["peak_rss_mib"].as_f64(),
-            "peak memory of that process, MiB",
-            300.0,
-        ),
-        (
-            "plan_60_of_3000_s",
-            mean_ns("plan/60_of_3000").map(|n| n / 1e9),
-            "plan 60 poses of 3,000 sampled IRB 140 candidates (tracker, unknown tool)",
-            2.0,
-        ),
-        (
-            "plan_growth_6000_over_3000",
-            ratio(mean_ns("plan/60_of_6000"), mean_ns("plan/60_of_3000")),
-            "the plan's cost, 6,000 candidates over 3,000 (linear: 2)",
-            2.2,
-        ),
-        (
-            "diagnose_wam_real_s",
-            scale["real_wam"]["seconds"].as_f64(),
-            "the real Barrett WAM: 216 grid poses nested, 20 random held out",
-            5.0,
-        ),
-        (
-            "diagnose_ur10_real_s",
-            scale["real_ur10"]["seconds"].as_f64(),
-            "the real UR10: series C (2,773 poses) nested, series B held out",
-            15.0,
-        ),
-        (
-            "transient_10050_s",
-            mean_ns("program/transient_10050").map(|n| n / 1e9),
-            "10,050 targets, warm-started (paper's 200 min)",
-            0.1,
-        ),
-    ];
-    println!("processor: {}", processor());
-    println!("{:<28} {:>12} {:>8}  what", "metric", "measured", "goal");
-    for (k, v, what, goal) in &rows {
-        let goal = if goal.is_nan() { "–".to_string() } else { goal.to_string() };
-        println!("{k:<28} {:>12} {goal:>8}  {what}", v.map_or("n/a".into(), |x| format!("{x:.4}")));
-    }
-    println!(
-        "{:<28} {:>12} {:>8}  success rate of random-seed IK over the bench's targets",
-        "ik_random_success",
-        success.map_or("n/a".into(), |x| format!("{x:.4}")),
-        "0.999"
-    );
-    if json {
-        let mut obj = serde_json::Map::new();
-        for (k, v, _, _) in rows {
-            obj.insert(k.into(), v.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
-        }
-        obj.insert("ik_random_success".into(), success.map_or(serde_json::Value::Null, |x| serde_json::json!(x)));
-        obj.insert("processor".into(), serde_json::json!(processor()));
-        println!("{}", serde_json::Value::Object(obj));
-    }
     Ok(())
 }
 

@@ -13,7 +13,6 @@ use crate::error_params::ErrorParams;
 use crate::frame::{AxisKind, Frame};
 
 /// A joint frame as its rotation matrix and origin in the base frame (mm).
-pub(crate) type RotationAndOrigin = (Matrix3<f64>, Vector3<f64>);
 /// Whether a joint turns or slides along its axis.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum JointKind {
@@ -151,6 +150,11 @@ pub struct PoseAndJacobian {
 struct Link {
     /// `Trans(offset + Δp) · R(Δθ)`.
     fixed: Frame,
+    /// `R(Δθ)` is exactly the identity (no error rotation: every row of a same-orientation table without
+    /// one): the frame behind the row is then its parent's rotation and a translated origin — the same
+    /// numbers the product gives (a product with an exact identity reproduces the other factor), for a
+    /// third of its work.
+    translation_only: bool,
     /// `Rx(Δθx)` and `Rx(Δθx) · Ry(Δθy)`: the partial error rotations the parameter Jacobian needs.
     partial: [Matrix3<f64>; 2],
     axis: AxisKind,
@@ -159,6 +163,18 @@ struct Link {
     zero: f64,
     /// `(sin zero, cos zero)`: the joint's motion from given sines of `q` by angle addition.
     zero_sin_cos: (f64, f64),
+}
+
+impl Link {
+    /// The frame behind this link's fixed row, from the frame `before` it: `before · fixed`.
+    #[inline(always)]
+    fn behind(&self, before: &Frame) -> Frame {
+        if self.translation_only {
+            Frame { rot: before.rot, trans: before.rot * self.fixed.trans + before.trans }
+        } else {
+            before.mul(&self.fixed)
+        }
+    }
 }
 
 /// A serial chain in the same-orientation extended convention: base row, joints, tool row.
@@ -226,6 +242,7 @@ impl Chain {
             let (rotation, partial) = row_rotations(&joint.error.rotation);
             links.push(Link {
                 fixed: Frame::new(rotation, joint.offset + joint.error.translation),
+                translation_only: rotation == Matrix3::identity(),
                 partial,
                 axis: AxisKind::classify(&joint.axis),
                 axis_vec: joint.axis.into_inner(),
@@ -326,6 +343,7 @@ impl Chain {
         let link = &mut self.links[index];
         let (rotation, partial) = row_rotations(&error.rotation);
         link.fixed = Frame::new(rotation, joint.offset + error.translation);
+        link.translation_only = rotation == Matrix3::identity();
         link.partial = partial;
         Ok(())
     }
@@ -412,7 +430,7 @@ impl Chain {
     /// saves one 3 × 3 product per evaluation (a seventh of FK's).
     #[inline(always)]
     fn after_fixed(&self, i: usize, before: &Frame, link: &Link) -> Frame {
-        if i == 0 && self.base_is_identity { link.fixed } else { before.mul(&link.fixed) }
+        if i == 0 && self.base_is_identity { link.fixed } else { link.behind(before) }
     }
 
     /// Forward kinematics, unchecked length: `base_from_tcp`.
@@ -479,7 +497,7 @@ impl Chain {
         let mut out = Vec::with_capacity(self.dof() + 1);
         let mut base_from_link = self.base_frame;
         for (link, &qi) in self.links.iter().zip(q) {
-            base_from_link = base_from_link.mul(&link.fixed);
+            base_from_link = link.behind(&base_from_link);
             Self::apply_joint(link, &mut base_from_link, qi, None);
             out.push(base_from_link.to_isometry());
         }
@@ -487,18 +505,27 @@ impl Chain {
         Ok(out)
     }
 
-    /// Every joint frame after the joint's motion, as rotation matrix and origin (no quaternion: the fast
-    /// path of [`crate::gravity_torques`], which runs per pose per fit evaluation of a compliance).
-    pub(crate) fn joint_rotations_and_origins(&self, q: &[f64]) -> Result<Vec<RotationAndOrigin>, ChainError> {
+    /// Calls `visit(i, rotation, origin)` with every joint frame after the joint's motion (no quaternion,
+    /// no allocation: the fast path of [`crate::gravity_torques_into`], which runs per pose per fit
+    /// evaluation of a compliance); `given` is `(sin q_i, cos q_i)` of each joint value when the caller
+    /// has them ([`Chain::tool_position_rotation_sin_cos`]'s rule).
+    pub(crate) fn visit_joint_frames(
+        &self,
+        q: &[f64],
+        given: Option<&[(f64, f64)]>,
+        mut visit: impl FnMut(usize, &Matrix3<f64>, &Vector3<f64>),
+    ) -> Result<(), ChainError> {
         self.check_q(q)?;
-        let mut out = Vec::with_capacity(self.dof());
-        let mut base_from_link = self.base_frame;
-        for (link, &qi) in self.links.iter().zip(q) {
-            base_from_link = base_from_link.mul(&link.fixed);
-            Self::apply_joint(link, &mut base_from_link, qi, None);
-            out.push((base_from_link.rot, base_from_link.trans));
+        if let Some(g) = given {
+            self.check_sin_cos(g)?;
         }
-        Ok(out)
+        let mut base_from_link = self.base_frame;
+        for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
+            base_from_link = link.behind(&base_from_link);
+            Self::apply_joint(link, &mut base_from_link, qi, given.map(|g| g[i]));
+            visit(i, &base_from_link.rot, &base_from_link.trans);
+        }
+        Ok(())
     }
 
     /// The geometric Jacobian (6 × dof) at the TCP in the base frame: rows 0–2 linear velocity (mm per
@@ -747,7 +774,7 @@ impl Chain {
                 let origin = frame.rot * link.fixed.trans + frame.trans;
                 row(jac, layout.joint(i), &frame, origin, &link.partial);
             }
-            frame = frame.mul(&link.fixed);
+            frame = link.behind(&frame);
             if rows.zeros[i] {
                 let z = frame.rot * link.axis_vec;
                 let revolute = link.kind == JointKind::Revolute;

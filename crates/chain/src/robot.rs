@@ -5,7 +5,7 @@
 
 use nalgebra::{Isometry3, Unit, Vector3};
 
-use crate::{Chain, ChainError};
+use crate::{Chain, ChainError, JointKind};
 
 /// Standard gravity, m/s²: a link mass in kg and a lever in mm give N·mm ([`crate::units::newton_metres`]
 /// for N·m).
@@ -144,7 +144,8 @@ impl Robot {
     /// pointing along `down` in the chain's world frame (the frame its base row maps into; `−Z` for a
     /// floor-mounted robot whose base row is level):
     /// `τ_j = z_j · Σ_{l ≥ j} (c_l − o_j) × m_l g`, with `z_j` and `o_j` joint j's axis and origin and `c_l`
-    /// link l's centre of mass, all in the world frame. A link without a mass contributes nothing.
+    /// link l's centre of mass, all in the world frame. A link without a mass contributes nothing. A
+    /// prismatic joint's entry is the weight it carries along its axis, N.
     ///
     /// ```
     /// use nalgebra::{Vector3, Isometry3};
@@ -173,31 +174,71 @@ impl Robot {
 }
 
 /// [`Robot::gravity_torques`] of a chain and its link masses (one per joint; missing entries carry
-/// nothing), without building a robot: the identification's hot path.
+/// nothing), without building a robot.
 pub fn gravity_torques(
     chain: &Chain,
     masses: &[Option<LinkMass>],
     q: &[f64],
     down: &Unit<Vector3<f64>>,
 ) -> Result<Vec<f64>, ChainError> {
-    let frames = chain.joint_rotations_and_origins(q)?;
-    let weight = down.into_inner() * STANDARD_GRAVITY;
+    let mut out = Vec::with_capacity(chain.dof());
+    gravity_torques_into(chain, masses, q, None, down, &mut out)?;
+    Ok(out)
+}
+
+/// [`gravity_torques`] into `out` (its length set to the joints'), with the caller's `(sin q_i, cos
+/// q_i)` of the joint values when given (as [`Chain::tool_position_rotation_sin_cos`] takes them): the
+/// identification's hot path, which evaluates the torques of every pose at every fit evaluation of a
+/// model with a compliance, with no allocation and no sine evaluated.
+///
+/// The torque about a revolute joint `j` is `aⱼ · Σ_{l ≥ j} (cₗ − oⱼ) × mₗ g` (axis `aⱼ` and origin `oⱼ` of joint
+/// `j`'s frame, `cₗ` the centre of mass of link `l` carrying `mₗ`), summed from the tip inwards as
+/// `aⱼ · (Mⱼ − oⱼ × g Wⱼ)` with the suffix sums `Mⱼ = Σ_{l ≥ j} cₗ × mₗ g` and `Wⱼ = Σ_{l ≥ j} mₗ`: one
+/// pass over the links; a prismatic joint's is the force along its axis, `aⱼ · g Wⱼ` (N) — each the
+/// derivative of gravity's work by the joint's motion (a test compares both with finite differences).
+pub fn gravity_torques_into(
+    chain: &Chain,
+    masses: &[Option<LinkMass>],
+    q: &[f64],
+    q_sin_cos: Option<&[(f64, f64)]>,
+    down: &Unit<Vector3<f64>>,
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
+    const ON_STACK: usize = 16;
+    /// Per joint: its axis and origin in the base frame, the moment `c × m g` and the mass of its link.
+    type Loaded = (Vector3<f64>, Vector3<f64>, Vector3<f64>, f64);
     let n = chain.dof();
-    let coms: Vec<Option<(f64, Vector3<f64>)>> = (0..n)
-        .map(|l| {
-            let (rot, origin) = &frames[l];
-            masses.get(l).copied().flatten().map(|m| (m.mass_kg, rot * m.com_mm + origin))
-        })
-        .collect();
-    Ok((0..n)
-        .map(|j| {
-            let axis = frames[j].0 * chain.joints()[j].axis.into_inner();
-            let origin = frames[j].1;
-            let moment_nmm: Vector3<f64> =
-                coms.iter().skip(j).flatten().map(|(m, c)| (c - origin).cross(&(weight * *m))).sum();
-            crate::units::newton_metres(axis.dot(&moment_nmm))
-        })
-        .collect())
+    let weight = down.into_inner() * STANDARD_GRAVITY;
+    let none: Loaded = (Vector3::zeros(), Vector3::zeros(), Vector3::zeros(), 0.0);
+    let mut small = [none; ON_STACK];
+    let mut large = Vec::new();
+    let per_joint: &mut [Loaded] = if n <= ON_STACK {
+        &mut small[..n]
+    } else {
+        large.resize(n, none);
+        &mut large[..]
+    };
+    chain.visit_joint_frames(q, q_sin_cos, |i, rot, origin| {
+        let (moment, mass) = match masses.get(i).copied().flatten() {
+            Some(m) => ((rot * m.com_mm + origin).cross(&(weight * m.mass_kg)), m.mass_kg),
+            None => (Vector3::zeros(), 0.0),
+        };
+        per_joint[i] = (rot * chain.joints()[i].axis.into_inner(), *origin, moment, mass);
+    })?;
+    out.clear();
+    out.resize(n, 0.0);
+    let (mut moment, mut mass) = (Vector3::zeros(), 0.0);
+    for j in (0..n).rev() {
+        let (axis, origin, m, w) = per_joint[j];
+        moment += m;
+        mass += w;
+        out[j] = match chain.joints()[j].kind {
+            JointKind::Revolute => crate::units::newton_metres(axis.dot(&(moment - origin.cross(&(weight * mass))))),
+            // A slide: the weight it carries along its axis (N), the derivative of gravity's work by its travel.
+            JointKind::Prismatic => axis.dot(&(weight * mass)),
+        };
+    }
+    Ok(())
 }
 
 fn check_len(field: &'static str, expected: usize, got: usize) -> Result<(), ChainError> {

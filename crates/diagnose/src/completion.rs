@@ -42,7 +42,7 @@ use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
 use crate::selection::{Joined, Selection, Step};
-use crate::shrinkage::strength;
+use crate::shrinkage::completion_strength;
 
 /// How many of its standard errors a compliance's fitted value must be from zero to join the completion
 /// (the conventional three: a rigid joint's value passes it about one time in 370).
@@ -99,9 +99,11 @@ fn complete_geometry(
         // least-squares fit trades rows against each other and the probe along directions the poses
         // barely see — a wrist row 60 mm off where its neighbour cancels it — values no robot has,
         // which the prior pulls back while the determined combinations stay.
-        let (plain_stats, plain_errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
-        let shrunk = strength(scorer, config, &effects, &plain_errors, 0.0)?;
-        let lambda = shrunk.as_ref().map_or(0.0, |(l, _)| *l);
+        let held = match completion_strength(scorer, config, &effects, &rows)? {
+            Some(shrunk) => shrunk,
+            None => (0.0, scorer.heldout_fits(&effects, &scorer.folds)?),
+        };
+        let lambda = held.0;
         let (model, full) = scorer.fit_shrunk(&effects, &scorer.all(), lambda)?;
         match judge(scorer, config, &model, &full, &rows) {
             Judgement::Unseen(unseen) => rows.retain(|r| !unseen.contains(r)),
@@ -113,10 +115,7 @@ fn complete_geometry(
                     rows.retain(|r| *r != e);
                 }
             }
-            Judgement::Joins => {
-                let (stats, errors) = shrunk.map_or((plain_stats, plain_errors), |(_, h)| (h.stats, h.errors));
-                break (effects, lambda, stats, errors);
-            }
+            Judgement::Joins => break (effects, lambda, held.1.stats, held.1.errors),
         }
     };
     if !joins(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {

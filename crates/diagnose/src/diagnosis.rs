@@ -7,6 +7,7 @@ use thermokin_chain::{Dataset, Robot};
 use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
 use crate::outliers::screen;
+use crate::profile::{Clock, Phase, Profile, profile};
 use crate::report::{HoldoutPair, HoldoutStats, Report};
 use crate::scoring::Scorer;
 use crate::select::select;
@@ -78,6 +79,34 @@ pub fn diagnose_with_progress(
     config: &Config,
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Report, DiagnoseError> {
+    let (main, outer) = (Clock::default(), Clock::default());
+    run(robot, data, holdout, config, progress, &main, &outer)
+}
+
+/// [`diagnose`], with where its time went phase by phase ([`Profile`]: the benchmarks print it). The
+/// report is the one [`diagnose`] gives: nothing it decides reads the clock.
+pub fn diagnose_profiled(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+) -> Result<(Report, Profile), DiagnoseError> {
+    let (main, outer) = (Clock::default(), Clock::default());
+    let t0 = std::time::Instant::now();
+    let report = run(robot, data, holdout, config, &mut |_| {}, &main, &outer)?;
+    Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
+}
+
+/// The diagnosis, its phases on all measurements timed into `main`, those of the outer folds into `outer`.
+fn run(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+    progress: &mut (dyn FnMut(Progress) + Send),
+    main: &Clock,
+    outer_clock: &Clock,
+) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let outer = match config.validation {
         Validation::Nested { outer } => nested_folds(data, config, outer).len(),
@@ -91,7 +120,7 @@ pub fn diagnose_with_progress(
     };
     check_joint_counts(robot, data, holdout)?;
     // Gross errors first: everything after works on the measurements the screen keeps.
-    let screened = screen(robot, data, config)?;
+    let screened = main.time(Phase::Screen, || screen(robot, data, config))?;
     let kept_data;
     let data = if screened.kept.len() == data.len() {
         data
@@ -101,17 +130,20 @@ pub fn diagnose_with_progress(
         &kept_data
     };
     let scorer = Scorer::new(robot, data, config);
-    let tables = tables(&scorer, config, select(&scorer, config)?)?;
+    let selected = select(&scorer, config, main)?;
+    let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     tell("selection on all measurements".into());
     let nested = match config.validation {
-        Validation::Nested { outer } => Some(nested(robot, data, config, outer, &mut tell)?),
+        Validation::Nested { outer } => {
+            Some(main.time(Phase::Nested, || nested(robot, data, config, outer, &mut tell, outer_clock))?)
+        }
         Validation::SelectionOnly => None,
     };
     let holdout = match holdout {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
-        Some(h) => {
+        Some(h) => main.time(Phase::Holdout, || {
             let always = config.setup().always_estimated(data);
             let score = |e: &[thermokin_identify::Effect], lambda| transfer_score(&scorer, h, e, lambda, config);
             let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
@@ -123,10 +155,11 @@ pub fn diagnose_with_progress(
                 same_frame: HoldoutPair { nominal: nominal.same_frame, selected: selected.same_frame },
             };
             tell("hold-out set".into());
-            Some(stats)
-        }
+            Ok::<_, DiagnoseError>(Some(stats))
+        })?,
         None => None,
     };
+    let report_started = std::time::Instant::now();
     // A transfer the poses cannot show is said first.
     let mut all_warnings: Vec<String> = not_shown(&tables, nested.as_ref()).into_iter().collect();
     all_warnings.extend(tables.warnings.iter().cloned());
@@ -139,6 +172,7 @@ pub fn diagnose_with_progress(
     }
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
+    main.add(Phase::Report, report_started.elapsed().as_secs_f64());
     Ok(Report {
         outliers: screened.outliers,
         outlier_screen: screened.screen,

@@ -337,4 +337,63 @@ mod tests {
             );
         }
     }
+
+    /// The real week (UR10 series A: 11,911 poses over 4.7 days, `time_min`): its folds are what the
+    /// report and docs/diagnosis.md say — 5 folds of 4 chunks each, 20 chunks of ~596 poses in time order
+    /// (about 5.6 hours each), fold `f` holding chunks `f, f + 5, f + 10, f + 15`: every fold spans the
+    /// week, no chunk is split between a training and a test part, each pose is tested once — and the
+    /// nested validation's outer folds are the same time chunks (a seed does not move time).
+    #[test]
+    fn the_real_week_is_folded_in_chunks_of_time() {
+        let robot = thermokin_io::read_robot_with(
+            &thermokin_testdata::urdf("ur10.urdf"),
+            &thermokin_io::RobotOptions { base: None, tip: Some("tool0".into()) },
+        )
+        .unwrap();
+        let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+        let path = thermokin_testdata::workspace("fixtures/real/ur10-ipa/series_A.csv");
+        let data = thermokin_io::read_measurements(&path, &kinds).unwrap();
+        assert_eq!(data.len(), 11_911);
+        let config = Config::default();
+        assert_eq!(
+            describe(&data, &config),
+            "5-fold cross-validation, folds grouped in time (4 chunks per fold); time-dependent effects also forward-chained"
+        );
+        let p = folds_for(&data, config.folds, config.seed, config.folds_by);
+        assert_eq!(p.folds.len(), 5);
+        let t = |i: usize| data.measurements[i].time_min;
+        // 20 chunks, each a contiguous span of time, in order.
+        let chunks = p.block.iter().copied().max().unwrap() + 1;
+        assert_eq!(chunks, 20);
+        let span = |c: usize| {
+            let times: Vec<f64> = (0..data.len()).filter(|&i| p.block[i] == c).map(t).collect();
+            (
+                times.len(),
+                times.iter().copied().fold(f64::MAX, f64::min),
+                times.iter().copied().fold(f64::MIN, f64::max),
+            )
+        };
+        let spans: Vec<(usize, f64, f64)> = (0..chunks).map(span).collect();
+        for w in spans.windows(2) {
+            assert!(w[0].2 <= w[1].1, "chunks overlap in time: {:?} {:?}", w[0], w[1]);
+        }
+        assert!(spans.iter().all(|s| (595..=596).contains(&s.0)), "{spans:?}");
+        let hours = |s: &(usize, f64, f64)| (s.2 - s.1) / 60.0;
+        assert!(
+            spans.iter().all(|s| hours(s) > 1.0 && hours(s) < 24.0),
+            "{:?}",
+            spans.iter().map(hours).collect::<Vec<_>>()
+        );
+        let mut tested = vec![0; data.len()];
+        for (f, (train, test)) in p.folds.iter().enumerate() {
+            let held: std::collections::BTreeSet<usize> = test.iter().map(|&i| p.block[i]).collect();
+            assert_eq!(held.into_iter().collect::<Vec<_>>(), vec![f, f + 5, f + 10, f + 15]);
+            assert!(train.iter().all(|&i| p.block[i] % 5 != f));
+            test.iter().for_each(|&i| tested[i] += 1);
+        }
+        assert!(tested.iter().all(|&c| c == 1));
+        // The nested validation's outer folds (their own seed): the same chunks of time.
+        let outer = crate::validation::nested_folds(&data, &config, 5);
+        assert_eq!(outer, p.folds);
+    }
 }

@@ -11,7 +11,7 @@ use crate::config::Config;
 use crate::error::DiagnoseError;
 use crate::plausibility::{Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::{Candidate, Scored, Selection, score};
+use crate::selection::{Candidate, Scored, Selection, score, unsettled};
 
 fn is_exponential(c: &Effect) -> bool {
     matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential))
@@ -88,6 +88,7 @@ fn score_round(
             Scored::AddsNothing(reason) => sel.skip(c, reason),
             Scored::Candidate(s) => match &s.runaway {
                 Some(why) => sel.refused.push(why.refusal(c, Judged::FittedOnEveryFold)),
+                None if s.unsettled => sel.refused.push(unsettled(c)),
                 None => {
                     still.push(c);
                     results.push(s);

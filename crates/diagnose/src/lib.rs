@@ -24,6 +24,7 @@ mod outliers;
 mod pairs;
 mod parsimony;
 mod plausibility;
+mod profile;
 mod regions;
 mod render;
 mod report;
@@ -41,9 +42,10 @@ mod verdict;
 pub use config::{
     Completion, Config, Eligibility, Extrapolation, FoldGrouping, Outliers, Plausibility, Screen, Shrinkage, Validation,
 };
-pub use diagnosis::{Progress, diagnose, diagnose_with_progress};
+pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;
 pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};
+pub use profile::{Phase, PhaseCost, Profile};
 pub use render::ReportText;
 pub use report::{
     Breakdown, EffectReport, FittedFrames, Gathered, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,

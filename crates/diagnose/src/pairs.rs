@@ -14,6 +14,11 @@
 //! still part of the pair), fits the model on all data, and refuses a coupling whose pair is not
 //! positive semidefinite — with the three values fitted — then drops it and the compliances it brought.
 //! Nothing is gated here: the pair is what the coupling means, and the held-out figures are rescored.
+//!
+//! The pair is judged in the fit it would join: with the prior the completion chose for the model
+//! ([`crate::completion`]), kept. (Until issue #49 it was judged in the least-squares fit of the complete
+//! geometry and the prior chosen anew after — a fit that on the real UR10's week walked a wrist row out to
+//! tens of millimetres until the iteration limit, and the prior chosen around such fits.)
 
 use thermokin_chain::units;
 use thermokin_identify::{Effect, JointIndex};
@@ -50,7 +55,7 @@ pub(crate) fn physical_pairs(
         if pairs.is_empty() && effects == before {
             return Ok(());
         }
-        let (model, full) = scorer.full_fit(&effects)?;
+        let (model, full) = scorer.fit_shrunk(&effects, &scorer.all(), sel.shrinkage)?;
         let value = |e: Effect| effects.iter().position(|x| *x == e).map(|i| full.theta[model.offsets()[i]]);
         let broken = pairs.iter().find_map(|&(j, n)| {
             let c = value(Effect::ComplianceCoupling(j))?;
@@ -104,7 +109,9 @@ fn accept(
     if effects == before {
         return Ok(());
     }
-    let (stats, errors) = scorer.heldout_errors(&effects, &scorer.folds)?;
+    let lambda = sel.shrinkage;
+    let held = scorer.heldout_fits_with(&effects, &scorer.folds, lambda)?;
+    let (stats, errors) = (held.stats, held.errors);
     let joined: Vec<Effect> = effects.iter().copied().filter(|e| !before.contains(e)).collect();
     let gone: Vec<Effect> = before.iter().copied().filter(|e| !effects.contains(e)).collect();
     for &e in &joined {
@@ -118,5 +125,6 @@ fn accept(
         _ => format!("the coupled pairs: + {}, − {} (not positive semidefinite)", names(&joined), names(&gone)),
     };
     sel.replace(effects, stats, errors, row);
+    sel.shrinkage = lambda;
     Ok(())
 }

@@ -10,8 +10,8 @@ use faer::Mat;
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Robot};
 use thermokin_identify::{
-    DEPENDENT, Effect, Fit, FixedParameter, Model, PoseTerms, Prior, Start, StartFrames, fit, fit_from, identifiable,
-    initial_frames, norms, project_out, residuals, residuals_and_jacobian,
+    DEPENDENT, Effect, Fit, FixedParameter, GiveUp, Model, PoseTerms, Prior, Start, StartFrames, fit_from,
+    identifiable, initial_frames, norms, project_out, residuals, residuals_and_jacobian,
 };
 
 use crate::config::Config;
@@ -23,8 +23,20 @@ use crate::stats::Stats;
 /// A starting frame's key: the measurement rows, whether a registration and a tool point start.
 type StartKey = (Vec<usize>, bool, bool);
 
-/// One model's fits on the folds, fold by fold: its parameters and which of them were free.
-type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>)>>;
+/// One model's fits on the folds, fold by fold: its parameters, which of them were free, and whether
+/// the fit ended by its own test.
+type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>, bool)>>;
+
+/// One fold's fit, scored on the fold's test poses.
+struct FoldFit {
+    errors: Vec<f64>,
+    theta: Vec<f64>,
+    free: Vec<bool>,
+    /// Stopped by the caller's [`GiveUp`].
+    stopped: bool,
+    /// Ended by its own test (converged), not by the iteration limit or a [`GiveUp`].
+    settled: bool,
+}
 
 /// What every held-out evaluation of one diagnosis shares: the robot, the data with their per-pose
 /// terms, the selection's folds and the blocks its gate counts.
@@ -45,10 +57,31 @@ pub(crate) struct Scorer<'a> {
     /// closed form runs once per fold, not once per candidate).
     starts: Mutex<HashMap<StartKey, StartFrames>>,
     /// The fold fits (parameters, free mask) of the models already scored on `folds`, by their effects
-    /// in order: the phases score some models more than once (a backward step, a replacement, the
-    /// leave-one-out table, the shrinkage's grid), and a fit is deterministic.
-    scored: Mutex<HashMap<Vec<Effect>, FoldFits>>,
+    /// in order and the prior's strength (its bits): the phases score some models more than once (a
+    /// backward step, a replacement, the leave-one-out table, the shrinkage's grid), and a fit is
+    /// deterministic.
+    scored: Mutex<HashMap<(Vec<Effect>, u64), FoldFits>>,
+    /// The catalogue's Jacobian at the nominal robot on all measurements, as its Gram matrix (what
+    /// [`Scorer::relations`] compares blocks by; formed once — the tables and parsimony relate the same
+    /// blocks many times over).
+    relation_gram: std::sync::OnceLock<Option<RelationGram>>,
+    /// The catalogue of these data, whose blocks [`Scorer::relations`] relates.
+    catalogue: Vec<Effect>,
 }
+
+/// The Gram matrix `JᵀJ` of the catalogue's blocks' Jacobian columns at the nominal robot on all
+/// measurements, and where each block's columns start.
+struct RelationGram {
+    /// Residual rows the Gram matrix sums over.
+    rows: usize,
+    effects: Vec<Effect>,
+    offsets: Vec<usize>,
+    gram: Mat<f64>,
+}
+
+/// Poses per block of rows when the relations' Gram matrix is accumulated: the catalogue's Jacobian of a
+/// week of poses (36,000 rows × ~350 columns) would be 100 MB at once.
+const GRAM_CHUNK_POSES: usize = 1000;
 
 /// A model scored on folds ([`Scorer::heldout_fits`]).
 pub(crate) struct HeldOut {
@@ -60,6 +93,10 @@ pub(crate) struct HeldOut {
     pub(crate) thetas: Vec<Vec<f64>>,
     /// Each fold's free parameters (empty for an empty fold).
     pub(crate) free: Vec<Vec<bool>>,
+    /// Whether each fold's fit ended by its own test (`true` for an empty fold): a fit stopped at the
+    /// iteration limit still moved its parameters by more than a tenth of their standard deviations
+    /// per step.
+    pub(crate) settled: Vec<bool>,
 }
 
 /// What a candidate adds to a model ([`Scorer::new_free`]).
@@ -108,6 +145,8 @@ impl<'a> Scorer<'a> {
             scale: RobotScale::of(robot, data),
             starts: Mutex::new(HashMap::new()),
             scored: Mutex::new(HashMap::new()),
+            relation_gram: std::sync::OnceLock::new(),
+            catalogue: config.setup().candidates(robot, data).unwrap_or_default(),
         }
     }
 
@@ -151,8 +190,8 @@ impl<'a> Scorer<'a> {
     }
 
     /// [`Scorer::heldout_fits`] of the model fitted with the prior of strength `lambda` on each fold
-    /// ([`Scorer::fit_shrunk`]; 0: least squares). On the selection's own folds, a least-squares model
-    /// fitted before is not fitted again (its held-out errors are recomputed from its parameters: one
+    /// ([`Scorer::fit_shrunk`]; 0: least squares). On the selection's own folds, a model fitted
+    /// before at the same strength is not fitted again (its held-out errors are recomputed from its parameters: one
     /// evaluation per fold, and no copy of every error kept per model).
     pub(crate) fn heldout_fits_with(
         &self,
@@ -160,36 +199,76 @@ impl<'a> Scorer<'a> {
         folds: &Folds,
         lambda: f64,
     ) -> Result<HeldOut, DiagnoseError> {
-        let kept = lambda == 0.0 && std::ptr::eq(folds, &self.folds);
-        let known = if kept { self.scored.lock().ok().and_then(|m| m.get(effects).cloned()) } else { None };
+        Ok(self.fold_fits(effects, folds, lambda, None)?.0)
+    }
+
+    /// [`Scorer::heldout_fits`] of a candidate's model, each fold's fit stopped once `give_up` holds
+    /// (the candidate's values beyond what the caller accepts): when it holds at the end of every fold's
+    /// fit, stopped or not, the held-out fits are returned as they stand (`true`: the caller refuses
+    /// the model, the scores do not matter); otherwise the stopped folds are fitted to the end, and the
+    /// scores are those of [`Scorer::heldout_fits`] (`false`).
+    pub(crate) fn heldout_fits_unless(
+        &self,
+        effects: &[Effect],
+        folds: &Folds,
+        give_up: &GiveUp,
+    ) -> Result<(HeldOut, bool), DiagnoseError> {
+        let (held, stopped) = self.fold_fits(effects, folds, 0.0, Some(give_up))?;
+        let every = held.thetas.iter().filter(|t| !t.is_empty()).all(|t| (give_up.test)(usize::MAX, t));
+        if every || !stopped.iter().any(|s| *s) {
+            return Ok((held, every));
+        }
+        Ok((self.heldout_fits(effects, folds)?, false))
+    }
+
+    /// The fold loop of [`Scorer::heldout_fits_with`], each fold's fit stopped once `give_up` holds
+    /// (which folds were stopped is returned beside: their fits are not kept).
+    pub(crate) fn fold_fits(
+        &self,
+        effects: &[Effect],
+        folds: &Folds,
+        lambda: f64,
+        give_up: Option<&GiveUp>,
+    ) -> Result<(HeldOut, Vec<bool>), DiagnoseError> {
+        let kept = std::ptr::eq(folds, &self.folds);
+        let key = (effects.to_vec(), lambda.to_bits());
+        let known = if kept { self.scored.lock().ok().and_then(|m| m.get(&key).cloned()) } else { None };
         // Folds in parallel, their errors concatenated in fold order (the same on any thread count).
-        let per_fold: Vec<(Vec<f64>, Vec<f64>, Vec<bool>)> = folds
+        let per_fold: Vec<FoldFit> = folds
             .par_iter()
             .enumerate()
             .map(|(k, (train, test))| {
                 if train.is_empty() || test.is_empty() {
-                    return Ok((Vec::new(), Vec::new(), Vec::new()));
+                    let empty = FoldFit { errors: vec![], theta: vec![], free: vec![], stopped: false, settled: true };
+                    return Ok(empty);
                 }
-                let (model, theta, free) = match &known {
-                    Some(fits) => (self.model(effects, train)?, fits[k].0.clone(), fits[k].1.clone()),
+                let (model, theta, free, stopped, settled) = match &known {
+                    Some(fits) => {
+                        let (theta, free, settled) = fits[k].clone();
+                        (self.model(effects, train)?, theta, free, false, settled)
+                    }
                     None => {
-                        let (model, f) = self.fit_shrunk(effects, train, lambda)?;
-                        (model, f.theta, f.free)
+                        let (model, f) = self.fit_until(effects, train, lambda, give_up)?;
+                        (model, f.theta, f.free, f.gave_up, f.converged)
                     }
                 };
                 let r = residuals(self.robot, &model, &theta, self.data, test, &self.terms)?;
-                Ok((norms(&r, self.terms.stride()), theta, free))
+                Ok(FoldFit { errors: norms(&r, self.terms.stride()), theta, free, stopped, settled })
             })
             .collect::<Result<_, DiagnoseError>>()?;
-        let errors: Vec<f64> = per_fold.iter().flat_map(|(e, _, _)| e.iter().copied()).collect();
-        let (thetas, free): (Vec<Vec<f64>>, Vec<Vec<bool>>) = per_fold.into_iter().map(|(_, t, f)| (t, f)).unzip();
+        let errors: Vec<f64> = per_fold.iter().flat_map(|f| f.errors.iter().copied()).collect();
+        let stopped: Vec<bool> = per_fold.iter().map(|f| f.stopped).collect();
+        let settled: Vec<bool> = per_fold.iter().map(|f| f.settled).collect();
+        let (thetas, free): (Vec<Vec<f64>>, Vec<Vec<bool>>) = per_fold.into_iter().map(|f| (f.theta, f.free)).unzip();
         if kept
             && known.is_none()
+            && !stopped.iter().any(|s| *s)
             && let Ok(mut m) = self.scored.lock()
         {
-            m.insert(effects.to_vec(), Arc::new(thetas.iter().cloned().zip(free.iter().cloned()).collect()));
+            let fits = thetas.iter().cloned().zip(free.iter().cloned()).zip(&settled).map(|((t, f), s)| (t, f, *s));
+            m.insert(key, Arc::new(fits.collect()));
         }
-        Ok(HeldOut { stats: Stats::of(&errors), errors, thetas, free })
+        Ok((HeldOut { stats: Stats::of(&errors), errors, thetas, free, settled }, stopped))
     }
 
     /// The model of `effects` fitted on `rows` with the prior of strength `lambda` ([`prior`]; 0: the
@@ -201,17 +280,27 @@ impl<'a> Scorer<'a> {
         rows: &[usize],
         lambda: f64,
     ) -> Result<(Model, Fit), DiagnoseError> {
+        self.fit_until(effects, rows, lambda, None)
+    }
+
+    /// [`Scorer::fit_shrunk`], stopped once `give_up` holds after a step.
+    fn fit_until(
+        &self,
+        effects: &[Effect],
+        rows: &[usize],
+        lambda: f64,
+        give_up: Option<&GiveUp>,
+    ) -> Result<(Model, Fit), DiagnoseError> {
         let model = self.model(effects, rows)?;
-        if lambda == 0.0 {
-            let plain = fit(self.robot, &model, self.data, rows, &self.terms)?;
-            return Ok((model, plain));
-        }
         let initial = model.initial();
-        let (_, jac) = residuals_and_jacobian(self.robot, &model, &initial, self.data, rows, &self.terms)?;
         let mut start = Start::new(initial, vec![true; model.len()]);
-        start.prior = Some(prior(&model, &jac, lambda));
-        let shrunk = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
-        Ok((model, shrunk))
+        start.give_up = give_up.cloned();
+        if lambda > 0.0 {
+            let (_, jac) = residuals_and_jacobian(self.robot, &model, &start.theta, self.data, rows, &self.terms)?;
+            start.prior = Some(prior(&model, &jac, lambda));
+        }
+        let f = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
+        Ok((model, f))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
@@ -293,25 +382,12 @@ impl Scorer<'_> {
     /// tolerance: a direction within 1e-6 (relative) of a span belongs to it. Linearised at the nominal
     /// model (every parameter zero) over all measurements.
     pub(crate) fn relations(&self, e: Effect, others: &[Effect]) -> Result<Vec<(Effect, Relation)>, DiagnoseError> {
-        let all = self.all();
         let mut out = Vec::new();
         for &b in others {
             if b == e || b.is_reported() != e.is_reported() {
                 continue;
             }
-            let model = self.model(&[e, b], &all)?;
-            let jac = self.jacobian_at_start(&model)?;
-            let cols = |range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
-                range.map(|c| (0..jac.nrows()).map(|r| jac[(r, c)]).collect()).collect()
-            };
-            let (ce, cb) = (cols(0..e.len()), cols(e.len()..e.len() + b.len()));
-            // A block that moves nothing on these data (gravity about a vertical axis) relates to nothing.
-            let moves = |c: &[Vec<f64>]| c.iter().any(|v| v.iter().any(|x| x.abs() > 1e-12));
-            if !moves(&ce) || !moves(&cb) {
-                continue;
-            }
-            let e_in_b = within_span(&ce, &cb);
-            let b_in_e = within_span(&cb, &ce);
+            let Some((e_in_b, b_in_e)) = self.spans(e, b)? else { continue };
             match (e_in_b, b_in_e) {
                 (true, true) => out.push((b, Relation::Equivalent)),
                 (true, false) => out.push((b, Relation::ContainedIn)),
@@ -320,6 +396,71 @@ impl Scorer<'_> {
             }
         }
         Ok(out)
+    }
+}
+
+impl Scorer<'_> {
+    /// The relations' Gram matrix of the catalogue ([`RelationGram`]), formed on first use, block of poses
+    /// by block of poses; `None` when the catalogue's model cannot be built.
+    fn relation_gram(&self) -> Option<&RelationGram> {
+        self.relation_gram
+            .get_or_init(|| {
+                let model = self.model(&self.catalogue, &self.all()).ok()?;
+                let initial = model.initial();
+                let p = model.len();
+                let mut gram = Mat::<f64>::zeros(p, p);
+                let all = self.all();
+                for rows in all.chunks(GRAM_CHUNK_POSES) {
+                    let (_, jac) =
+                        residuals_and_jacobian(self.robot, &model, &initial, self.data, rows, &self.terms).ok()?;
+                    faer::linalg::matmul::matmul(
+                        gram.as_mut(),
+                        faer::Accum::Add,
+                        jac.as_ref().transpose(),
+                        jac.as_ref(),
+                        1.0,
+                        faer::Par::Seq,
+                    );
+                }
+                Some(RelationGram {
+                    rows: all.len() * self.terms.stride(),
+                    effects: self.catalogue.clone(),
+                    offsets: model.offsets().to_vec(),
+                    gram,
+                })
+            })
+            .as_ref()
+    }
+
+    /// Whether `e`'s columns lie in `b`'s span and `b`'s in `e`'s, on all measurements at the nominal
+    /// robot; `None` when either block moves nothing there (gravity about a vertical axis).
+    fn spans(&self, e: Effect, b: Effect) -> Result<Option<(bool, bool)>, DiagnoseError> {
+        let indices = |g: &RelationGram, x: Effect| {
+            g.effects.iter().position(|y| *y == x).map(|k| (g.offsets[k]..g.offsets[k] + x.len()).collect::<Vec<_>>())
+        };
+        if let Some(g) = self.relation_gram()
+            && let (Some(ie), Some(ib)) = (indices(g, e), indices(g, b))
+        {
+            // As on the columns themselves (an entry beyond 1e-12), by their RMS: gravity's torque about a
+            // vertical axis leaves ~1e-13 of rounding in every entry, which sums beyond 1e-12 over the rows.
+            let moves = |cols: &[usize]| cols.iter().any(|&c| (g.gram[(c, c)] / g.rows.max(1) as f64).sqrt() > 1e-12);
+            if !moves(&ie) || !moves(&ib) {
+                return Ok(None);
+            }
+            return Ok(Some((within_span_gram(&g.gram, &ie, &ib), within_span_gram(&g.gram, &ib, &ie))));
+        }
+        // A block outside the catalogue: its pair's Jacobian.
+        let model = self.model(&[e, b], &self.all())?;
+        let jac = self.jacobian_at_start(&model)?;
+        let cols = |range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
+            range.map(|c| (0..jac.nrows()).map(|r| jac[(r, c)]).collect()).collect()
+        };
+        let (ce, cb) = (cols(0..e.len()), cols(e.len()..e.len() + b.len()));
+        let moves = |c: &[Vec<f64>]| c.iter().any(|v| v.iter().any(|x| x.abs() > 1e-12));
+        if !moves(&ce) || !moves(&cb) {
+            return Ok(None);
+        }
+        Ok(Some((within_span(&ce, &cb), within_span(&cb, &ce))))
     }
 }
 
@@ -332,6 +473,40 @@ pub(crate) enum Relation {
     ContainedIn,
     /// The other's column space is inside this one's.
     Contains,
+}
+
+/// [`within_span`] on columns given by their Gram matrix `gram` (indices `a`, `b` into it): Gram–Schmidt
+/// in the Gram matrix's metric — for each unit column of `b`, its distance from the span of those kept
+/// before, `√(1 − |y|²)` with `L y = s` (`L` the Cholesky factor of the kept ones' unit Gram matrix, `s`
+/// their inner products with it), kept at [`DEPENDENT`] or more; then each column of `a` within
+/// [`DEPENDENT`] of their span. The distance carries the rounding of a difference of squares, ~1e-8
+/// where the columns themselves give ~1e-15: two orders of magnitude below the threshold.
+fn within_span_gram(gram: &Mat<f64>, a: &[usize], b: &[usize]) -> bool {
+    let unit = |i: usize, j: usize| gram[(i, j)] / (gram[(i, i)] * gram[(j, j)]).sqrt();
+    // Rows of the Cholesky factor of the kept columns' unit Gram matrix.
+    let mut kept: Vec<usize> = Vec::new();
+    let mut l: Vec<Vec<f64>> = Vec::new();
+    let distance = |kept: &[usize], l: &[Vec<f64>], x: usize| -> (Vec<f64>, f64) {
+        let mut y = Vec::with_capacity(kept.len());
+        for (k, row) in l.iter().enumerate() {
+            let v = (unit(kept[k], x) - row[..k].iter().zip(&y).map(|(r, y)| r * y).sum::<f64>()) / row[k];
+            y.push(v);
+        }
+        let rest = 1.0 - y.iter().map(|v| v * v).sum::<f64>();
+        (y, rest.max(0.0).sqrt())
+    };
+    for &c in b {
+        if gram[(c, c)].sqrt() < 1e-12 {
+            continue;
+        }
+        let (mut y, d) = distance(&kept, &l, c);
+        if d >= DEPENDENT {
+            y.push(d);
+            l.push(y);
+            kept.push(c);
+        }
+    }
+    a.iter().all(|&c| gram[(c, c)].sqrt() < 1e-12 || distance(&kept, &l, c).1 < DEPENDENT)
 }
 
 /// Whether every non-zero column of `a` lies in the span of `b` (Gram–Schmidt, twice, on unit columns).

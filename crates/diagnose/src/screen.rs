@@ -1,10 +1,11 @@
 //! Score before you fit: every candidate of a forward step ranked by the held-out error one linearised
 //! step would give it, so that only a shortlist is fitted in full (issue #23).
 //!
-//! One pass over all measurements evaluates the residuals `r` and the Jacobian `A` of a model holding the
-//! current effects at their fit on all data (`θ̂`) and every candidate at its initial value (zero). The
-//! normal equations are formed once, `N = AᵀA`, `g = Aᵀr`; a fold's training part is all data but its test
-//! poses, so its equations are `N − N_test`, `g − g_test` (exact for the linearised step). For each fold
+//! The residuals `r` and the Jacobian `A` of a model holding the current effects at their fit on all data
+//! (`θ̂`) and every candidate at its initial value (zero) are evaluated fold by fold. The normal equations
+//! of all data are the sum of the folds' test parts', `N = AᵀA`, `g = Aᵀr`; a fold's training part is all
+//! data but its test poses, so its equations are `N − N_test`, `g − g_test` (exact for the linearised
+//! step). For each fold
 //! and candidate, the Gauss–Newton step from `θ̂` on the training part over the current and the
 //! candidate's columns, `δ = (N_f + εI)⁻¹ g_f` on those columns, predicts the test residuals
 //! `r_test − A_test δ`, hence the candidate's held-out sum of squares.
@@ -62,6 +63,13 @@ pub(crate) fn shortlist(
 
 /// Per candidate, the held-out sum of squares (mm²) that one Gauss–Newton step from the current all-data
 /// fit on each fold's training part predicts on its test part.
+///
+/// Fold by fold, never the whole Jacobian at once (with every candidate's columns, ~200 on a six-joint
+/// arm with time and temperatures, a week of 12,000 poses would hold 57 MB — the largest matrix of a
+/// diagnosis, two of them while two outer folds select at once): a first pass forms each fold's test
+/// part's normal equations, `Jₜᵀ Jₜ` and `Jₜᵀ rₜ`, whose sum over the folds (which partition the data)
+/// is all data's; a second evaluates each fold's test Jacobian again for the predicted residuals. Twice
+/// the evaluations of one pass; a fifth of its memory.
 fn linearised_heldout(
     scorer: &Scorer<'_>,
     effects: &[Effect],
@@ -74,49 +82,52 @@ fn linearised_heldout(
     let model = scorer.model(&joint_model, &all)?;
     let mut at = model.initial();
     at[..theta.len()].copy_from_slice(theta);
-    let (r, mut jac) = residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, &all, &scorer.terms)?;
-    // Unit columns (mm, radians and minutes weigh alike); negligible columns dropped. Scaled in place and
-    // copied only when a column is dropped: with every candidate's columns (~200 on a six-joint arm with
-    // time and temperatures) the Jacobian of 12,000 poses is 60 MB, the largest matrix of a diagnosis.
-    let norms: Vec<f64> = (0..jac.ncols()).map(|c| jac.col(c).norm_l2()).collect();
-    let largest = norms.iter().copied().fold(0.0, f64::max);
-    let used: Vec<usize> = (0..jac.ncols()).filter(|&c| norms[c] > NEGLIGIBLE_COLUMN * largest).collect();
-    for &c in &used {
-        jac.col_mut(c).iter_mut().for_each(|v| *v /= norms[c]);
+    let p = model.len();
+    let folds: Vec<&Vec<usize>> = scorer.folds.iter().map(|(_, test)| test).filter(|t| !t.is_empty()).collect();
+    let test_part =
+        |test: &[usize]| residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, test, &scorer.terms);
+    // Pass 1: each fold's test part's unscaled normal equations.
+    let mut parts: Vec<(Mat<f64>, Mat<f64>)> = Vec::with_capacity(folds.len());
+    for test in &folds {
+        let (r, j) = test_part(test)?;
+        parts.push(normal_equations(&j, &r));
     }
-    let a = if used.len() == jac.ncols() {
-        jac
-    } else {
-        let sub = Mat::<f64>::from_fn(jac.nrows(), used.len(), |i, k| jac[(i, used[k])]);
-        drop(jac);
-        sub
-    };
+    let mut gram = Mat::<f64>::zeros(p, p);
+    let mut grad = Mat::<f64>::zeros(p, 1);
+    for (g, h) in &parts {
+        gram += g;
+        grad += h;
+    }
+    // Unit columns (mm, radians and minutes weigh alike): `A = J D⁻¹`, `AᵀA = D⁻¹ JᵀJ D⁻¹`; negligible
+    // columns (an exponential drift's τ at zero amplitude) dropped.
+    let norms: Vec<f64> = (0..p).map(|c| gram[(c, c)].max(0.0).sqrt()).collect();
+    let largest = norms.iter().copied().fold(0.0, f64::max);
+    let used: Vec<usize> = (0..p).filter(|&c| norms[c] > NEGLIGIBLE_COLUMN * largest).collect();
+    let q = used.len();
+    let scaled =
+        |m: &Mat<f64>| Mat::<f64>::from_fn(q, q, |i, k| m[(used[i], used[k])] / (norms[used[i]] * norms[used[k]]));
+    let scaled_g = |g: &Mat<f64>| Mat::<f64>::from_fn(q, 1, |i, _| g[(used[i], 0)] / norms[used[i]]);
     let column = |c: usize| used.iter().position(|&u| u == c);
     let current: Vec<usize> = (0..theta.len()).filter_map(column).collect();
     let offsets = &model.offsets()[effects.len()..];
     let own: Vec<Vec<usize>> =
         candidates.iter().zip(offsets).map(|(c, &o)| (o..o + c.len()).filter_map(column).collect()).collect();
-    let (n_all, g_all) = normal_equations(&a, &r, None);
-    let stride = scorer.terms.stride();
+    let (n_all, g_all) = (scaled(&gram), scaled_g(&grad));
     let mut sse = vec![0.0; candidates.len()];
-    for (_, test) in &scorer.folds {
-        if test.is_empty() {
-            continue;
-        }
-        let rows: Vec<usize> = test.iter().flat_map(|&i| (0..stride).map(move |k| stride * i + k)).collect();
-        let (n_test, g_test) = normal_equations(&a, &r, Some(&rows));
-        let n_f = &n_all - &n_test;
-        let g_f = &g_all - &g_test;
+    // Pass 2: each fold's steps from its training part, and its test part's predicted residuals.
+    for (test, (g_test, h_test)) in folds.iter().zip(&parts) {
+        let n_f = &n_all - scaled(g_test);
+        let g_f = &g_all - scaled_g(h_test);
+        let (r, j) = test_part(test)?;
         for (k, cols) in own.iter().enumerate() {
             let idx: Vec<usize> = current.iter().chain(cols).copied().collect();
             let Some(step) = solve(&n_f, &g_f, &idx) else {
                 sse[k] = f64::INFINITY;
                 continue;
             };
-            sse[k] += rows
-                .iter()
-                .map(|&row| {
-                    let fitted: f64 = idx.iter().zip(&step).map(|(&c, s)| a[(row, c)] * s).sum();
+            sse[k] += (0..r.len())
+                .map(|row| {
+                    let fitted: f64 = idx.iter().zip(&step).map(|(&c, s)| j[(row, used[c])] / norms[used[c]] * s).sum();
                     (r[row] - fitted).powi(2)
                 })
                 .sum::<f64>();
@@ -125,24 +136,14 @@ fn linearised_heldout(
     Ok(sse)
 }
 
-/// `AᵀA` and `Aᵀr` over all rows, or over `rows` only.
-fn normal_equations(a: &Mat<f64>, r: &[f64], rows: Option<&[usize]>) -> (Mat<f64>, Mat<f64>) {
-    let p = a.ncols();
-    let product = |sub: faer::MatRef<'_, f64>, rv: faer::MatRef<'_, f64>| {
-        let mut n = Mat::<f64>::zeros(p, p);
-        matmul(n.as_mut(), Accum::Replace, sub.transpose(), sub, 1.0, Par::Seq);
-        let mut g = Mat::<f64>::zeros(p, 1);
-        matmul(g.as_mut(), Accum::Replace, sub.transpose(), rv, 1.0, Par::Seq);
-        (n, g)
-    };
-    match rows {
-        None => product(a.as_ref(), faer::ColRef::from_slice(r).as_mat()),
-        Some(rows) => {
-            let sub = Mat::<f64>::from_fn(rows.len(), p, |i, k| a[(rows[i], k)]);
-            let rv = Mat::<f64>::from_fn(rows.len(), 1, |i, _| r[rows[i]]);
-            product(sub.as_ref(), rv.as_ref())
-        }
-    }
+/// `JᵀJ` and `Jᵀr`.
+fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Mat<f64>) {
+    let p = j.ncols();
+    let mut n = Mat::<f64>::zeros(p, p);
+    matmul(n.as_mut(), Accum::Replace, j.as_ref().transpose(), j.as_ref(), 1.0, Par::Seq);
+    let mut g = Mat::<f64>::zeros(p, 1);
+    matmul(g.as_mut(), Accum::Replace, j.as_ref().transpose(), faer::ColRef::from_slice(r).as_mat(), 1.0, Par::Seq);
+    (n, g)
 }
 
 /// The step on columns `idx` of the normal equations `n δ = g`, ridged; `None` when not solvable.

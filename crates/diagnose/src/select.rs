@@ -32,6 +32,7 @@ use crate::extrapolation::beyond_the_measured_poses;
 use crate::forward::forward;
 use crate::pairs::physical_pairs;
 use crate::parsimony::parsimony;
+use crate::profile::{Clock, Phase};
 use crate::report::TableRow;
 use crate::scoring::Scorer;
 use crate::selection::Selection;
@@ -43,8 +44,9 @@ pub(crate) struct Selected {
     pub(crate) catalogue: Vec<Effect>,
 }
 
-/// Phases 1–7 on the scorer's data: candidates chosen by cross-validation on its folds.
-pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, DiagnoseError> {
+/// Phases 1–7 on the scorer's data: candidates chosen by cross-validation on its folds, each phase's
+/// wall time added to `clock`.
+pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Result<Selected, DiagnoseError> {
     let data = scorer.data;
     let needed = config.minimum_poses();
     if data.len() < needed {
@@ -53,31 +55,34 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config) -> Result<Selected, D
     let setup = config.setup();
     let always = setup.always_estimated(data);
     // 1–2. Candidates and eligibility.
-    let catalogue = setup.candidates(scorer.robot, data)?;
-    let (eligible, refused) = check(scorer, &always, &catalogue, &config.eligibility)?;
-    let (nominal, nominal_errors) = scorer.heldout_errors(&always, &scorer.folds)?;
-    let (_, nominal_fit) = scorer.full_fit(&always)?;
-    let mut selection = Selection {
-        effects: always.clone(),
-        always: always.len(),
-        current: nominal,
-        errors: nominal_errors,
-        steps: Vec::new(),
-        additive: vec![TableRow { model: "nominal".into(), stats: nominal }],
-        bic: vec![scorer.bic_of(&nominal_fit)],
-        theta: nominal_fit.theta,
-        skipped: Vec::new(),
-        refused,
-        shrinkage: 0.0,
-    };
+    let (catalogue, eligible, mut selection) = clock.time(Phase::Eligibility, || {
+        let catalogue = setup.candidates(scorer.robot, data)?;
+        let (eligible, refused) = check(scorer, &always, &catalogue, &config.eligibility)?;
+        let (nominal, nominal_errors) = scorer.heldout_errors(&always, &scorer.folds)?;
+        let (_, nominal_fit) = scorer.full_fit(&always)?;
+        let selection = Selection {
+            effects: always.clone(),
+            always: always.len(),
+            current: nominal,
+            errors: nominal_errors,
+            steps: Vec::new(),
+            additive: vec![TableRow { model: "nominal".into(), stats: nominal }],
+            bic: vec![scorer.bic_of(&nominal_fit)],
+            theta: nominal_fit.theta,
+            skipped: Vec::new(),
+            refused,
+            shrinkage: 0.0,
+        };
+        Ok::<_, DiagnoseError>((catalogue, eligible, selection))
+    })?;
     // 3–7.
-    forward(scorer, config, &mut selection, eligible.clone())?;
-    backward(scorer, config, &mut selection)?;
-    parsimony(scorer, config, &mut selection, &eligible)?;
-    let beyond = beyond_the_measured_poses(scorer, config, &mut selection)?;
+    clock.time(Phase::Forward, || forward(scorer, config, &mut selection, eligible.clone()))?;
+    clock.time(Phase::Backward, || backward(scorer, config, &mut selection))?;
+    clock.time(Phase::Parsimony, || parsimony(scorer, config, &mut selection, &eligible))?;
+    let beyond = clock.time(Phase::Extrapolation, || beyond_the_measured_poses(scorer, config, &mut selection))?;
     let eligible: Vec<Effect> = eligible.into_iter().filter(|e| !beyond.contains(e)).collect();
-    complete(scorer, config, &mut selection, &eligible)?;
-    physical_pairs(scorer, &mut selection, &eligible)?;
-    shrink(scorer, config, &mut selection)?;
+    clock.time(Phase::Completion, || complete(scorer, config, &mut selection, &eligible))?;
+    clock.time(Phase::Pairs, || physical_pairs(scorer, &mut selection, &eligible))?;
+    clock.time(Phase::Shrinkage, || shrink(scorer, config, &mut selection))?;
     Ok(Selected { selection, catalogue })
 }

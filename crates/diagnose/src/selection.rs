@@ -1,6 +1,8 @@
 //! Where the selection stands between its phases ([`Selection`]), and a candidate scored against it.
 
-use thermokin_identify::Effect;
+use std::sync::Arc;
+
+use thermokin_identify::{Effect, GiveUp, MAX_ITERATIONS};
 
 use crate::config::Plausibility;
 use crate::error::DiagnoseError;
@@ -21,6 +23,9 @@ pub(crate) struct Candidate {
     /// Its values beyond [`Plausibility`] in the fit of every fold, when they are: a fit running away (a
     /// block trading with the probe), refused when first scored rather than refitted every step.
     pub(crate) runaway: Option<Implausible>,
+    /// Its fit stopped at the iteration limit in every fold, still moving: refused when first scored
+    /// ([`unsettled`]).
+    pub(crate) unsettled: bool,
 }
 
 /// What scoring a candidate found.
@@ -129,6 +134,15 @@ impl Selection {
     }
 }
 
+/// The accepted steps of a candidate's fold fit before its values beyond the plausibility bounds stop it
+/// ([`score`]). Measured (issue #49) over the diagnosis test suite and the real UR10 (2,876 fold fits
+/// whose values passed a bound at some step): the 83 that came back within the bounds by the end had
+/// passed them at their first or second step (a cold start's first steps overshoot while the frames
+/// settle); of the ~1,000 that passed at the third step or later, none came back — a candidate trading
+/// with another block (the UR10's `link_deviation[6]` against the probe) walks out along a flat valley,
+/// 20 to 70 steps in, until the iteration limit. Five leaves a margin of three steps.
+pub(crate) const GIVE_UP_AFTER: usize = 5;
+
 /// Scores `c` added to `effects` on the selection's folds.
 /// Every fold's fit starts cold, at the initial values: warm starts from the current model's fold fits
 /// were tried (issue #23) and changed the UR10's choice (B 0.457 → 0.569 mm) while running slower —
@@ -147,12 +161,23 @@ pub(crate) fn score(
     }
     let mut with = effects.to_vec();
     with.push(c);
-    let held = scorer.heldout_fits(&with, &scorer.folds)?;
     let o: usize = effects.iter().map(Effect::len).sum();
+    let values = move |t: &[f64]| t.len() >= o + c.len();
+    // A fold's fit stops once the candidate's values are beyond the bounds (from its `GIVE_UP_AFTER`-th
+    // step on): it is refused where every fold's fit ends there, and where one does not, the stopped
+    // folds are fitted to the end.
+    let bounds = (scorer.scale.clone(), *plausibility);
+    let give_up = GiveUp {
+        after_steps: GIVE_UP_AFTER,
+        test: Arc::new(move |_, t: &[f64]| {
+            values(t) && implausible(&bounds.0, &t[o..o + c.len()], c, &bounds.1).is_some()
+        }),
+    };
+    let (held, _) = scorer.heldout_fits_unless(&with, &scorer.folds, &give_up)?;
     let reasons: Vec<Option<Implausible>> = held
         .thetas
         .iter()
-        .filter(|t| t.len() >= o + c.len())
+        .filter(|t| values(t))
         .map(|t| implausible(&scorer.scale, &t[o..o + c.len()], c, plausibility))
         .collect();
     let runaway = if !reasons.is_empty() && reasons.iter().all(Option::is_some) {
@@ -160,16 +185,35 @@ pub(crate) fn score(
     } else {
         None
     };
+    let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
     Ok(Scored::Candidate(Candidate {
         effect: c,
         new_free: addition.new_free,
         stats: held.stats,
         errors: held.errors,
         runaway,
+        unsettled,
     }))
 }
 
 /// `effects` without its `k`-th (the model a removal step scores).
 pub(crate) fn without(effects: &[Effect], k: usize) -> Vec<Effect> {
     effects.iter().enumerate().filter(|(i, _)| *i != k).map(|(_, e)| *e).collect()
+}
+
+/// The refusal of a candidate whose fit does not settle beside the model: in every fold it stopped at the
+/// iteration limit with each step still moving its parameters by more than a tenth of their standard
+/// deviations — a direction the poses barely determine, walked along (the real UR10's wrist row against
+/// the probe on the 11,911 poses of series A: within its plausible bounds after a hundred steps, in
+/// every fold of every forward step, never settling, never chosen — issue #49). Its held-out score is
+/// that of wherever the limit stopped it, which says nothing of the effect; it would be scored so again
+/// at every step.
+pub(crate) fn unsettled(effect: Effect) -> Refusal {
+    Refusal {
+        effect: effect.label(),
+        reason: format!(
+            "its fit does not settle beside the model: in the fit of every fold it still moved by more than a tenth of its standard deviations per step at the {MAX_ITERATIONS}-iteration limit — a direction these poses barely determine, traded with another block"
+        ),
+        remedy: "measure poses that move it apart from the blocks it trades with (other configurations of the joints around it), or leave it to the completion, which fits it beside the whole geometry with a prior".into(),
+    }
 }

@@ -64,9 +64,10 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
         sel.steps.iter().filter(|s| s.joined == Joined::Completion).map(|s| s.effect).collect();
     let diagnosed: Vec<Effect> = effects.iter().copied().filter(|e| !completion.contains(e)).collect();
     let diagnosed_fit = if completion.is_empty() { None } else { Some(scorer.full_fit(&diagnosed)?) };
-    let in_diagnosed = leave_one_out(scorer, &diagnosed, sel.always..diagnosed.len())?;
+    let in_diagnosed = leave_one_out(scorer, &diagnosed, sel.always..diagnosed.len(), 0.0)?;
     let rows_at: Vec<usize> = (0..effects.len()).filter(|&k| completion.contains(&effects[k])).collect();
-    let in_completed = leave_one_out(scorer, &effects, rows_at)?;
+    // A completion row's removal is scored in the fit the completed model is scored in: with its prior.
+    let in_completed = leave_one_out(scorer, &effects, rows_at, shrinkage)?;
     let without: Vec<(usize, Stats)> = in_diagnosed
         .into_iter()
         .map(|(k, s)| (effects.iter().position(|e| *e == diagnosed[k]).unwrap_or(k), s))
@@ -136,18 +137,19 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
 }
 
 /// The held-out statistics of the model `effects` without each of the effects at `at` (indices into
-/// `effects`).
+/// `effects`), fitted with the prior of strength `lambda` (0: least squares).
 fn leave_one_out(
     scorer: &Scorer<'_>,
     effects: &[Effect],
     at: impl IntoIterator<Item = usize>,
+    lambda: f64,
 ) -> Result<Vec<(usize, Stats)>, DiagnoseError> {
     at.into_iter()
         .collect::<Vec<_>>()
         .into_par_iter()
         .map(|k| {
             let rest = without(effects, k);
-            Ok((k, scorer.heldout(&rest, &scorer.folds)?))
+            Ok((k, scorer.heldout_fits_with(&rest, &scorer.folds, lambda)?.stats))
         })
         .collect()
 }

@@ -8,7 +8,7 @@ use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
 use crate::identifiability::{FixedParameter, identifiable, inert_columns};
-use crate::lm::{CONVERGED, Lm, REUSE_JACOBIAN, Rates};
+use crate::lm::{Lm, REUSE_JACOBIAN, Rates, converged_gain};
 use crate::model::Model;
 use crate::residuals::weighted;
 use crate::terms::PoseTerms;
@@ -32,8 +32,11 @@ pub struct Fit {
     /// Pairs of free parameters the data barely tell apart: correlation of their estimates above
     /// [`NEARLY_DEPENDENT`] in magnitude.
     pub correlated: Vec<CorrelatedPair>,
+    /// Whether the fit stopped because [`Start::give_up`] held after a step: its parameters are where that
+    /// step left them, not at a minimum.
+    pub gave_up: bool,
     /// Whether the iteration ended by its own test — the next step predicted or found to gain less than
-    /// [`CONVERGED`] of the cost, or no step gaining at all — rather than by [`MAX_ITERATIONS`], after
+    /// the convergence gain (a move under a tenth of the parameters' standard deviations, `lm::SETTLED`, or 1e-9 of the cost), or no step gaining at all — rather than by [`MAX_ITERATIONS`], after
     /// which the parameters are not at the least-squares minimum.
     pub converged: bool,
 }
@@ -77,12 +80,36 @@ pub struct Start {
     pub max_iterations: usize,
     /// A Gaussian prior on the parameters (shrinkage), none by default.
     pub prior: Option<Prior>,
+    /// A test of the parameters after every accepted step: when it holds, the fit stops there
+    /// ([`Fit::gave_up`]). None by default.
+    pub give_up: Option<GiveUp>,
+}
+
+/// A test of a fit's parameters after each accepted step from the `after_steps`-th of a pass on
+/// ([`Start::give_up`]): the caller's way to stop a fit whose outcome it no longer needs — a candidate's
+/// values already beyond what it would accept.
+#[derive(Clone)]
+pub struct GiveUp {
+    /// Accepted steps of a pass before the test applies (the first steps from a cold start may overshoot
+    /// and come back).
+    pub after_steps: usize,
+    /// The test, of the accepted steps of the pass so far and the parameters: `true` stops the fit.
+    pub test: GiveUpTest,
+}
+
+/// [`GiveUp::test`]: of the accepted steps of a pass so far and the parameters.
+pub type GiveUpTest = std::sync::Arc<dyn Fn(usize, &[f64]) -> bool + Send + Sync>;
+
+impl std::fmt::Debug for GiveUp {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "GiveUp {{ after_steps: {}, .. }}", self.after_steps)
+    }
 }
 
 impl Start {
     /// From `theta`, moving the `movable` parameters, at most [`MAX_ITERATIONS`] per pass.
     pub fn new(theta: Vec<f64>, movable: Vec<bool>) -> Self {
-        Self { theta, movable, max_iterations: MAX_ITERATIONS, prior: None }
+        Self { theta, movable, max_iterations: MAX_ITERATIONS, prior: None, give_up: None }
     }
 }
 
@@ -114,18 +141,21 @@ impl Problem<'_> {
     /// when given.
     fn residuals(&self, theta: &[f64], jac: Option<&mut Mat<f64>>) -> Result<Vec<f64>, IdentifyError> {
         let Some(prior) = self.prior else {
-            return weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, jac);
+            return weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, jac.map(Mat::as_mut));
         };
         let n = self.data_rows();
-        let mut data_jac = jac.as_ref().map(|_| Mat::zeros(n, theta.len()));
-        let mut r = weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, data_jac.as_mut())?;
         let priored: Vec<usize> = (0..theta.len()).filter(|&k| prior.weight[k] > 0.0).collect();
+        // The data's rows written into the top of `jac` (no copy of a data Jacobian), the prior's below.
+        let mut jac = jac;
+        if let Some(jac) = jac.as_deref_mut() {
+            jac.fill(0.0);
+        }
+        let top = jac.as_deref_mut().map(|j| j.as_mut().subrows_mut(0, n));
+        let mut r = weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, top)?;
         // As the data's rows, `measured − predicted`: the prior's mean is the measurement, `wₖ θₖ` the
         // prediction (whose derivative the Jacobian holds).
         r.extend(priored.iter().map(|&k| prior.weight[k] * (prior.centre[k] - theta[k])));
-        if let (Some(jac), Some(d)) = (jac, data_jac) {
-            jac.fill(0.0);
-            jac.as_mut().subrows_mut(0, n).copy_from(&d);
+        if let Some(jac) = jac {
             for (i, &k) in priored.iter().enumerate() {
                 jac[(n + i, k)] = prior.weight[k];
             }
@@ -208,6 +238,7 @@ pub fn fit_from(
     let mut scaled = Scaled { cols: Vec::new(), scale: Vec::new(), signs: Vec::new(), normal: Mat::zeros(0, 0) };
     let mut inert = true;
     let mut converged_every_pass = true;
+    let mut gave_up = false;
     for _pass in 0..2 {
         if !inert {
             break;
@@ -233,7 +264,13 @@ pub fn fit_from(
         }
         let mut lm = Lm::new(&cols);
         lm.refresh(&it.jac, &it.theta, &rates);
-        converged_every_pass &= iterate(&problem, &rates, &mut lm, &mut it, start.max_iterations)?;
+        match iterate(&problem, &rates, &mut lm, &mut it, start)? {
+            PassEnd::Converged => {}
+            PassEnd::Limit => converged_every_pass = false,
+            PassEnd::GaveUp => {
+                (converged_every_pass, gave_up) = (false, true);
+            }
+        }
         // Back to θ's coordinates: a column's scale per unit of θ, and the sign `∂θ/∂u` gives a correlation.
         scaled = Scaled {
             scale: lm.scale.iter().zip(&lm.chain).map(|(s, d)| s / d.abs()).collect(),
@@ -241,6 +278,9 @@ pub fn fit_from(
             normal: lm.scaled_normal_matrix(&it.jac),
             cols,
         };
+        if gave_up {
+            break;
+        }
     }
     let names = model.parameter_names();
     let (std, correlated) = uncertainty(&scaled, it.cost, problem.rows(), model.len(), &names);
@@ -251,38 +291,54 @@ pub fn fit_from(
         ssr: it.cost,
         correlated,
         converged: converged_every_pass,
+        gave_up,
         theta: it.theta,
     })
 }
 
-/// Levenberg–Marquardt iterations of one pass, at most `max_iterations`; whether the pass ended by its
-/// own test (converged, or no step gaining at all).
+/// How one pass of iterations ended.
+enum PassEnd {
+    /// By its own test: converged, or no step gaining at all.
+    Converged,
+    /// At the iteration limit.
+    Limit,
+    /// [`Start::give_up`] held after a step.
+    GaveUp,
+}
+
+/// Levenberg–Marquardt iterations of one pass, at most `start.max_iterations`, and how the pass ended.
 fn iterate(
     problem: &Problem<'_>,
     rates: &Rates,
     lm: &mut Lm,
     it: &mut Iterate,
-    max_iterations: usize,
-) -> Result<bool, IdentifyError> {
-    for _ in 0..max_iterations {
+    start: &Start,
+) -> Result<PassEnd, IdentifyError> {
+    let mut taken = 0;
+    for _ in 0..start.max_iterations {
         let g = lm.gradient(&it.jac, &it.r);
         match damped_step(problem, rates, lm, it, &g)? {
-            StepOutcome::Converged => return Ok(true),
-            StepOutcome::Taken => {}
+            StepOutcome::Converged => return Ok(PassEnd::Converged),
+            StepOutcome::Taken => {
+                taken += 1;
+                if start.give_up.as_ref().is_some_and(|g| taken >= g.after_steps && (g.test)(taken, &it.theta)) {
+                    return Ok(PassEnd::GaveUp);
+                }
+            }
             StepOutcome::NoGain if lm.retry() => {}
-            StepOutcome::NoGain => return Ok(true),
+            StepOutcome::NoGain => return Ok(PassEnd::Converged),
         }
     }
-    Ok(false)
+    Ok(PassEnd::Limit)
 }
 
 /// How one iteration ended.
 enum StepOutcome {
     /// A step was accepted.
     Taken,
-    /// A step was accepted that gained less than [`CONVERGED`] of the cost.
+    /// A step was accepted that gained less than the convergence gain.
     Converged,
-    /// No step was taken: the next is predicted to gain less than [`CONVERGED`] of the cost, or no
+    /// No step was taken: the next is predicted to gain less than the convergence gain, or no
     /// damping gave one that gains (after a failed chord step, the Jacobian was refreshed: the iteration
     /// is then retried).
     NoGain,
@@ -302,10 +358,11 @@ fn damped_step(
             lm.lambda *= 10.0;
             continue;
         };
-        // Converged when the step at this damping is predicted to gain less than 1e-9 of the cost (the
-        // parameters then move by ~1e-5 of their uncertainty): the trial is not evaluated — its actual
-        // change is rounding, ±1e-13 of the cost, and damping further only shortens the step.
-        if predicted <= CONVERGED * it.cost {
+        // Converged when the step at this damping is predicted to gain less than `converged_gain` (the
+        // parameters would move by less than a tenth of their uncertainty): the trial is not evaluated —
+        // damping further only shortens the step.
+        let settled = converged_gain(it.cost, problem.rows(), lm.cols.len(), problem.prior.is_some());
+        if predicted <= settled {
             return Ok(StepOutcome::NoGain);
         }
         let mut trial = it.theta.clone();
@@ -321,8 +378,8 @@ fn damped_step(
             it.r = rt;
             it.cost = ct;
             lm.adapt(gain * cost_before / predicted.max(1e-300));
-            // A step that gained less than 1e-9 of the cost ends the fit, as a predicted one does.
-            if gain <= CONVERGED {
+            // A step that gained less than `converged_gain` ends the fit, as a predicted one does.
+            if gain * cost_before <= settled {
                 return Ok(StepOutcome::Converged);
             }
             // A small step keeps its Jacobian for the next (chord) step ([`REUSE_JACOBIAN`]).

@@ -122,7 +122,14 @@ impl Model {
         q.clear();
         q.extend_from_slice(&m.q);
         if let Some((chain, down)) = &cached.gravity {
-            cached.torques = thermokin_chain::gravity_torques(chain, robot.masses(), &m.q, down)?;
+            thermokin_chain::gravity_torques_into(
+                chain,
+                robot.masses(),
+                &m.q,
+                inputs.sin_cos,
+                down,
+                &mut cached.torques,
+            )?;
         }
         let mut drift_rows = std::mem::take(&mut cached.drift_rows);
         cached.drift_scale.clear();

@@ -1,6 +1,7 @@
 //! Residual rows `measured − predicted` of a model at a parameter vector, and their Jacobian.
 
-use faer::Mat;
+use faer::reborrow::ReborrowMut;
+use faer::{Mat, MatMut};
 use nalgebra::Matrix6xX;
 use thermokin_chain::{Dataset, Robot, rotation_log};
 
@@ -34,7 +35,7 @@ pub fn residuals_and_jacobian(
     terms: &PoseTerms,
 ) -> Result<(Vec<f64>, Mat<f64>), IdentifyError> {
     let mut jac = Mat::zeros(rows.len() * terms.stride(), model.len());
-    let r = evaluate(robot, model, theta, data, rows, terms, Some(&mut jac))?;
+    let r = evaluate(robot, model, theta, data, rows, terms, Some(jac.as_mut()))?;
     Ok((r, jac))
 }
 
@@ -46,7 +47,7 @@ fn evaluate(
     data: &Dataset,
     rows: &[usize],
     terms: &PoseTerms,
-    mut jac: Option<&mut Mat<f64>>,
+    mut jac: Option<MatMut<'_, f64>>,
 ) -> Result<Vec<f64>, IdentifyError> {
     let stride = terms.stride();
     let mut r = Vec::with_capacity(rows.len() * stride);
@@ -64,7 +65,7 @@ fn evaluate(
             let e = rotation_log(&(measured * rot.transpose())) * lever;
             r.extend_from_slice(&[e.x, e.y, e.z]);
         }
-        if let Some(jac) = jac.as_deref_mut() {
+        if let Some(jac) = jac.as_mut() {
             for c in 0..model.len() {
                 for a in 0..stride {
                     let w = if a < 3 { 1.0 } else { lever };
@@ -76,8 +77,9 @@ fn evaluate(
     Ok(r)
 }
 
-/// [`residuals`] (and the Jacobian when `jac` is given) as the fit minimises them: position rows weighted
-/// by the tracker's stated standard deviations (weighted least squares), unchanged otherwise.
+/// [`residuals`] (and the Jacobian into `jac` when given: its rows are the residuals') as the fit
+/// minimises them: position rows weighted by the tracker's stated standard deviations (weighted least
+/// squares), unchanged otherwise.
 pub(crate) fn weighted(
     robot: &Robot,
     model: &Model,
@@ -85,16 +87,16 @@ pub(crate) fn weighted(
     data: &Dataset,
     rows: &[usize],
     terms: &PoseTerms,
-    mut jac: Option<&mut Mat<f64>>,
+    mut jac: Option<MatMut<'_, f64>>,
 ) -> Result<Vec<f64>, IdentifyError> {
-    let mut r = evaluate(robot, model, theta, data, rows, terms, jac.as_deref_mut())?;
+    let mut r = evaluate(robot, model, theta, data, rows, terms, jac.as_mut().map(|j| j.rb_mut()))?;
     if let Some(weights) = &terms.weights {
         let stride = terms.stride();
         for (k, &i) in rows.iter().enumerate() {
             for a in 0..3 {
                 let (row, w) = (stride * k + a, weights[i][a]);
                 r[row] *= w;
-                if let Some(jac) = jac.as_deref_mut() {
+                if let Some(jac) = jac.as_mut() {
                     for c in 0..jac.ncols() {
                         jac[(row, c)] *= w;
                     }

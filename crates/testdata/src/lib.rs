@@ -129,3 +129,16 @@ pub fn peak_rss_mib() -> Option<f64> {
     let kb: f64 = status.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()?;
     Some(kb / 1024.0)
 }
+
+/// CPU seconds this process has used so far, user and system, all threads (`/proc/self/stat`, fields 14
+/// and 15, in clock ticks of 1/100 s — the kernel's `USER_HZ` on every Linux this runs on); `None` off
+/// Linux. Read twice around a run, the difference is the run's CPU time.
+pub fn cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count from the closing one.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |k: usize| fields.get(k)?.parse::<f64>().ok();
+    // After ')': field 3 is at 0, so utime (14) at 11 and stime (15) at 12.
+    Some((ticks(11)? + ticks(12)?) / 100.0)
+}

@@ -112,14 +112,16 @@ fn thirty_grid_poses_end_at_the_full_fit() {
     assert!(refit <= 1.05 * full_refit, "refitted {refit:.3} vs full fit {full_refit:.3}");
 }
 
-/// A verdict weighs the outer folds with their uncertainty (issue #35): on the first seeded draw of thirty
-/// grid poses, one outer fold's six poses end far off (4.8 → 12.7 mm RMS, one pose at 20 mm) and pull the
-/// nested mean above the nominal one (4.00 against 3.47 mm) — within the paired difference's uncertainty.
-/// That is said first among the warnings (the poses cannot show a transfer), not as a refusal: the export
-/// beats the nominal model on the random poses by a third (2.47 against 3.82 mm in the training frame).
-/// Before, the report's first line was `NOT BETTER THAN NOMINAL` and `--export` refused.
+/// The first seeded draw of thirty grid poses, which issue #35 found with one outer fold far off (4.8 →
+/// 12.7 mm RMS, one pose at 20 mm; nested mean 4.00 against the nominal 3.47 mm, within the paired
+/// difference's uncertainty — the case that taught the verdict to weigh outer folds with it, now a unit
+/// test of `validation::worse_beyond_uncertainty`). Since the fits stop where they settle and the
+/// completion's prior is chosen from the weakest one up where least squares walks away (issue #49), no
+/// outer fold of it is far off: the procedure beats the nominal model on its outer folds beyond their
+/// uncertainty, and the export beats it on the random poses, nothing said against either. (Over forty
+/// seeded draws none ends above the nominal model on its outer folds now.)
 #[test]
-fn one_outer_fold_far_off_is_weighed_with_its_uncertainty() {
+fn the_first_thirty_pose_draw_transfers() {
     use rand::SeedableRng;
     let (robot, grid, random) = wam();
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
@@ -139,8 +141,9 @@ fn one_outer_fold_far_off_is_weighed_with_its_uncertainty() {
         report.honest_end,
         report.warnings.first()
     );
-    assert!(nested.selected.heldout_mean_mm > nested.nominal.heldout_mean_mm, "the case is not the one described");
+    assert!(nested.mean_difference_mm < -2.0 * nested.mean_difference_se_mm, "not better beyond its uncertainty");
     assert!(report.honest_end.is_none(), "{:?}", report.honest_end);
-    assert!(report.warnings.first().is_some_and(|w| w.contains("cannot show")), "{:?}", report.warnings);
+    assert!(!report.warnings.iter().any(|w| w.contains("cannot show")), "{:?}", report.warnings);
     assert!(h.same_frame.selected.heldout_mean_mm < h.same_frame.nominal.heldout_mean_mm);
+    assert!(h.selected.heldout_mean_mm < h.nominal.heldout_mean_mm);
 }
