@@ -361,7 +361,8 @@ fn damped_step(
         // Converged when the step at this damping is predicted to gain less than `converged_gain` (the
         // parameters would move by less than a tenth of their uncertainty): the trial is not evaluated —
         // damping further only shortens the step.
-        let settled = converged_gain(it.cost, problem.rows(), lm.cols.len(), problem.prior.is_some());
+        let prior_cost = ssr(&it.r[problem.data_rows().min(it.r.len())..]);
+        let settled = converged_gain(it.cost, prior_cost, problem.data_rows(), lm.cols.len());
         if predicted <= settled {
             return Ok(StepOutcome::NoGain);
         }

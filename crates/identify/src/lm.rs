@@ -23,18 +23,21 @@ pub(crate) const CONVERGED: f64 = 1e-9;
 /// there (`√(1e-9 · m)`), and a thousandth of σ on a week of poses.
 pub(crate) const SETTLED: f64 = 0.1;
 
-/// The cost gain below which a fit has converged at `cost` over `rows` residual rows with `free`
-/// parameters: [`CONVERGED`] of the cost, or a move under [`SETTLED`] of the parameters' standard
-/// deviations, whichever is larger — the latter for a least-squares fit only (`priored` false): with a
-/// prior, the cost carries the prior's tension against the data, which is no noise to measure a move
-/// by (a tool point pulled by its prior 0.5 mm from where 25 poses put it within 0.01 mm would stop a
-/// tenth of its true σ short), and a fit with a prior reaches its minimum in a few steps anyway.
-pub(crate) fn converged_gain(cost: f64, rows: usize, free: usize, priored: bool) -> f64 {
-    if priored {
+/// The cost gain below which a fit has converged at `cost` — of which `prior_cost` is its prior's rows —
+/// over `rows` residual rows of data with `free` parameters: [`CONVERGED`] of the cost, or a move under
+/// [`SETTLED`] of the parameters' standard deviations (`σ̂²` from the data's rows), whichever is larger —
+/// the latter only where the prior's rows hold under a hundredth of the cost: a strong prior's tension
+/// against the data is no noise to measure a move by (a tool point pulled by its prior 0.5 mm from where
+/// 25 poses put it within 0.01 mm would stop a tenth of its true σ short), and such a fit reaches its
+/// minimum in a few steps anyway; a weak one (the completion's weakest, a hundredth of a row per
+/// parameter) leaves the data's noise as it is, and its fit creeps along the same flat valleys as least
+/// squares.
+pub(crate) fn converged_gain(cost: f64, prior_cost: f64, rows: usize, free: usize) -> f64 {
+    if prior_cost > 0.01 * cost {
         return CONVERGED * cost;
     }
     let dof = (rows as f64 - free as f64).max(1.0);
-    (CONVERGED * cost).max(SETTLED * SETTLED * cost / dof)
+    (CONVERGED * cost).max(SETTLED * SETTLED * (cost - prior_cost) / dof)
 }
 
 /// Relative cost gain below which the step's Jacobian is reused for the next (chord) step. Near the
