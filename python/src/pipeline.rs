@@ -277,6 +277,13 @@ impl PyReport {
         py.import("json")?.call_method1("loads", (text,))
     }
 
+    /// The report as one self-contained HTML page, the page `thermokin diagnose --html` writes (opens
+    /// offline; in a notebook, `IPython.display.HTML(report.html())`).
+    fn html(&self) -> String {
+        let context = thermokin_report::PageContext::new(self.file_robot.name(), self.source.clone());
+        thermokin_report::diagnosis_page(&self.report, &context)
+    }
+
     /// The effects chosen, main cause first (labels such as `joint_offset[2]`).
     #[getter]
     fn effects(&self) -> Vec<String> {

@@ -16,6 +16,9 @@ use crate::robot::PyRobot;
 #[pyclass(module = "thermokin", name = "Plan", frozen)]
 pub struct PyPlan {
     plan: Plan,
+    /// The robot's name and what the candidates were, for the page.
+    robot: String,
+    candidates: String,
 }
 
 #[pymethods]
@@ -53,6 +56,14 @@ impl PyPlan {
         self.plan.criterion_by_pose.clone()
     }
 
+    /// The plan as one self-contained HTML page, the page `thermokin plan --html` writes.
+    fn html(&self) -> String {
+        thermokin_report::plan_page(
+            &self.plan,
+            &thermokin_report::PageContext::new(self.robot.clone(), self.candidates.clone()),
+        )
+    }
+
     /// The report as a dict (the JSON of `thermokin plan --json`, parsed).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let text = serde_json::to_string(&self.plan).map_err(|e| raise(Kind::Other, e))?;
@@ -86,7 +97,7 @@ fn configurations(
 /// `to_dict()["left_out"]`); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
 /// `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=3000, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
+#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=thermokin_planner::DEFAULT_SAMPLES, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -123,6 +134,10 @@ pub fn plan(
         ..defaults
     };
     let measured = measured.map(|m| configurations(robot, &m, "measured")).transpose()?.unwrap_or_default();
+    let described = match &candidates {
+        Some(_) => "the candidates given".to_string(),
+        None => format!("{samples} sampled configurations"),
+    };
     let pool = match candidates {
         Some(c) => Candidates::new(&file_robot, configurations(robot, &c, "candidates")?, vec![]).map_err(input)?,
         None => {
@@ -132,5 +147,5 @@ pub fn plan(
         }
     };
     let plan = py.detach(|| thermokin_planner::plan(&file_robot, &pool, &measured, &params)).map_err(input)?;
-    Ok(PyPlan { plan })
+    Ok(PyPlan { plan, robot: file_robot.name().to_string(), candidates: described })
 }

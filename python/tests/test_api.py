@@ -3,6 +3,7 @@ properties (batch = loop, FK∘IK = identity, round trips), and on bad input (th
 
 import json
 import math
+import re
 import subprocess
 
 import numpy as np
@@ -154,6 +155,21 @@ def test_diagnose_equals_the_command_lines_json_on_the_real_ur10(root, cli, tmp_
     calibrated = report.calibrated
     assert calibrated.dof == 6
     assert np.abs(calibrated.fk(c.q[:5])[:, :3, 3] - robot.fk(c.q[:5])[:, :3, 3]).max() > 0.01
+
+
+def test_the_report_and_the_plan_as_pages(irb140):
+    """The page `diagnose --html` and `plan --html` write, from a notebook: self-contained, its figures the
+    report's."""
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=120, minutes=0)
+    report = thermokin.diagnose(irb140, data, noise_mm=0.005)
+    page = report.html()
+    assert page.startswith("<!DOCTYPE html>")
+    assert "<script" not in page and not re.findall(r'(?:src|href)="[^"]*(?:http|//)', page)
+    nested = report.to_dict()["nested"]["selected"]["heldout_mean_mm"]
+    assert f'data-figure="nested.selected.heldout_mean_mm">{nested:.4f}<' in page
+    assert "joint_offset[2]" in page
+    plan = thermokin.plan(irb140, poses=10, samples=300)
+    assert plan.html().startswith("<!DOCTYPE html>") and "10 poses for" in plan.html()
 
 
 def test_diagnose_takes_arrays_as_it_takes_a_measurement_set(irb140):

@@ -164,6 +164,11 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-diagnose",
         ],
     ),
+    // The diagnosis and the plan as a page: it reads their reports and writes a string; no file format.
+    (
+        "thermokin-report",
+        &["thermokin-chain", "thermokin-deform", "thermokin-identify", "thermokin-diagnose", "thermokin-planner"],
+    ),
     // The Python front end calls the libraries the CLI calls, never the CLI (nor the paper crate).
     (
         "thermokin-python",
@@ -177,6 +182,7 @@ const ALLOWED: &[(&str, &[&str])] = &[
             "thermokin-identify",
             "thermokin-diagnose",
             "thermokin-planner",
+            "thermokin-report",
         ],
     ),
 ];

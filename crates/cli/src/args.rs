@@ -339,6 +339,11 @@ pub struct DiagnoseArgs {
     /// Write SVG plots (residuals before/after, held-out error per effect) into this directory.
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
+    /// Write the report as one self-contained HTML page (opens offline): the verdict and held-out
+    /// figures, then where the gap lies — residual vectors over the workspace, against each joint, over
+    /// time, per fold —, the ladder of effects, each effect's values with σ, gross errors, refusals.
+    #[arg(long, value_name = "FILE")]
+    pub html: Option<PathBuf>,
     /// How poses are grouped into validation folds, so that an effect is scored on poses unlike those it
     /// was fitted on and the gate counts blocks, not poses.
     #[arg(long, value_parser = choice(FoldGrouping::CHOICES), default_value_t = Config::default().folds_by)]
@@ -405,7 +410,7 @@ pub struct PlanArgs {
     #[arg(long, value_name = "FILE", conflicts_with_all = ["samples", "workspace"])]
     pub candidates: Option<PathBuf>,
     /// Without --candidates: configurations sampled within the joint limits (seeded).
-    #[arg(long, value_name = "N", default_value_t = 3000)]
+    #[arg(long, value_name = "N", default_value_t = thermokin_planner::DEFAULT_SAMPLES)]
     pub samples: usize,
     /// Keep sampled configurations whose tool point lies in this box of the base frame, mm.
     #[arg(long = "box", value_name = "X0,Y0,Z0,X1,Y1,Z1", allow_hyphen_values = true)]
@@ -451,6 +456,10 @@ pub struct PlanArgs {
     /// Write the report as JSON.
     #[arg(long, value_name = "FILE")]
     pub json: Option<PathBuf>,
+    /// Write the plan as one self-contained HTML page (opens offline): the plan against random poses,
+    /// the poses over the workspace in measuring order, joint coverage, predicted σ.
+    #[arg(long, value_name = "FILE")]
+    pub html: Option<PathBuf>,
 }
 
 /// `simulate` arguments.

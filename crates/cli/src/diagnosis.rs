@@ -98,26 +98,21 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
 }
 
 /// Where the report refused effects for what the poses cover (a joint's arc, a gravity-torque range), the
-/// command that plans the poses to measure next, from these measurements.
-fn next_poses_hint(a: &DiagnoseArgs, report: &Report) -> Result<(), Failure> {
-    let coverage = |r: &&thermokin_diagnose::Refusal| {
-        r.remedy.starts_with("measure joint") || r.remedy.starts_with("measure poses")
-    };
-    let refused: Vec<&str> =
-        report.identifiability.not_identifiable.iter().filter(coverage).map(|r| r.effect.as_str()).collect();
+/// command that plans the poses to measure next, from these measurements, and what it pins down.
+fn next_poses(a: &DiagnoseArgs, report: &Report) -> Option<(String, String)> {
+    let refused = report.refused_for_coverage();
     if refused.is_empty() {
-        return Ok(());
+        return None;
     }
     let tip = a.robot.tip.as_deref().map(|t| format!(" --tip {t}")).unwrap_or_default();
-    say!(
-        "\nnext poses: `thermokin plan --robot {}{tip} --frame {} --tool {} --candidates <the poses you can reach>.csv --measured {} --poses 20 --out next.csv` plans the poses that pin down {} (docs/planner.md)",
+    let command = format!(
+        "thermokin plan --robot {}{tip} --frame {} --tool {} --candidates <the poses you can reach>.csv --measured {} --poses 20 --out next.csv",
         a.robot.robot.display(),
         a.frame,
         a.tool,
         a.measurements.display(),
-        refused.join(", ")
     );
-    Ok(())
+    Some((command, refused.join(", ")))
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
@@ -174,7 +169,21 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     };
     let report = run_with_progress(&a, &fitted_robot, &data, holdout.as_ref(), &config)?;
     say!("{}", report.text().to_string().trim_end());
-    next_poses_hint(&a, &report)?;
+    let next = next_poses(&a, &report);
+    if let Some((command, pins)) = &next {
+        say!("\nnext poses: `{command}` plans the poses that pin down {pins} (docs/planner.md)");
+    }
+    if let Some(p) = &a.html {
+        let context = thermokin_report::PageContext {
+            holdout: a.holdout.as_ref().map(|h| h.display().to_string()),
+            next_poses: next.map(|(command, _)| command),
+            ..thermokin_report::PageContext::new(
+                a.robot.robot.display().to_string(),
+                a.measurements.display().to_string(),
+            )
+        };
+        write_atomic(p, thermokin_report::diagnosis_page(&report, &context).as_bytes()).map_err(Failure::internal)?;
+    }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;

@@ -73,6 +73,17 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         let text = serde_json::to_string_pretty(&plan).map_err(Failure::internal)?;
         write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
     }
+    if let Some(p) = &a.html {
+        let data = a
+            .candidates
+            .as_ref()
+            .map_or_else(|| format!("{} sampled configurations", a.samples), |c| c.display().to_string());
+        let page = thermokin_report::plan_page(
+            &plan,
+            &thermokin_report::PageContext::new(a.robot.robot.display().to_string(), data),
+        );
+        write_atomic(p, page.as_bytes()).map_err(Failure::internal)?;
+    }
     say!("\nplan → {}", a.out.display());
     Ok(exit::OK)
 }

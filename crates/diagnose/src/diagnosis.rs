@@ -8,7 +8,7 @@ use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
 use crate::outliers::screen;
 use crate::profile::{Clock, Phase, Profile, profile};
-use crate::report::{HoldoutPair, HoldoutStats, Report};
+use crate::report::{HoldoutPair, HoldoutStats, PoseHeldOut, PoseRecord, Report};
 use crate::scoring::Scorer;
 use crate::select::select;
 use crate::tables::tables;
@@ -133,11 +133,13 @@ fn run(
     let selected = select(&scorer, config, main)?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     tell("selection on all measurements".into());
-    let nested = match config.validation {
+    let (nested, heldout_per_pose) = match config.validation {
         Validation::Nested { outer } => {
-            Some(main.time(Phase::Nested, || nested(robot, data, config, outer, &mut tell, outer_clock))?)
+            let (n, per_pose) =
+                main.time(Phase::Nested, || nested(robot, data, config, outer, &mut tell, outer_clock))?;
+            (Some(n), per_pose)
         }
-        Validation::SelectionOnly => None,
+        Validation::SelectionOnly => (None, vec![None; data.len()]),
     };
     let holdout = match holdout {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
@@ -172,6 +174,7 @@ fn run(
     }
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
+    let poses = pose_records(robot, data, &tables, heldout_per_pose);
     main.add(Phase::Report, report_started.elapsed().as_secs_f64());
     Ok(Report {
         outliers: screened.outliers,
@@ -196,5 +199,30 @@ fn run(
         frames: tables.frames,
         warnings: all_warnings,
         verdict,
+        poses,
     })
+}
+
+/// Every kept measurement as the report's pictures show it ([`PoseRecord`]), in report units.
+fn pose_records(
+    robot: &Robot,
+    data: &Dataset,
+    tables: &crate::tables::Tables,
+    heldout: Vec<Option<PoseHeldOut>>,
+) -> Vec<PoseRecord> {
+    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+    data.measurements
+        .iter()
+        .enumerate()
+        .zip(heldout)
+        .map(|((i, m), heldout)| PoseRecord {
+            line: data.line_of(i),
+            time_min: m.time_min,
+            joints: m.q.iter().zip(&kinds).map(|(&q, &k)| thermokin_chain::units::joint_value_out(k, q)).collect(),
+            measured_mm: [m.position_mm.x, m.position_mm.y, m.position_mm.z],
+            before_mm: tables.vectors_before.get(i).copied().unwrap_or_default(),
+            after_mm: tables.vectors_after.get(i).copied().unwrap_or_default(),
+            heldout,
+        })
+        .collect()
 }

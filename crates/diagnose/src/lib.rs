@@ -49,7 +49,8 @@ pub use profile::{Phase, PhaseCost, Profile};
 pub use render::ReportText;
 pub use report::{
     Breakdown, EffectReport, FittedFrames, Gathered, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,
-    Outlier, OutlierScreen, ParameterValue, PoseReport, Refusal, Report, ScaleSource, ScreenModel, Skipped, TableRow,
+    Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report, ScaleSource,
+    ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::Stats;

@@ -330,6 +330,41 @@ pub struct Report {
     pub warnings: Vec<String>,
     /// Whether the effects found explain the data, against the measurement noise when it is stated.
     pub verdict: String,
+    /// Every measurement the diagnosis kept (the gross errors left out), in file order: where it was
+    /// measured and its residual vector before and after — what the report's pictures are drawn from.
+    pub poses: Vec<PoseRecord>,
+}
+
+/// One measurement as the report's pictures show it, in report units (mm, degrees).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PoseRecord {
+    /// Its 1-based line in the measurements file, when it was read from one.
+    pub line: Option<usize>,
+    /// When it was measured, minutes (0 without a time column).
+    pub time_min: f64,
+    /// Its joint values, degrees (mm for a prismatic joint).
+    pub joints: Vec<f64>,
+    /// The measured position, mm, in the measurement frame.
+    pub measured_mm: [f64; 3],
+    /// Measured − predicted by the nominal model (the always-estimated blocks fitted on all
+    /// measurements), mm.
+    pub before_mm: [f64; 3],
+    /// Measured − predicted by the final model fitted on all measurements, mm.
+    pub after_mm: [f64; 3],
+    /// The nested validation's outer fold (1-based) it was a test pose of, with its held-out error there
+    /// under the nominal and the selected model, mm; `None` without nested validation.
+    pub heldout: Option<PoseHeldOut>,
+}
+
+/// One measurement's held-out error in the nested validation.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PoseHeldOut {
+    /// The outer fold (1-based) it was a test pose of.
+    pub fold: usize,
+    /// Its error under the nominal model fitted on the fold's training part, mm.
+    pub nominal_mm: f64,
+    /// Its error under the model the fold's selection chose, mm.
+    pub selected_mm: f64,
 }
 
 /// A pose for reports: position (mm) and X-Y-Z Euler angles (degrees).
@@ -356,6 +391,20 @@ pub struct FittedFrames {
     /// (X-Y-Z, degrees, eq. 19 — about the axes of the flange's same-orientation frame, before the
     /// row's nominal rotation).
     pub tool_rotation_deg: Option<[f64; 3]>,
+}
+
+/// The position residual (measured − predicted, mm) of every measurement of `data` under `model` at
+/// `theta`.
+pub(crate) fn residual_vectors(
+    robot: &Robot,
+    data: &Dataset,
+    model: &Model,
+    theta: &[f64],
+    terms: &PoseTerms,
+) -> Result<Vec<[f64; 3]>, DiagnoseError> {
+    let all: Vec<usize> = (0..data.len()).collect();
+    let r = residuals(robot, model, theta, data, &all, terms)?;
+    Ok(r.chunks(terms.stride()).map(|c| [c[0], c[1], c[2]]).collect())
 }
 
 /// Where the residuals of `model` at `theta` lie on `data`: RMS by quartile of each joint's angle, by
@@ -394,6 +443,13 @@ pub(crate) fn breakdown(
 }
 
 impl Report {
+    /// The effects refused for what the poses cover — a joint's arc, a gravity-torque range: more poses,
+    /// planned, would let them be told.
+    pub fn refused_for_coverage(&self) -> Vec<&str> {
+        let coverage = |r: &&Refusal| r.remedy.starts_with("measure joint") || r.remedy.starts_with("measure poses");
+        self.identifiability.not_identifiable.iter().filter(coverage).map(|r| r.effect.as_str()).collect()
+    }
+
     /// Whether the identified robot may be exported: refused ([`DiagnoseError::DoesNotTransfer`]) when the
     /// chosen model does not beat the nominal one on data it never saw, unless `force`d.
     pub fn check_export(&self, force: bool) -> Result<(), DiagnoseError> {

@@ -12,6 +12,7 @@ use crate::error::DiagnoseError;
 use crate::folds::describe;
 use crate::report::{
     Breakdown, EffectReport, FittedFrames, Identifiability, ParameterValue, PoseReport, TableRow, breakdown,
+    residual_vectors,
 };
 use crate::scoring::{Relation, Scorer};
 use crate::select::Selected;
@@ -39,6 +40,9 @@ pub(crate) struct Tables {
     pub(crate) identifiability: Identifiability,
     pub(crate) residuals_before: Breakdown,
     pub(crate) residuals_after: Breakdown,
+    /// Every measurement's position residual under the nominal and the final model, mm.
+    pub(crate) vectors_before: Vec<[f64; 3]>,
+    pub(crate) vectors_after: Vec<[f64; 3]>,
     pub(crate) bic: Vec<f64>,
     pub(crate) frames: FittedFrames,
     pub(crate) calibrated: Chain,
@@ -124,6 +128,8 @@ pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -
         },
         residuals_before: breakdown(robot, data, &nominal_model, &nominal_fit.theta, &scorer.terms)?,
         residuals_after: breakdown(robot, data, &model, &final_fit.theta, &scorer.terms)?,
+        vectors_before: residual_vectors(robot, data, &nominal_model, &nominal_fit.theta, &scorer.terms)?,
+        vectors_after: residual_vectors(robot, data, &model, &final_fit.theta, &scorer.terms)?,
         additive: sel.additive,
         bic: sel.bic,
         frames,

@@ -10,7 +10,7 @@ use crate::config::{Config, Validation};
 use crate::error::DiagnoseError;
 use crate::folds::{Folds, folds_for};
 use crate::profile::Clock;
-use crate::report::{Nested, OuterFold};
+use crate::report::{Nested, OuterFold, PoseHeldOut};
 use crate::scoring::Scorer;
 use crate::select::select;
 use crate::stats::Stats;
@@ -23,6 +23,8 @@ pub(crate) fn nested_folds(data: &Dataset, config: &Config, outer: usize) -> Fol
 /// One outer fold's outcome and its test poses' errors under the nominal and the selected model.
 struct OuterOutcome {
     fold: OuterFold,
+    /// Its test poses (indices into the data), in the order of the errors.
+    test: Vec<usize>,
     nominal: Vec<f64>,
     selected: Vec<f64>,
 }
@@ -39,7 +41,7 @@ pub(crate) fn nested(
     outer: usize,
     tell: &mut (dyn FnMut(String) + Send),
     clock: &Clock,
-) -> Result<Nested, DiagnoseError> {
+) -> Result<(Nested, Vec<Option<PoseHeldOut>>), DiagnoseError> {
     let folds = nested_folds(data, config, outer);
     let inner = Config { validation: Validation::SelectionOnly, ..config.clone() };
     // Outer folds in parallel (each selection is parallel inside too; the outer level keeps both cores
@@ -62,7 +64,14 @@ pub(crate) fn nested(
             Ok(Some(outcome))
         })
         .collect::<Result<_, DiagnoseError>>()?;
-    Ok(gather(outer, per_fold.into_iter().flatten().collect()))
+    let outcomes: Vec<OuterOutcome> = per_fold.into_iter().flatten().collect();
+    let mut per_pose = vec![None; data.len()];
+    for o in &outcomes {
+        for (k, &i) in o.test.iter().enumerate() {
+            per_pose[i] = Some(PoseHeldOut { fold: o.fold.fold, nominal_mm: o.nominal[k], selected_mm: o.selected[k] });
+        }
+    }
+    Ok((gather(outer, outcomes), per_pose))
 }
 
 /// Outer fold `k`: the selection on `train` (its phases timed into `clock`), its choice and the nominal
@@ -99,7 +108,7 @@ fn outer_fold(
         selected: Stats::of(&selected),
         effects: effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
     };
-    Ok(OuterOutcome { fold, nominal, selected })
+    Ok(OuterOutcome { fold, test: test.to_vec(), nominal, selected })
 }
 
 /// How many standard errors of its own paired difference a fold's chosen model must be worse than the
@@ -262,6 +271,7 @@ mod tests {
     #[test]
     fn a_nested_mean_worse_within_its_uncertainty_is_not_worse_beyond_it() {
         let outcome = |fold: usize, nominal: Vec<f64>, selected: Vec<f64>| OuterOutcome {
+            test: (0..nominal.len()).collect(),
             fold: OuterFold {
                 fold,
                 poses: nominal.len(),

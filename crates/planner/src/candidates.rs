@@ -15,6 +15,10 @@ const SAMPLING_MARGIN: f64 = 0.02;
 /// Draws per wanted candidate before sampling within a box gives up.
 const DRAWS_PER_CANDIDATE: usize = 200;
 
+/// Configurations [`Candidates::sampled`] draws when the front end is not told how many: enough that a
+/// 60-pose plan of a six-joint arm chooses among fifty per pose.
+pub const DEFAULT_SAMPLES: usize = 3000;
+
 /// Candidate configurations, radians (mm for a prismatic joint), each with where it came from: its
 /// 1-based line in the candidates file, or its 1-based index when sampled. Built by [`Candidates::new`]
 /// or [`Candidates::sampled`], which check every value against the robot.

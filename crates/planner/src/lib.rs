@@ -28,7 +28,7 @@ mod select;
 
 use thermokin_chain::{Robot, units};
 
-pub use candidates::Candidates;
+pub use candidates::{Candidates, DEFAULT_SAMPLES};
 pub use error::PlanError;
 pub use params::{Criterion, Params, WorkspaceBox};
 pub use report::{Comparison, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose};

@@ -4,5 +4,6 @@
 mod bad_inputs;
 mod citizen;
 mod cli;
+mod page;
 mod plan;
 mod warmup_loop;
