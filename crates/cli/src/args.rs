@@ -35,7 +35,9 @@ Exit status:
   2  bad input: unreadable or malformed file, bad flag value, conflicting flags
   3  the run finished but some targets were not reached (each is a record in the output)
   4  reproduce-paper --check found drift from the golden outputs
-  5  the diagnosis does not transfer: --export refused;  141  standard output closed (| head)
+  5  the diagnosis does not transfer: --export refused
+  130  interrupted (Ctrl-C, SIGTERM, SIGHUP): temporary files removed, no output half-written
+  141  standard output closed (| head)
 
 Examples:
   thermokin fk --robot configs/irb140.toml --joints 0,30,10,0,-40,0
@@ -43,6 +45,8 @@ Examples:
   thermokin compensate --robot configs/irb140.toml --deformation fixtures/paper/deformations-case-study.toml \\
       --targets fixtures/paper/table12-targets.csv --out results.csv --program prog.mod
   thermokin compensate ... --profile linear-grow:180 --duration 200 --step 1 --plot plots/
+  thermokin diagnose --robot configs/irb140.toml --measurements M.csv --html report.html --export calibrated.toml
+  thermokin plan --robot configs/irb140.toml --samples 2000 --poses 30 --out plan.csv --html plan.html
   thermokin reproduce-paper";
 
 /// Thermal error compensation for serial industrial robots on the paper's extended forward model.
@@ -86,11 +90,14 @@ pub enum Command {
     Plan(PlanArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
     #[command(
-        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
+        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential), compliance_coupling (joints J and J+1 each sag by c times the other's\ngravity torque); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
     )]
     Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
     /// authors' full files (bundled in fixtures/paper/authors).
+    #[command(
+        after_help = "Examples:\n  thermokin reproduce-paper\n  thermokin reproduce-paper --report paper.md --plot plots/ --json measured.json\n  thermokin reproduce-paper --json measured.json --check fixtures/golden/paper-reproduction.json   # exit 4 on drift"
+    )]
     ReproducePaper(ReproduceArgs),
 }
 
@@ -218,6 +225,10 @@ pub struct IkArgs {
     /// Solve for the position only (orientation free).
     #[arg(long)]
     pub position_only: bool,
+    /// Unit of --poses-file's positions (default: millimetres, refused when ten or more targets all lie
+    /// within ±5 — a program in metres).
+    #[arg(long, value_parser = choice(PositionUnits::CHOICES))]
+    pub position_units: Option<PositionUnits>,
     /// Seed joint values, degrees (default: all zero).
     #[arg(long, value_name = "Q1,...,QN", allow_hyphen_values = true)]
     pub seed: Option<String>,
@@ -244,6 +255,10 @@ pub struct CompensateArgs {
     /// Program of targets: CSV `,X,Y,Z` (mm) with optional `RX,RY,RZ` (degrees; default 0,90,0).
     #[arg(long, value_name = "FILE")]
     pub targets: PathBuf,
+    /// Unit of the targets' positions (default: millimetres, refused when ten or more targets all lie
+    /// within ±5 — a program in metres).
+    #[arg(long, value_parser = choice(PositionUnits::CHOICES))]
+    pub position_units: Option<PositionUnits>,
     /// The results (written atomically), in --format.
     #[arg(long, value_name = "FILE")]
     pub out: PathBuf,

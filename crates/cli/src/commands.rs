@@ -5,11 +5,10 @@ use anyhow::anyhow;
 use nalgebra::Vector3;
 use serde_json::json;
 use thermokin_chain::{Chain, OperatingState};
-use thermokin_compensate::{BranchOut, SolutionRow};
+use thermokin_compensate::{BranchOut, SolutionRow, SolveOut};
 use thermokin_deform::RobotModel;
 use thermokin_ik::{Goal, Params, Workspace, solve_branches};
-use thermokin_io::units::{degrees, joints_to_external, rounded};
-use thermokin_io::{PoseOut, PoseRow, RobotOptions, read_robot_with, robot_to_toml, write_atomic};
+use thermokin_io::{PoseOut, PoseRow, RobotOptions, read_robot_with, robot_to_toml};
 
 use crate::args::{Cli, Command, FkArgs, IkArgs, UrdfCommand, parse_list};
 use crate::input::{joints, load, pose, working_model};
@@ -29,20 +28,6 @@ pub fn run(cli: Cli) -> Result<u8, Failure> {
     }
 }
 
-/// Joints outside the robot's limits ([`Chain::outside_limits`]), named, in degrees (mm for prismatic joints).
-fn outside_limits(chain: &Chain, q: &[f64]) -> Vec<String> {
-    let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
-    let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
-    let (lo, hi, v) =
-        (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
-    let joints = chain.joints();
-    chain
-        .outside_limits(q)
-        .into_iter()
-        .map(|i| format!("{} = {:.6} outside [{:.6}, {:.6}]", joints[i].name, v[i], lo[i], hi[i]))
-        .collect()
-}
-
 fn fk(a: FkArgs) -> Result<u8, Failure> {
     let loaded = load(&a.robot)?;
     let model = working_model(&a.robot, &loaded)?;
@@ -56,7 +41,7 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
     let q = joints(chain, "joints", text)?;
     // The commanded joints on the robot as it is in the flags' state (drift, joint corrections, payload).
     let pose = model.tool_pose(&q, &loaded.state).map_err(Failure::input)?;
-    let outside = outside_limits(chain, &q);
+    let outside = thermokin_io::outside_limits(chain, &q);
     for o in &outside {
         eprintln!("warning: {o} (the pose is computed anyway)");
     }
@@ -71,31 +56,16 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
     Ok(exit::OK)
 }
 
-/// `fk --joints-file`: one output row per input row — its pose, or why it has none — in the row's own
-/// state (`time_min` / `temp_*`) or the flags'.
+/// `fk --joints-file`: one output row per input row ([`PoseRow::of_file`]).
 fn fk_rows(path: &std::path::Path, model: &RobotModel, flags: &OperatingState, json: bool) -> Result<u8, Failure> {
-    let chain = model.robot().chain();
-    let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
-    let rows =
-        thermokin_io::read_joint_rows(path, &kinds, thermokin_io::JointUnits::Degrees).map_err(Failure::input)?;
+    let rows = PoseRow::of_file(model, path, flags).map_err(Failure::input)?;
     if !json {
         say!("{}", PoseRow::CSV_HEADER);
     }
-    let mut failed = 0;
-    for row in rows {
-        let pose = row.values.map_err(|e| e.to_string()).and_then(|(q, state)| {
-            let state = if state == OperatingState::default() { flags.clone() } else { state };
-            model.tool_pose(&q, &state).map_err(|e| e.to_string())
-        });
-        failed += usize::from(pose.is_err());
-        let (pose, error) = match pose {
-            Ok(p) => (Some(PoseOut::of(&p)), None),
-            Err(e) => (None, Some(e)),
-        };
-        let out = PoseRow { line: row.line, pose, error };
+    for out in &rows {
         if json { say!("{}", json!(out)) } else { say!("{}", out.csv()) }
     }
-    Ok(if failed > 0 { exit::PARTIAL } else { exit::OK })
+    Ok(if rows.iter().any(|r| r.error.is_some()) { exit::PARTIAL } else { exit::OK })
 }
 
 fn ik(a: IkArgs) -> Result<u8, Failure> {
@@ -109,7 +79,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     };
     let params = Params { restarts: a.restarts, ..Params::default() };
     if let Some(path) = &a.poses_file {
-        return ik_rows(path, &model, &loaded.state, &seed, &params, a.json);
+        return ik_rows(path, a.position_units, &model, &loaded.state, &seed, &params, a.json);
     }
     let Some(text) = &a.pose else { return Err(Failure::input(anyhow!("give --pose or --poses-file FILE"))) };
     let target = match (a.position_only, parse_list("pose", text)) {
@@ -129,63 +99,36 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     let mut ws = Workspace::new(chain.dof());
     let s = thermokin_compensate::solve_on_model(&model, &loaded.state, &target, &seed, &params, &mut ws, 0)
         .map_err(Failure::input)?;
-    let deg = joints_to_external(&chain, &s.q);
+    let out = SolveOut::of(&chain, &s);
     if a.json {
-        say!(
-            "{}",
-            json!({"joints_deg": deg.iter().map(|&d| rounded(d, 12)).collect::<Vec<_>>(), "status": format!("{:?}", s.status), "iterations": s.iterations, "restarts": s.restarts,
-                   "position_error_mm": s.position_error_mm, "orientation_error_deg": degrees(s.orientation_error_rad)})
-        );
+        say!("{}", json!(out))
     } else {
-        let list: Vec<String> = deg.iter().map(|&d| format!("{:.6}", rounded(d, 6))).collect();
-        say!("joints_deg   {}", list.join(","));
-        say!(
-            "status       {:?} after {} iterations, {} restarts; error {:.3e} mm, {:.3e}° (checked by FK)",
-            s.status,
-            s.iterations,
-            s.restarts,
-            s.position_error_mm,
-            degrees(s.orientation_error_rad)
-        );
+        say!("{}", out.to_string().trim_end())
     }
     Ok(if s.converged() { exit::OK } else { exit::PARTIAL })
 }
 
-/// `ik --poses-file`: one output row per target row (its conventions, its states), solved from `seed` —
-/// the joints to command and the status checked by FK, or why it has none.
+/// `ik --poses-file`: one output row per target row ([`thermokin_compensate::solve_rows`]).
 fn ik_rows(
     path: &std::path::Path,
+    units: Option<thermokin_io::PositionUnits>,
     model: &RobotModel,
     flags: &OperatingState,
     seed: &[f64],
     params: &Params,
     json: bool,
 ) -> Result<u8, Failure> {
-    let read = thermokin_io::read_target_rows(path).map_err(Failure::input)?;
-    crate::input::warn_ignored(path, &read.ignored_columns);
-    let chain = model.robot().chain();
+    let read = crate::input::target_rows(path, units)?;
+    let dof = model.robot().chain().dof();
     if !json {
-        say!("{}", SolutionRow::csv_header(chain.dof()));
+        say!("{}", SolutionRow::csv_header(dof));
     }
-    let mut ws = Workspace::new(chain.dof());
-    let mut failed = 0;
-    for (k, row) in read.rows.into_iter().enumerate() {
-        let failure = |line, label, e: String| SolutionRow { line, label, error: Some(e), ..SolutionRow::default() };
-        let out = match row {
-            Err(e) => failure(None, String::new(), e.to_string()),
-            Ok(t) => {
-                let state = if t.state == OperatingState::default() { flags } else { &t.state };
-                let goal = Goal::Pose(t.pose);
-                match thermokin_compensate::solve_on_model(model, state, &goal, seed, params, &mut ws, k as u64) {
-                    Ok(s) => SolutionRow::solved(chain, t.line, t.label, &s),
-                    Err(e) => failure(t.line, t.label, e.to_string()),
-                }
-            }
-        };
-        failed += usize::from(out.status.as_deref() != Some("Converged"));
-        if json { say!("{}", json!(out)) } else { say!("{}", out.csv(chain.dof())) }
+    let rows = thermokin_compensate::solve_rows(model, read.rows, flags, seed, params);
+    for out in &rows {
+        if json { say!("{}", json!(out)) } else { say!("{}", out.csv(dof)) }
     }
-    Ok(if failed > 0 { exit::PARTIAL } else { exit::OK })
+    let failed = rows.iter().any(|r| r.status.as_deref() != Some("Converged"));
+    Ok(if failed { exit::PARTIAL } else { exit::OK })
 }
 
 /// `ik --branches`: every configuration of a closed-form arm, refined on the working robot.
@@ -223,7 +166,7 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
     match c {
         UrdfCommand::Import { file, base, tip, out } => {
             let robot = read_robot_with(&file, &RobotOptions { base, tip }).map_err(Failure::input)?;
-            write_atomic(&out, robot_to_toml(&robot).as_bytes()).map_err(Failure::internal)?;
+            crate::out::save(&out, robot_to_toml(&robot))?;
             say!("{}: {} joints → {}", robot.name(), robot.chain().dof(), out.display());
         }
         UrdfCommand::Export { robot, out } => {
@@ -242,7 +185,7 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
                 eprintln!("note: not in the URDF (kept in the TOML): {line}");
             }
             let xml = thermokin_urdf::export_robot_noting(&working, &beyond);
-            write_atomic(&out, xml.as_bytes()).map_err(Failure::internal)?;
+            crate::out::save(&out, xml)?;
             say!("{}: {} joints → {}", working.name(), working.chain().dof(), out.display());
         }
     }

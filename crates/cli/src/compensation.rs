@@ -8,7 +8,7 @@ use thermokin_compensate::{
     SummaryOut, compensate_static_stream, program_files, write_joint_csv,
 };
 use thermokin_ik::Params;
-use thermokin_io::{TargetReader, write_atomic, write_atomic_with};
+use thermokin_io::{TargetReader, write_atomic_with};
 
 use std::path::{Path, PathBuf};
 
@@ -52,7 +52,7 @@ pub fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
             ))),
         };
     }
-    let prog = program(&a.targets)?;
+    let prog = program(&a.targets, a.position_units)?;
     let run = match plan.cycle() {
         Some(cycle) => with_cycle_bar(cycle, |progress| plan.run(&request, &prog, &settings, progress))?,
         None => plan.run(&request, &prog, &settings, |_, _| {}),
@@ -156,13 +156,13 @@ fn compensate_streamed(
 }
 
 fn write_outputs(a: &CompensateArgs, loaded: &thermokin_io::LoadedRobot, run: &RunOutput) -> Result<(), Failure> {
-    write_atomic_with(&a.out, |w| a.format.write(w, run, run.timed)).map_err(Failure::internal)?;
+    crate::out::save_with(&a.out, |w| a.format.write(w, run, run.timed))?;
     if let Some(p) = &a.joints_out {
-        write_atomic_with(p, |w| write_joint_csv(w, run)).map_err(Failure::internal)?;
+        crate::out::save_with(p, |w| write_joint_csv(w, run))?;
     }
     if let Some(p) = &a.program {
         for (path, text) in robot_programs(a, p, loaded.robot.chain(), run)? {
-            write_atomic(&path, text.as_bytes()).map_err(Failure::internal)?;
+            crate::out::save(&path, text)?;
         }
     }
     if let Some(dir) = &a.plot {
@@ -171,12 +171,12 @@ fn write_outputs(a: &CompensateArgs, loaded: &thermokin_io::LoadedRobot, run: &R
             .map_err(Failure::internal)?;
         if run.timed {
             let svg = thermokin_plot::deviation_vs_time(run).map_err(Failure::internal)?;
-            write_atomic(&dir.join("deviation-vs-time.svg"), svg.as_bytes()).map_err(Failure::internal)?;
+            crate::out::save(&dir.join("deviation-vs-time.svg"), svg)?;
         }
         if let Some(table) = &loaded.table {
             let deformed = table.apply(loaded.robot.chain(), &loaded.semantics).map_err(Failure::input)?;
             let svg = thermokin_plot::structure(loaded.robot.chain(), &deformed, 20.0).map_err(Failure::internal)?;
-            write_atomic(&dir.join("structure.svg"), svg.as_bytes()).map_err(Failure::internal)?;
+            crate::out::save(&dir.join("structure.svg"), svg)?;
         }
     }
     Ok(())

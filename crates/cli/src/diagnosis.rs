@@ -6,13 +6,10 @@ use std::path::Path;
 use anyhow::anyhow;
 use thermokin_chain::Robot;
 use thermokin_diagnose::{Config, DiagnoseError, HiddenEffect, Report, SimulationConfig};
-use thermokin_io::{
-    IoError, MeasurementFormat, UnitsUnclear, read_measurements_joined, read_measurements_with, write_atomic,
-    write_atomic_with, write_measurements,
-};
+use thermokin_io::{MeasurementFormat, read_measurements_joined, read_measurements_with, write_measurements};
 
 use crate::args::{DiagnoseArgs, SimulateArgs};
-use crate::input::{load, working_chain};
+use crate::input::{load, units_error, working_chain};
 use crate::{Failure, exit};
 
 /// A library setting's error in the words of the command line: the flag that set it.
@@ -28,20 +25,6 @@ fn setting_error(e: DiagnoseError) -> Failure {
     let DiagnoseError::BadSetting { setting, rule, .. } = &e else { return Failure::input(e) };
     let flag = FLAGS.iter().find(|(s, _)| s == setting).map_or(*setting, |(_, f)| *f);
     Failure::input(anyhow!("{flag} {rule}"))
-}
-
-/// A measurement file's unit the numbers contradict, in the command line's words: the flag to state it.
-fn units_error(e: IoError) -> Failure {
-    let IoError::UnitsUnclear { unclear, .. } = &e else { return Failure::input(e) };
-    let flag = match unclear {
-        UnitsUnclear::JointsLookLikeRadians { .. } => {
-            "give --joint-units rad (or --joint-units deg to read them as degrees)"
-        }
-        UnitsUnclear::PositionsLookLikeMetres { .. } => {
-            "give --position-units m (or --position-units mm to read them as millimetres)"
-        }
-    };
-    Failure::input(anyhow!("{e}: {flag}"))
 }
 
 /// The diagnosis with progress on stderr, a step per stage (selection, outer folds, hold-out): a bar on a
@@ -81,7 +64,7 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
     let source = a.measurements.display().to_string();
     let model = report.export_model(robot, payload, &source).map_err(Failure::internal)?;
     let (text, beyond) = thermokin_io::robot_file_text(&model, path);
-    write_atomic(path, text.as_bytes()).map_err(Failure::internal)?;
+    crate::out::save(path, text)?;
     let carried: Vec<String> = report.effects.iter().chain(&report.completed).map(|e| e.label.clone()).collect();
     say!(
         "\nidentified robot → {}: {}",
@@ -182,18 +165,18 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
                 a.measurements.display().to_string(),
             )
         };
-        write_atomic(p, thermokin_report::diagnosis_page(&report, &context).as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, thermokin_report::diagnosis_page(&report, &context))?;
     }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&report).map_err(Failure::internal)?;
-        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, text)?;
     }
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
         let residuals = thermokin_plot::residuals(&report).map_err(Failure::internal)?;
-        write_atomic(&dir.join("residuals.svg"), residuals.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(&dir.join("residuals.svg"), residuals)?;
         let additive = thermokin_plot::heldout_per_effect(&report).map_err(Failure::internal)?;
-        write_atomic(&dir.join("heldout-per-effect.svg"), additive.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(&dir.join("heldout-per-effect.svg"), additive)?;
     }
     if let Some(p) = &a.export {
         if let Err(e) = report.check_export(a.force_export) {
@@ -229,7 +212,7 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
         .map_err(Failure::input)?;
     let data = thermokin_diagnose::simulate(&robot, &hidden, &config).map_err(setting_error)?;
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
-    write_atomic_with(&a.out, |w| write_measurements(w, &data, &kinds)).map_err(Failure::internal)?;
+    crate::out::save_with(&a.out, |w| write_measurements(w, &data, &kinds))?;
     for h in &hidden {
         say!("hidden {h}");
     }

@@ -10,7 +10,7 @@ use nalgebra::Isometry3;
 use thermokin_chain::{Chain, OperatingState, Target};
 use thermokin_deform::{DeformError, RobotModel, StateError};
 use thermokin_io::units::joints_to_internal;
-use thermokin_io::{LoadError, LoadedRobot, Orientation, RobotOptions, RobotRequest};
+use thermokin_io::{LoadError, LoadedRobot, Orientation, PositionUnits, RobotOptions, RobotRequest};
 
 use crate::Failure;
 use crate::args::{RobotArgs, parse_list};
@@ -94,11 +94,32 @@ pub fn warn_ignored(path: &Path, columns: &[String]) {
     }
 }
 
-/// Reads a targets file into a program; the columns nothing reads are said.
-pub fn program(path: &Path) -> Result<Vec<Target>, Failure> {
-    let read = thermokin_io::read_target_rows(path).map_err(Failure::input)?;
+/// Reads a targets file row by row, its positions in `units` ([`thermokin_io::TargetRows::settle_units`]);
+/// the columns nothing reads are said.
+pub fn target_rows(path: &Path, units: Option<PositionUnits>) -> Result<thermokin_io::TargetRows, Failure> {
+    let read = thermokin_io::read_target_rows(path).map_err(Failure::input)?.settle_units(path, units);
+    let read = read.map_err(units_error)?;
     warn_ignored(path, &read.ignored_columns);
-    read.rows.into_iter().collect::<Result<_, _>>().map_err(Failure::input)
+    Ok(read)
+}
+
+/// Reads a targets file into a program ([`target_rows`]).
+pub fn program(path: &Path, units: Option<PositionUnits>) -> Result<Vec<Target>, Failure> {
+    target_rows(path, units)?.rows.into_iter().collect::<Result<_, _>>().map_err(Failure::input)
+}
+
+/// A file's unit the numbers contradict, in the command line's words: the flag to state it.
+pub fn units_error(e: thermokin_io::IoError) -> Failure {
+    let thermokin_io::IoError::UnitsUnclear { unclear, .. } = &e else { return Failure::input(e) };
+    let flag = match unclear {
+        thermokin_io::UnitsUnclear::JointsLookLikeRadians { .. } => {
+            "give --joint-units rad (or --joint-units deg to read them as degrees)"
+        }
+        thermokin_io::UnitsUnclear::PositionsLookLikeMetres { .. } => {
+            "give --position-units m (or --position-units mm to read them as millimetres)"
+        }
+    };
+    Failure::input(anyhow!("{e}: {flag}"))
 }
 
 /// A progress bar of `len` steps that shows itself only when a run lasts more than a second.
@@ -149,8 +170,9 @@ pub fn program_controller(
     let by_extension =
         path.extension().and_then(|e| e.to_str()).and_then(thermokin_compensate::Controller::from_extension);
     flag.or(by_extension).ok_or_else(|| {
+        let known = thermokin_compensate::Controller::EXTENSIONS;
         Failure::input(anyhow!(
-            "--program {}: say --controller abb, kuka or ur (or use .mod, .src or .script)",
+            "--program {}: unknown program type; name it {known}, or say --controller abb, kuka or ur",
             path.display()
         ))
     })

@@ -37,6 +37,9 @@ pub mod exit {
     pub const DRIFT: u8 = 4;
     /// The diagnosis does not transfer: the export was refused (the report says why).
     pub const REFUSED: u8 = 5;
+    /// Interrupted by SIGINT, SIGTERM or SIGHUP: the run stopped, its temporary files removed, no output
+    /// half-written.
+    pub const INTERRUPTED: i32 = 130;
     /// Standard output closed early (`… | head -1`): reported as SIGPIPE would, and nothing is said.
     pub const CLOSED_PIPE: u8 = 141;
 }
@@ -76,7 +79,7 @@ fn main() -> ExitCode {
     // A run interrupted (Ctrl-C, SIGTERM, SIGHUP) leaves no temporary file beside its outputs.
     let _ = ctrlc::set_handler(|| {
         thermokin_io::remove_temporaries();
-        std::process::exit(130);
+        std::process::exit(exit::INTERRUPTED);
     });
     match commands::run(cli) {
         Ok(code) => ExitCode::from(code),

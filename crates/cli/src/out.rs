@@ -16,3 +16,17 @@ pub fn line(text: std::fmt::Arguments<'_>) -> Result<(), Failure> {
         }
     })
 }
+
+/// Writes `bytes` to `path` atomically ([`thermokin_io::write_atomic`]): a write that fails is an internal
+/// failure.
+pub fn save(path: &std::path::Path, bytes: impl AsRef<[u8]>) -> Result<(), Failure> {
+    thermokin_io::write_atomic(path, bytes.as_ref()).map_err(Failure::internal)
+}
+
+/// Writes `path` atomically through `write` ([`thermokin_io::write_atomic_with`]).
+pub fn save_with(
+    path: &std::path::Path,
+    fill: impl FnOnce(&mut std::io::BufWriter<Box<dyn Write>>) -> std::io::Result<()>,
+) -> Result<(), Failure> {
+    thermokin_io::write_atomic_with(path, fill).map_err(Failure::internal)
+}

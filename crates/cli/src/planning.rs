@@ -4,7 +4,7 @@ use anyhow::anyhow;
 use thermokin_chain::Robot;
 use thermokin_compensate::{Motion, ProgramSettings, motion_program};
 use thermokin_identify::Effect;
-use thermokin_io::{read_configurations, write_atomic, write_atomic_with};
+use thermokin_io::read_configurations;
 use thermokin_planner::{Candidates, Params, WorkspaceBox};
 
 use crate::args::{PlanArgs, parse_list};
@@ -57,7 +57,7 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
     };
     let plan = thermokin_planner::plan(&robot, &candidates, &measured, &params).map_err(named)?;
     say!("{}", plan.text().trim_end());
-    write_atomic_with(&a.out, |w| plan.write_csv(w)).map_err(Failure::internal)?;
+    crate::out::save_with(&a.out, |w| plan.write_csv(w))?;
     if let Some(path) = &a.program {
         let controller = program_controller(path, a.controller)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plan").to_string();
@@ -67,11 +67,11 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         let header = format!("thermokin plan: {} poses to measure, in this order", motions.len());
         let settings = ProgramSettings { name, ..ProgramSettings::new(controller) };
         let text = motion_program(&header, &motions, robot.chain(), &settings).map_err(Failure::input)?;
-        write_atomic(path, text.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(path, text)?;
     }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&plan).map_err(Failure::internal)?;
-        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, text)?;
     }
     if let Some(p) = &a.html {
         let data = a
@@ -82,7 +82,7 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
             &plan,
             &thermokin_report::PageContext::new(a.robot.robot.display().to_string(), data),
         );
-        write_atomic(p, page.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, page)?;
     }
     say!("\nplan → {}", a.out.display());
     Ok(exit::OK)

@@ -3,9 +3,8 @@
 
 use std::time::Instant;
 
-use anyhow::{Context, anyhow};
-use thermokin_io::write_atomic;
-use thermokin_paper::{Inputs, check, reproduce};
+use anyhow::anyhow;
+use thermokin_paper::{Inputs, check_file, reproduce};
 
 use crate::args::ReproduceArgs;
 use crate::input::progress_bar;
@@ -33,27 +32,22 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
     if let Some(dir) = &a.plot {
         std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
         let deviation = thermokin_plot::deviation_vs_time(&r.transient_run).map_err(Failure::internal)?;
-        write_atomic(&dir.join("transient-deviation.svg"), deviation.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(&dir.join("transient-deviation.svg"), deviation)?;
         let structure = thermokin_plot::structure(&r.scene, &r.deformed, 10.0).map_err(Failure::internal)?;
-        write_atomic(&dir.join("figure15-structure.svg"), structure.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(&dir.join("figure15-structure.svg"), structure)?;
     }
     if let Some(p) = &a.report {
-        write_atomic(p, r.report.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, r.report)?;
     }
     if let Some(p) = &a.json {
         let text = serde_json::to_string_pretty(&r.measurements.golden_json()).map_err(Failure::internal)?;
-        write_atomic(p, text.as_bytes()).map_err(Failure::internal)?;
+        crate::out::save(p, text)?;
     }
     say!("{}", r.headline.text());
     say!("({:.2} s)", started.elapsed().as_secs_f64());
     let mut code = exit::OK;
     if let Some(golden) = &a.check {
-        let text = std::fs::read_to_string(golden)
-            .with_context(|| format!("reading {}", golden.display()))
-            .map_err(Failure::input)?;
-        let g: serde_json::Value =
-            serde_json::from_str(&text).map_err(|e| Failure::input(anyhow!("{}: {e}", golden.display())))?;
-        let drift = check(&g, &r.measurements.golden_json());
+        let drift = check_file(golden, &r.measurements.golden_json()).map_err(paper)?;
         if drift.is_empty() {
             say!("check: no drift against {}", golden.display());
         } else {

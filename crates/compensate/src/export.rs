@@ -106,7 +106,8 @@ pub struct SummaryOut {
 
 impl std::fmt::Display for SummaryOut {
     /// The summary as `compensate` prints it: solves and failures (the failed targets named, twenty at
-    /// most), the position and orientation deviations' ranges, the largest errors.
+    /// most), the position and orientation deviations' ranges, the largest errors — or, when no target
+    /// was reached, that none was.
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "solves {}  failed {}", self.solves, self.failures)?;
         if !self.failed.is_empty() {
@@ -117,6 +118,13 @@ impl std::fmt::Display for SummaryOut {
                 String::new()
             };
             writeln!(f, "not reached (left out of the statistics below): {}{more}", shown.join(", "))?;
+        }
+        if self.failures >= self.solves {
+            // Nothing reached: no deviation to give a range of (the statistics' empty extremes are ±∞).
+            return writeln!(
+                f,
+                "no target reached: nothing to compensate with — check the targets' units (millimetres) and that they lie in the robot's reach"
+            );
         }
         let ranges = |a: &Axes| {
             format!(

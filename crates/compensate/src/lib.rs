@@ -21,11 +21,11 @@ mod stream;
 
 pub use export::{ResultsFormat, SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use model_run::{
-    command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, state_or,
+    command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, solve_rows, state_or,
 };
 pub use plan::{Plan, PlanError, Request};
 pub use program::{
-    AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow,
+    AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow, SolveOut,
     arm_configuration, confdata, kuka_status, kuka_turn, motion_program, program_files, programs,
 };
 pub use run::{

@@ -153,6 +153,35 @@ pub fn solve_on_model(
     Ok(solution)
 }
 
+/// Every row of a targets file solved on `model` from `seed` (`ik --poses-file`, one output row per input
+/// row): each target in its own state (its `time_min` / `temp_*` columns) or, where it gives none, in
+/// `flags`; a row that could not be read, or not solved, is a record with its error. `index` of each
+/// solve is its row's position, so that the results do not depend on threads.
+pub fn solve_rows(
+    model: &RobotModel,
+    rows: Vec<Result<Target, thermokin_io::IoError>>,
+    flags: &OperatingState,
+    seed: &[f64],
+    params: &Params,
+) -> Vec<crate::SolutionRow> {
+    let chain = model.robot().chain();
+    let mut ws = thermokin_ik::Workspace::new(chain.dof());
+    let failure = |line, label, e: String| crate::SolutionRow { line, label, error: Some(e), ..Default::default() };
+    rows.into_iter()
+        .enumerate()
+        .map(|(k, row)| match row {
+            Err(e) => failure(None, String::new(), e.to_string()),
+            Ok(t) => {
+                let state = if t.state == OperatingState::default() { flags } else { &t.state };
+                match solve_on_model(model, state, &Goal::Pose(t.pose), seed, params, &mut ws, k as u64) {
+                    Ok(s) => crate::SolutionRow::solved(chain, t.line, t.label, &s),
+                    Err(e) => failure(t.line, t.label, e.to_string()),
+                }
+            }
+        })
+        .collect()
+}
+
 /// A solution on the chain in force made the joints to command on `model`: [`command_solution`] when the
 /// model corrects its joint values (gear ratio, cyclic error, compliance), nothing otherwise — a plain
 /// or drifting robot's chain values are the joints to command.

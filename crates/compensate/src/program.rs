@@ -37,11 +37,15 @@ thermokin_chain::choices!(
 );
 
 impl Controller {
-    /// The controller whose programs use this file extension (any case): `.mod`, `.modx` or `.prg` for
-    /// ABB, `.src` for KUKA, `.script` or `.urscript` for Universal Robots.
+    /// The file extensions [`Controller::from_extension`] knows, in words.
+    pub const EXTENSIONS: &'static str = ".mod or .modx (ABB RAPID), .src (KUKA KRL), .script or .urscript (URScript)";
+
+    /// The controller whose programs use this file extension (any case): `.mod` or `.modx` for ABB,
+    /// `.src` for KUKA, `.script` or `.urscript` for Universal Robots. `.prg` is none of them: an ABB S4
+    /// program, and other makers' too — the controller must then be said.
     pub fn from_extension(extension: &str) -> Option<Self> {
         match extension.to_ascii_lowercase().as_str() {
-            "mod" | "modx" | "prg" => Some(Controller::Abb),
+            "mod" | "modx" => Some(Controller::Abb),
             "src" => Some(Controller::Kuka),
             "script" | "urscript" => Some(Controller::UniversalRobots),
             _ => None,
@@ -516,6 +520,52 @@ pub struct SolutionRow {
     /// Why the row has no solution.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+}
+
+/// One solve as `thermokin ik` reports it: the joints to command (degrees; mm for prismatic joints, to
+/// 1e-12), the status (`Converged` only as checked by an independent FK), the solver's work, and the
+/// independently measured errors; JSON through serde, text through `Display`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SolveOut {
+    /// The joints to command, degrees (mm for prismatic joints).
+    pub joints_deg: Vec<f64>,
+    /// The status.
+    pub status: String,
+    /// Iterations of the last attempt.
+    pub iterations: usize,
+    /// Restarts taken.
+    pub restarts: usize,
+    /// Position error, mm (independent FK).
+    pub position_error_mm: f64,
+    /// Orientation error, degrees (independent FK).
+    pub orientation_error_deg: f64,
+}
+
+impl SolveOut {
+    /// The report of solve `s` on `chain`.
+    pub fn of(chain: &Chain, s: &thermokin_ik::Solution) -> Self {
+        let joints = thermokin_io::units::joints_to_external(chain, &s.q);
+        Self {
+            joints_deg: joints.iter().map(|&d| thermokin_io::units::rounded(d, 12)).collect(),
+            status: format!("{:?}", s.status),
+            iterations: s.iterations,
+            restarts: s.restarts,
+            position_error_mm: s.position_error_mm,
+            orientation_error_deg: thermokin_io::units::degrees(s.orientation_error_rad),
+        }
+    }
+}
+
+impl std::fmt::Display for SolveOut {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let list: Vec<String> = self.joints_deg.iter().map(|&d| format!("{:.6}", thermokin_io::units::rounded(d, 6))).collect();
+        writeln!(f, "joints_deg   {}", list.join(","))?;
+        writeln!(
+            f,
+            "status       {} after {} iterations, {} restarts; error {:.3e} mm, {:.3e}° (checked by FK)",
+            self.status, self.iterations, self.restarts, self.position_error_mm, self.orientation_error_deg
+        )
+    }
 }
 
 impl SolutionRow {

@@ -162,6 +162,31 @@ pub struct PoseRow {
 }
 
 impl PoseRow {
+    /// Every row of a joints file (`fk --joints-file`: `q1..qn` in degrees, optional `time_min` /
+    /// `temp_*`) through `model`, each in its own state or, where it gives none, in `flags`: its pose, or
+    /// why it has none (a bad row, a state the model refuses).
+    pub fn of_file(
+        model: &thermokin_deform::RobotModel,
+        path: &std::path::Path,
+        flags: &thermokin_chain::OperatingState,
+    ) -> Result<Vec<PoseRow>, crate::IoError> {
+        let kinds: Vec<_> = model.robot().chain().joints().iter().map(|j| j.kind).collect();
+        let rows = crate::read_joint_rows(path, &kinds, crate::JointUnits::Degrees)?;
+        Ok(rows
+            .into_iter()
+            .map(|row| {
+                let pose = row.values.map_err(|e| e.to_string()).and_then(|(q, state)| {
+                    let state = if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
+                    model.tool_pose(&q, &state).map_err(|e| e.to_string())
+                });
+                match pose {
+                    Ok(p) => PoseRow { line: row.line, pose: Some(PoseOut::of(&p)), error: None },
+                    Err(e) => PoseRow { line: row.line, pose: None, error: Some(e) },
+                }
+            })
+            .collect())
+    }
+
     /// The header of [`PoseRow::csv`]: the position and the X-Y-Z Euler angles.
     pub const CSV_HEADER: &'static str = "line,x_mm,y_mm,z_mm,rx_deg,ry_deg,rz_deg,error";
 
@@ -197,4 +222,20 @@ impl std::fmt::Display for PoseOut {
         }
         Ok(())
     }
+}
+
+/// The joints of `q` outside `chain`'s limits ([`thermokin_chain::Chain::outside_limits`]), each named
+/// with its value and limits in degrees (mm for a prismatic joint): `A2 = 115.000000 outside
+/// [-90.000000, 110.000000]`.
+pub fn outside_limits(chain: &thermokin_chain::Chain, q: &[f64]) -> Vec<String> {
+    use crate::units::joints_to_external;
+    let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
+    let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
+    let (lo, hi, v) = (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
+    let joints = chain.joints();
+    chain
+        .outside_limits(q)
+        .into_iter()
+        .map(|i| format!("{} = {:.6} outside [{:.6}, {:.6}]", joints[i].name, v[i], lo[i], hi[i]))
+        .collect()
 }

@@ -43,6 +43,28 @@ pub struct TargetRows {
     pub ignored_columns: Vec<String>,
 }
 
+impl TargetRows {
+    /// The targets' positions in `units`: metres scaled to millimetres; left unstated (`None`), refused
+    /// when ten or more targets all lie within ±5 of the origin — a program written in metres, whose every
+    /// target read in millimetres would sit inside the robot's base ([`crate::UnitsUnclear`], as for
+    /// measurements).
+    pub fn settle_units(mut self, path: &Path, units: Option<crate::PositionUnits>) -> Result<Self, IoError> {
+        if units == Some(crate::PositionUnits::Metres) {
+            for t in self.rows.iter_mut().flatten() {
+                t.pose.translation.vector = t.pose.translation.vector.map(crate::units::millimetres);
+            }
+            return Ok(self);
+        }
+        let read: Vec<&Target> = self.rows.iter().flatten().collect();
+        let largest = read.iter().map(|t| t.pose.translation.vector.amax()).fold(0.0, f64::max);
+        if units.is_none() && read.len() >= 10 && largest <= 5.0 {
+            let unclear = crate::UnitsUnclear::PositionsLookLikeMetres { largest };
+            return Err(IoError::UnitsUnclear { path: path.to_path_buf(), unclear });
+        }
+        Ok(self)
+    }
+}
+
 /// Reads a targets CSV row by row ([`TargetRows`]): a bad header is an error, a bad row that row's.
 pub fn read_target_rows(path: &Path) -> Result<TargetRows, IoError> {
     let text = read_text(path)?;

@@ -19,7 +19,7 @@ pub use measure::{
     AuthorsComparison, FkResidual, Measurements, PrintComparison, PrintRow, SceneReplay, Table14Row, Table16Comparison,
     Table16Row,
 };
-pub use reproduce::{Headline, Inputs, Reproduction, check, reproduce};
+pub use reproduce::{Headline, Inputs, Reproduction, check, check_file, reproduce};
 
 pub use scene::{
     Hypothesis, Residuals, SCENE_RANK_CUTOFF, SinglePrecisionEvidence, TransientCandidate, Verdict,

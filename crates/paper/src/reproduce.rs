@@ -185,6 +185,21 @@ pub fn reproduce(inputs: &Inputs, progress: impl FnMut(usize, usize)) -> Result<
 /// match the golden value within 1e-6 (absolute, mm or degrees) — the runs are deterministic, so any
 /// larger change is a change of the model. A key present in only one of the two is drift.
 pub fn check(g: &Value, measured: &Value) -> Vec<String> {
+    check_values(g, measured)
+}
+
+/// [`check`] against the golden JSON file at `path` (read from disk, or bundled).
+pub fn check_file(path: &std::path::Path, measured: &Value) -> Result<Vec<String>, crate::PaperError> {
+    let text = thermokin_io::read_text(path)?;
+    let golden: Value = serde_json::from_str(&text).map_err(|e| crate::PaperError::Fixture {
+        path: path.to_path_buf(),
+        line: e.line(),
+        message: format!("not the golden JSON: {e}"),
+    })?;
+    Ok(check_values(&golden, measured))
+}
+
+fn check_values(g: &Value, measured: &Value) -> Vec<String> {
     let mut drift = Vec::new();
     for case in ["static", "static_canonical", "transient"] {
         for key in ["max_position_error_mm", "max_orientation_error_deg"] {

@@ -4,6 +4,7 @@
 mod bad_inputs;
 mod citizen;
 mod cli;
+mod edges;
 mod page;
 mod plan;
 mod warmup_loop;

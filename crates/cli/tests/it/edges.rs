@@ -1,0 +1,155 @@
+//! The rough edges issue #50 found, each a clear sentence or a refusal now: a program in metres, a run
+//! that reaches nothing, a program type the extension does not tell, the exit statuses and every
+//! command's help.
+
+use crate::cli::{stderr, stdout, thermokin, tmp};
+
+/// The paper's 50 targets with their positions written in metres.
+fn targets_in_metres() -> std::path::PathBuf {
+    let text = std::fs::read_to_string(thermokin_testdata::workspace("fixtures/paper/table12-targets.csv")).unwrap();
+    let mut out = String::new();
+    let mut header = true;
+    for line in text.lines() {
+        if line.starts_with('#') || header {
+            header &= line.starts_with('#');
+            out.push_str(line);
+        } else {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            for c in cells.iter_mut().skip(1).take(3) {
+                *c = format!("{}", c.trim().parse::<f64>().unwrap() / 1000.0);
+            }
+            out.push_str(&cells.join(","));
+        }
+        out.push('\n');
+    }
+    let path = tmp("targets-in-metres.csv");
+    std::fs::write(&path, out).unwrap();
+    path
+}
+
+#[test]
+fn a_program_in_metres_gets_the_unit_hint_and_runs_when_the_unit_is_said() {
+    let targets = targets_in_metres();
+    let t = targets.display().to_string();
+    let out = tmp("metres-out.csv").display().to_string();
+    let base = ["--robot", "configs/irb140.toml", "--deformation", "fixtures/paper/deformations-case-study.toml"];
+    let mut args = vec!["compensate"];
+    args.extend(base);
+    args.extend(["--targets", &t, "--seed", "0,20,20,0,-45,0", "--out", &out]);
+    let o = thermokin(&args);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("look like metres") && stderr(&o).contains("--position-units m"), "{}", stderr(&o));
+    args.extend(["--position-units", "m"]);
+    let o = thermokin(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // ik --poses-file reads the same files the same way.
+    let o = thermokin(&["ik", "--robot", "configs/irb140.toml", "--poses-file", &t]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--position-units m"), "{}", stderr(&o));
+}
+
+#[test]
+fn a_run_that_reaches_nothing_says_so_instead_of_infinite_ranges() {
+    // Every target 10 m away: none is reachable.
+    let path = tmp("far-targets.csv");
+    let rows: Vec<String> = (1..=3).map(|k| format!("P{k},{},0,400,0,90,0", 10_000 + k)).collect();
+    std::fs::write(&path, format!(",X,Y,Z,RX,RY,RZ\n{}\n", rows.join("\n"))).unwrap();
+    let out = tmp("far-out.csv").display().to_string();
+    let p = path.display().to_string();
+    let o = thermokin(&[
+        "compensate",
+        "--robot",
+        "configs/irb140.toml",
+        "--deformation",
+        "fixtures/paper/deformations-case-study.toml",
+        "--targets",
+        &p,
+        "--out",
+        &out,
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("no target reached"), "{text}");
+    assert!(!text.contains("inf") && !text.contains("largest error"), "{text}");
+}
+
+#[test]
+fn a_program_type_the_extension_does_not_tell_is_refused_with_the_list() {
+    let out = tmp("prg-out.csv").display().to_string();
+    let prg = tmp("x.prg").display().to_string();
+    let o = thermokin(&[
+        "compensate",
+        "--robot",
+        "configs/irb140.toml",
+        "--deformation",
+        "fixtures/paper/deformations-case-study.toml",
+        "--targets",
+        "fixtures/paper/table12-targets.csv",
+        "--seed",
+        "0,20,20,0,-45,0",
+        "--out",
+        &out,
+        "--program",
+        &prg,
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    for known in [".mod", ".src", ".script", "--controller"] {
+        assert!(stderr(&o).contains(known), "{known}: {}", stderr(&o));
+    }
+    assert!(!std::path::Path::new(&prg).exists(), "nothing written");
+}
+
+#[test]
+fn the_help_lists_every_command_every_exit_status_and_an_example_each() {
+    let top = stdout(&thermokin(&["--help"]));
+    for command in ["fk", "ik", "compensate", "urdf", "diagnose", "plan", "simulate", "reproduce-paper"] {
+        assert!(top.lines().next().unwrap().contains(command), "the first line names {command}: {top}");
+        assert!(top.contains(&format!("  {command} ")), "{command} listed: {top}");
+    }
+    for status in ["  0  ", "  1  ", "  2  ", "  3  ", "  4  ", "  5  ", "  130  ", "  141  "] {
+        assert!(top.contains(status), "exit status {status} in the table: {top}");
+    }
+    let commands: [&[&str]; 9] = [
+        &["fk"],
+        &["ik"],
+        &["compensate"],
+        &["urdf", "import"],
+        &["urdf", "export"],
+        &["diagnose"],
+        &["plan"],
+        &["simulate"],
+        &["reproduce-paper"],
+    ];
+    for c in commands {
+        let mut args = c.to_vec();
+        args.push("--help");
+        let help = stdout(&thermokin(&args));
+        assert!(help.contains("Example"), "{c:?} --help has no example:\n{help}");
+        assert!(help.contains("  thermokin "), "{c:?} --help shows no command:\n{help}");
+    }
+    // simulate --help names every effect of the catalogue.
+    let simulate = stdout(&thermokin(&["simulate", "--help"]));
+    for name in thermokin_identify::EFFECT_NAMES {
+        assert!(simulate.contains(name), "simulate --help omits {name}");
+    }
+}
+
+/// Every numeric default of the command line comes from a library's `Default` or constant: none is typed
+/// into clap, where it could drift from what the libraries (and the Python front end) use.
+#[test]
+fn no_numeric_default_is_typed_into_clap() {
+    let src = thermokin_testdata::workspace("crates/cli/src");
+    for entry in std::fs::read_dir(src).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        for (k, line) in text.lines().enumerate() {
+            for key in ["default_value_t = ", "default_value = \""] {
+                if let Some(at) = line.find(key) {
+                    let value = &line[at + key.len()..];
+                    let numeric = value.trim_start_matches('-').starts_with(|c: char| c.is_ascii_digit());
+                    assert!(!numeric, "{}:{}: a number typed into clap: {}", path.display(), k + 1, line.trim());
+                }
+            }
+        }
+    }
+}
