@@ -21,12 +21,13 @@ mod stream;
 
 pub use export::{ResultsFormat, SummaryOut, write_joint_csv, write_long_csv, write_results_csv, write_results_json};
 pub use model_run::{
-    command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, solve_rows, state_or,
+    command_solution, commanded_on_model, compensate_model, compensate_model_cycle, solve_on_model, solve_rows,
+    state_or,
 };
 pub use plan::{Plan, PlanError, Request};
 pub use program::{
-    AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow, SolveOut,
-    arm_configuration, confdata, kuka_status, kuka_turn, motion_program, program_files, programs,
+    AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow,
+    SolveOut, arm_configuration, confdata, kuka_status, kuka_turn, motion_program, program_files, programs,
 };
 pub use run::{
     Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

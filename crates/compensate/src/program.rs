@@ -558,7 +558,8 @@ impl SolveOut {
 
 impl std::fmt::Display for SolveOut {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let list: Vec<String> = self.joints_deg.iter().map(|&d| format!("{:.6}", thermokin_io::units::rounded(d, 6))).collect();
+        let list: Vec<String> =
+            self.joints_deg.iter().map(|&d| format!("{:.6}", thermokin_io::units::rounded(d, 6))).collect();
         writeln!(f, "joints_deg   {}", list.join(","))?;
         writeln!(
             f,

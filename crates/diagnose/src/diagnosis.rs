@@ -145,20 +145,11 @@ fn run(
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
-        Some(h) => main.time(Phase::Holdout, || {
-            let always = config.setup().always_estimated(data);
-            let score = |e: &[thermokin_identify::Effect], lambda| transfer_score(&scorer, h, e, lambda, config);
-            let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
-            let (nominal, selected) = (score(&always, 0.0)?, score(&tables.effects, tables.shrinkage)?);
-            let stats = HoldoutStats {
-                nominal: nominal.refitted,
-                selected: selected.refitted,
-                refitted,
-                same_frame: HoldoutPair { nominal: nominal.same_frame, selected: selected.same_frame },
-            };
+        Some(h) => {
+            let stats = main.time(Phase::Holdout, || holdout_stats(&scorer, h, &tables, config))?;
             tell("hold-out set".into());
-            Ok::<_, DiagnoseError>(Some(stats))
-        })?,
+            Some(stats)
+        }
         None => None,
     };
     let report_started = std::time::Instant::now();
@@ -200,6 +191,28 @@ fn run(
         warnings: all_warnings,
         verdict,
         poses,
+    })
+}
+
+/// The model of `tables` fitted on all of the scorer's data and the nominal one, scored on `holdout` in
+/// both protocols. When the registration or the tool point is always estimated, the hold-out file may be
+/// in another tracker frame or carry another probe: those blocks (only) are refitted on it, the effects
+/// kept as fitted; and scored as fitted too (the training frame).
+fn holdout_stats(
+    scorer: &Scorer<'_>,
+    holdout: &Dataset,
+    tables: &crate::tables::Tables,
+    config: &Config,
+) -> Result<HoldoutStats, DiagnoseError> {
+    let always = config.setup().always_estimated(scorer.data);
+    let score = |e: &[thermokin_identify::Effect], lambda| transfer_score(scorer, holdout, e, lambda, config);
+    let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
+    let (nominal, selected) = (score(&always, 0.0)?, score(&tables.effects, tables.shrinkage)?);
+    Ok(HoldoutStats {
+        nominal: nominal.refitted,
+        selected: selected.refitted,
+        refitted,
+        same_frame: HoldoutPair { nominal: nominal.same_frame, selected: selected.same_frame },
     })
 }
 

@@ -28,7 +28,9 @@ pub use measurements::{
     read_configurations, read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with,
     settle_units, write_measurements,
 };
-pub use notation::{PoseOut, PoseRow, csv_cell, outside_limits, parse_list, parse_payload, parse_pose, parse_temperatures};
+pub use notation::{
+    PoseOut, PoseRow, csv_cell, outside_limits, parse_list, parse_payload, parse_pose, parse_temperatures,
+};
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{
     RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot, read_robot_model, read_robot_model_with,

@@ -231,7 +231,8 @@ pub fn outside_limits(chain: &thermokin_chain::Chain, q: &[f64]) -> Vec<String> 
     use crate::units::joints_to_external;
     let lower: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::NEG_INFINITY, |l| l.lower)).collect();
     let upper: Vec<f64> = chain.joints().iter().map(|j| j.limits.map_or(f64::INFINITY, |l| l.upper)).collect();
-    let (lo, hi, v) = (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
+    let (lo, hi, v) =
+        (joints_to_external(chain, &lower), joints_to_external(chain, &upper), joints_to_external(chain, q));
     let joints = chain.joints();
     chain
         .outside_limits(q)

@@ -307,29 +307,7 @@ impl Bars {
         };
         let mut out = String::new();
         open(&mut out, &self.title, height);
-        let xt = ticks(f.x0, f.x1, 5);
-        let xstep = if xt.len() > 1 { xt[1] - xt[0] } else { 1.0 };
-        let bottom = f.top + f.height;
-        let _ = write!(out, r#"<g class="ax">"#);
-        for v in &xt {
-            let px = f.px(*v);
-            let _ = write!(
-                out,
-                r#"<line class="grid" x1="{px:.1}" y1="{}" x2="{px:.1}" y2="{bottom}"/><text x="{px:.1}" y="{}" text-anchor="middle">{}</text>"#,
-                f.top,
-                bottom + 18.0,
-                tick_label(*v, xstep)
-            );
-        }
-        let _ = write!(
-            out,
-            r#"<line x1="{}" y1="{bottom}" x2="{}" y2="{bottom}"/><text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text></g>"#,
-            f.left,
-            f.left + f.width,
-            f.left + f.width / 2.0,
-            bottom + 40.0,
-            escape(&self.value_label)
-        );
+        value_axis(&mut out, &f, &self.value_label);
         for (g, group) in self.groups.iter().enumerate() {
             let y0 = f.top + group_height * g as f64 + 5.0;
             let _ = write!(
@@ -384,6 +362,33 @@ impl Bars {
         out.push_str("</svg>");
         out
     }
+}
+
+/// A bar chart's value axis: grid lines, tick labels below, the axis line and its label.
+fn value_axis(out: &mut String, f: &Frame, label: &str) {
+    let xt = ticks(f.x0, f.x1, 5);
+    let xstep = if xt.len() > 1 { xt[1] - xt[0] } else { 1.0 };
+    let bottom = f.top + f.height;
+    out.push_str(r#"<g class="ax">"#);
+    for v in &xt {
+        let px = f.px(*v);
+        let _ = write!(
+            out,
+            r#"<line class="grid" x1="{px:.1}" y1="{}" x2="{px:.1}" y2="{bottom}"/><text x="{px:.1}" y="{}" text-anchor="middle">{}</text>"#,
+            f.top,
+            bottom + 18.0,
+            tick_label(*v, xstep)
+        );
+    }
+    let _ = write!(
+        out,
+        r#"<line x1="{}" y1="{bottom}" x2="{}" y2="{bottom}"/><text x="{:.1}" y="{:.1}" text-anchor="middle">{}</text></g>"#,
+        f.left,
+        f.left + f.width,
+        f.left + f.width / 2.0,
+        bottom + 40.0,
+        escape(label)
+    );
 }
 
 /// `s`, cut to `n` characters with an ellipsis (the full text stays in the table beside the chart).

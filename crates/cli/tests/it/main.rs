@@ -5,6 +5,7 @@ mod bad_inputs;
 mod citizen;
 mod cli;
 mod edges;
+mod guide;
 mod page;
 mod plan;
 mod warmup_loop;
