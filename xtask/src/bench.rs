@@ -340,14 +340,23 @@ const REAL_RUNS: &[(&str, &[&str])] = &[
     ),
 ];
 
-/// What one command cost: CPU (user, system), wall, peak resident memory, and the figures of the JSON
-/// report it wrote.
-struct Cost {
-    user_s: f64,
-    system_s: f64,
-    wall_s: f64,
-    peak_mib: f64,
-    figures: String,
+/// What one command cost: CPU (user, system), wall, peak resident memory.
+pub(crate) struct Cost {
+    pub(crate) user_s: f64,
+    pub(crate) system_s: f64,
+    pub(crate) wall_s: f64,
+    pub(crate) peak_mib: f64,
+}
+
+/// The headline figures of a diagnosis' JSON report, in words.
+fn figures(report: &serde_json::Value) -> String {
+    let mean = |v: &serde_json::Value| v["heldout_mean_mm"].as_f64().map_or("–".into(), |x| format!("{x:.4}"));
+    format!(
+        "nested {}, hold-out {} refitted / {} same frame",
+        mean(&report["nested"]["selected"]),
+        mean(&report["holdout"]["selected"]),
+        mean(&report["holdout"]["same_frame"]["selected"])
+    )
 }
 
 /// Builds `commit`'s command line in a worktree under `target/baseline/` (once; reused after), and ours;
@@ -384,21 +393,24 @@ fn beside_baseline(commit: &str) -> Result<()> {
     for (name, args) in REAL_RUNS {
         let mut first: Option<f64> = None;
         for (who, bin) in &builds {
-            let c = measure(bin, args)?;
+            let (c, report) = measure(bin, args)?;
             let cpu = c.user_s + c.system_s;
             let ratio = first.map_or("–".to_string(), |b| format!("{:.2}", cpu / b));
             first.get_or_insert(cpu);
             println!(
                 "  {name:<14} {who:<10} {cpu:>8.2} {:>8.2} {:>8.1} {ratio:>9}  {}",
-                c.wall_s, c.peak_mib, c.figures
+                c.wall_s,
+                c.peak_mib,
+                figures(&report)
             );
         }
     }
     Ok(())
 }
 
-/// Runs `bin args` in a process of its own under `cargo xtask measure`, which reports its resource use.
-fn measure(bin: &Path, args: &[&str]) -> Result<Cost> {
+/// Runs `bin args --json FILE` in a process of its own under `cargo xtask measure`, which reports its
+/// resource use; returns it with the JSON report the command wrote.
+pub(crate) fn measure(bin: &Path, args: &[&str]) -> Result<(Cost, serde_json::Value)> {
     let json: PathBuf = std::env::temp_dir().join(format!("thermokin-bench-{}.json", std::process::id()));
     let me = std::env::current_exe()?;
     let out = Command::new(me)
@@ -417,21 +429,11 @@ fn measure(bin: &Path, args: &[&str]) -> Result<Cost> {
     let report: serde_json::Value =
         std::fs::read_to_string(&json).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let _ = std::fs::remove_file(&json);
-    let mean = |v: &serde_json::Value| v["heldout_mean_mm"].as_f64().map_or("–".into(), |x| format!("{x:.4}"));
-    let figures = format!(
-        "nested {}, hold-out {} refitted / {} same frame",
-        mean(&report["nested"]["selected"]),
-        mean(&report["holdout"]["selected"]),
-        mean(&report["holdout"]["same_frame"]["selected"])
-    );
     let f = |k: &str| v[k].as_f64().unwrap_or(f64::NAN);
-    Ok(Cost {
-        user_s: f("user_s"),
-        system_s: f("system_s"),
-        wall_s: f("wall_s"),
-        peak_mib: f("peak_kib") / 1024.0,
-        figures,
-    })
+    Ok((
+        Cost { user_s: f("user_s"), system_s: f("system_s"), wall_s: f("wall_s"), peak_mib: f("peak_kib") / 1024.0 },
+        report,
+    ))
 }
 
 /// `cargo xtask measure BIN ARGS…`: runs the command (its output discarded) and prints its resource use

@@ -7,6 +7,7 @@ use std::process::Command;
 use anyhow::{Context, Result, bail};
 
 mod bench;
+mod real_data;
 
 const HELP: &str = "\
 cargo xtask <task>
@@ -25,8 +26,11 @@ Tasks:
                               COMMIT's command line is built in a worktree under target/baseline/ and
                               both builds run the real sets one after the other: CPU, wall, peak memory
                               and figures side by side, with the CPU ratio.
-  measure BIN ARGS...         (used by bench --baseline) Run one command and print its CPU seconds, wall
-                              seconds and peak memory as JSON.
+  real-data                   Rerun every shared real set (UR10 C -> B, series A, WAM, Rokae) with the
+                              release build, in both protocols where there is a hold-out file, and write
+                              one table (figures, time, memory, processor, date) to docs/real-data.md.
+  measure BIN ARGS...         (used by bench --baseline and real-data) Run one command and print its CPU
+                              seconds, wall seconds and peak memory as JSON.
   deps                        Check that dependencies point one way (the core never depends on I/O,
                               the CLI or file formats).
   tidy                        Check the unit boundary: no literal unit conversion (/ 1000.0, * 1000.0,
@@ -49,6 +53,7 @@ fn main() -> Result<()> {
             bench::bench(args.iter().any(|a| a == "--json"), baseline.map(String::as_str))
         }
         Some("measure") => bench::measure_task(&args[1..]),
+        Some("real-data") => real_data::real_data(),
         Some("deps") => deps(),
         Some("tidy") => tidy(),
         Some("-h" | "--help") | None => {

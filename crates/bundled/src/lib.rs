@@ -1,5 +1,5 @@
 //! `thermokin-bundled`: the files the README's and the guide's commands name — the bundled robots, the
-//! paper's tables, the authors' files, the public URDFs, the real UR10 and WAM sets — built into the
+//! paper's tables, the authors' files, the public URDFs, the real UR10 (series B and C), WAM and Rokae sets — built into the
 //! binary that links this crate, so that an installed `thermokin` runs them from any directory. A front
 //! end hands [`FILES`] to `thermokin_io::bundle`: a relative path under `configs/` or `fixtures/` that
 //! does not exist on disk is then read from this copy in memory (nothing is unpacked, so no copy on disk
@@ -43,6 +43,9 @@ pub const FILES: &[(&str, &[u8])] = bundle![
     "fixtures/real/jacobi-wam/wam.urdf",
     "fixtures/real/jacobi-wam/wam-grid.csv",
     "fixtures/real/jacobi-wam/wam-random.csv",
+    "fixtures/real/rokae-robot-b/rokae.toml",
+    "fixtures/real/rokae-robot-b/joints-deg.csv",
+    "fixtures/real/rokae-robot-b/tracker-poses.csv",
 ];
 
 /// The bundled robots, by the paths the README gives them.

@@ -59,12 +59,7 @@ fn fk(a: FkArgs) -> Result<u8, Failure> {
 /// `fk --joints-file`: one output row per input row ([`PoseRow::of_file`]).
 fn fk_rows(path: &std::path::Path, model: &RobotModel, flags: &OperatingState, json: bool) -> Result<u8, Failure> {
     let rows = PoseRow::of_file(model, path, flags).map_err(Failure::input)?;
-    if !json {
-        say!("{}", PoseRow::CSV_HEADER);
-    }
-    for out in &rows {
-        if json { say!("{}", json!(out)) } else { say!("{}", out.csv()) }
-    }
+    crate::out::rows(&rows, json, PoseRow::CSV_HEADER, PoseRow::csv)?;
     Ok(if rows.iter().any(|r| r.error.is_some()) { exit::PARTIAL } else { exit::OK })
 }
 
@@ -73,10 +68,7 @@ fn ik(a: IkArgs) -> Result<u8, Failure> {
     let model = working_model(&a.robot, &loaded)?;
     // IK on the chain in force in this state; the joint corrections are inverted after (`commanded`).
     let chain = model.chain_at(&loaded.state).map_err(Failure::input)?;
-    let seed = match &a.seed {
-        Some(s) => joints(&chain, "seed", s)?,
-        None => vec![0.0; chain.dof()],
-    };
+    let seed = crate::input::seed(&chain, a.seed.as_deref())?;
     let params = Params { restarts: a.restarts, ..Params::default() };
     if let Some(path) = &a.poses_file {
         return ik_rows(path, a.position_units, &model, &loaded.state, &seed, &params, a.json);
@@ -120,13 +112,8 @@ fn ik_rows(
 ) -> Result<u8, Failure> {
     let read = crate::input::target_rows(path, units)?;
     let dof = model.robot().chain().dof();
-    if !json {
-        say!("{}", SolutionRow::csv_header(dof));
-    }
     let rows = thermokin_compensate::solve_rows(model, read.rows, flags, seed, params);
-    for out in &rows {
-        if json { say!("{}", json!(out)) } else { say!("{}", out.csv(dof)) }
-    }
+    crate::out::rows(&rows, json, &SolutionRow::csv_header(dof), |r| r.csv(dof))?;
     let failed = rows.iter().any(|r| r.status.as_deref() != Some("Converged"));
     Ok(if failed { exit::PARTIAL } else { exit::OK })
 }
@@ -172,21 +159,13 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
         UrdfCommand::Export { robot, out } => {
             let loaded = load(&robot)?;
             let model = working_model(&robot, &loaded)?;
-            // The geometry in force in the flags' state (a drifting robot at --time, --temperature); the
-            // robot's static geometry without one.
-            let chain = if loaded.state == OperatingState::default() {
-                model.robot().chain().clone()
-            } else {
-                model.chain_at(&loaded.state).map_err(Failure::input)?
-            };
-            let working = model.robot().with_chain(chain).map_err(Failure::input)?;
-            let beyond = model.beyond_urdf();
+            // The geometry in force in the flags' state (a drifting robot at --time, --temperature).
+            let (xml, beyond) = thermokin_io::urdf_in_state(&model, &loaded.state).map_err(Failure::input)?;
             for line in &beyond {
                 eprintln!("note: not in the URDF (kept in the TOML): {line}");
             }
-            let xml = thermokin_urdf::export_robot_noting(&working, &beyond);
             crate::out::save(&out, xml)?;
-            say!("{}: {} joints → {}", working.name(), working.chain().dof(), out.display());
+            say!("{}: {} joints → {}", model.robot().name(), model.robot().chain().dof(), out.display());
         }
     }
     Ok(exit::OK)

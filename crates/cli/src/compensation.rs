@@ -1,7 +1,7 @@
 //! `thermokin compensate`: which run a request is (the library's `Plan`), the run with its progress, and
 //! its outputs — results, joints, robot programs, plots — each written atomically.
 
-use anyhow::{Context, anyhow};
+use anyhow::anyhow;
 use thermokin_chain::Chain;
 use thermokin_compensate::{
     AbbTargets, Cycle, Plan, PlanError, ProgramSettings, Request, RunOutput, RunSettings, StreamSettings, Summary,
@@ -13,7 +13,7 @@ use thermokin_io::{TargetReader, write_atomic_with};
 use std::path::{Path, PathBuf};
 
 use crate::args::CompensateArgs;
-use crate::input::{joints, load, program, program_controller, progress_bar, warn_ignored};
+use crate::input::{load, program, program_controller, progress_bar, warn_ignored};
 use crate::{Failure, exit};
 
 /// The summary on standard output, as text or JSON.
@@ -74,15 +74,7 @@ fn plan_error(a: &CompensateArgs, e: thermokin_compensate::CompensateError) -> F
         PlanError::IncrementsNeedTransient => {
             anyhow!("--accumulate increments needs a transient run: give --profile (e.g. linear-grow:180)")
         }
-        PlanError::IncrementsOnCalibrated => {
-            anyhow!("--accumulate increments replays the authors' CoppeliaSim updates on a plain robot's table")
-        }
-        PlanError::SemanticsOnCalibrated => anyhow!(
-            "--semantics coppeliasim applies to a plain robot's table; a calibrated robot's rows drift canonically"
-        ),
-        PlanError::TemperatureLogOnCalibrated => anyhow!(
-            "a temperature-log profile cannot be combined with a calibrated robot: give the targets' temp_* columns instead"
-        ),
+        // The library's own words name the setting plainly (accumulation, semantics, a temperature log).
         other => anyhow!("{other}"),
     })
 }
@@ -94,10 +86,7 @@ fn run_settings(
     semantics: thermokin_deform::TableSemantics,
     chain: &Chain,
 ) -> Result<RunSettings, Failure> {
-    let start = match &a.seed {
-        Some(s) => joints(chain, "seed", s)?,
-        None => vec![0.0; chain.dof()],
-    };
+    let start = crate::input::seed(chain, a.seed.as_deref())?;
     Ok(RunSettings { semantics, accumulation: a.accumulate, ik: Params::default(), start })
 }
 
@@ -166,18 +155,9 @@ fn write_outputs(a: &CompensateArgs, loaded: &thermokin_io::LoadedRobot, run: &R
         }
     }
     if let Some(dir) = &a.plot {
-        std::fs::create_dir_all(dir)
-            .with_context(|| format!("creating {}", dir.display()))
-            .map_err(Failure::internal)?;
-        if run.timed {
-            let svg = thermokin_plot::deviation_vs_time(run).map_err(Failure::internal)?;
-            crate::out::save(&dir.join("deviation-vs-time.svg"), svg)?;
-        }
-        if let Some(table) = &loaded.table {
-            let deformed = table.apply(loaded.robot.chain(), &loaded.semantics).map_err(Failure::input)?;
-            let svg = thermokin_plot::structure(loaded.robot.chain(), &deformed, 20.0).map_err(Failure::internal)?;
-            crate::out::save(&dir.join("structure.svg"), svg)?;
-        }
+        let deformed = loaded.table.as_ref().map(|t| t.apply(loaded.robot.chain(), &loaded.semantics)).transpose();
+        let deformed = deformed.map_err(Failure::input)?;
+        crate::out::save_plots(dir, thermokin_plot::run_plots(run, loaded.robot.chain(), deformed.as_ref()))?;
     }
     Ok(())
 }

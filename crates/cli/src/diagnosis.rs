@@ -172,11 +172,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         crate::out::save(p, text)?;
     }
     if let Some(dir) = &a.plot {
-        std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
-        let residuals = thermokin_plot::residuals(&report).map_err(Failure::internal)?;
-        crate::out::save(&dir.join("residuals.svg"), residuals)?;
-        let additive = thermokin_plot::heldout_per_effect(&report).map_err(Failure::internal)?;
-        crate::out::save(&dir.join("heldout-per-effect.svg"), additive)?;
+        crate::out::save_plots(dir, thermokin_plot::diagnosis_plots(&report))?;
     }
     if let Some(p) = &a.export {
         if let Err(e) = report.check_export(a.force_export) {

@@ -82,6 +82,11 @@ pub fn joints(chain: &Chain, flag: &str, text: &str) -> Result<Vec<f64>, Failure
     })
 }
 
+/// `--seed` (degrees, mm for prismatic joints) in radians and mm; all zero when not given.
+pub fn seed(chain: &Chain, text: Option<&str>) -> Result<Vec<f64>, Failure> {
+    text.map_or_else(|| Ok(vec![0.0; chain.dof()]), |s| joints(chain, "seed", s))
+}
+
 /// A pose flag ([`thermokin_io::parse_pose`]): `x,y,z` (mm) and orientation in `convention`, or JSON.
 pub fn pose(text: &str, flag: &str, convention: Orientation) -> Result<Isometry3<f64>, Failure> {
     thermokin_io::parse_pose(text, convention).map_err(|m| Failure::input(anyhow!("--{flag}: {m}")))
@@ -162,18 +167,11 @@ impl DelayedBar {
     }
 }
 
-/// The controller language of a `--program` file: `--controller` when given, else its extension's.
+/// The controller language of a `--program` file ([`thermokin_compensate::Controller::for_file`]).
 pub fn program_controller(
     path: &Path,
     flag: Option<thermokin_compensate::Controller>,
 ) -> Result<thermokin_compensate::Controller, Failure> {
-    let by_extension =
-        path.extension().and_then(|e| e.to_str()).and_then(thermokin_compensate::Controller::from_extension);
-    flag.or(by_extension).ok_or_else(|| {
-        let known = thermokin_compensate::Controller::EXTENSIONS;
-        Failure::input(anyhow!(
-            "--program {}: unknown program type; name it {known}, or say --controller abb, kuka or ur",
-            path.display()
-        ))
-    })
+    thermokin_compensate::Controller::for_file(path, flag)
+        .map_err(|e| Failure::input(anyhow!("--program {e}, or say --controller abb, kuka or ur")))
 }

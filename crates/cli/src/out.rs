@@ -30,3 +30,32 @@ pub fn save_with(
 ) -> Result<(), Failure> {
     thermokin_io::write_atomic_with(path, fill).map_err(Failure::internal)
 }
+
+/// Writes each plot into `dir` (created when missing), atomically.
+pub fn save_plots(
+    dir: &std::path::Path,
+    plots: Result<thermokin_plot::Plots, thermokin_plot::PlotError>,
+) -> Result<(), Failure> {
+    std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow::anyhow!("{}: {e}", dir.display())))?;
+    for (name, svg) in plots.map_err(Failure::internal)? {
+        save(&dir.join(name), svg)?;
+    }
+    Ok(())
+}
+
+/// Prints `rows` on standard output: as CSV under `header`, or as one JSON object per line.
+pub fn rows<T: serde::Serialize>(
+    rows: &[T],
+    json: bool,
+    header: &str,
+    csv: impl Fn(&T) -> String,
+) -> Result<(), Failure> {
+    if !json {
+        line(format_args!("{header}"))?;
+    }
+    for row in rows {
+        let text = if json { serde_json::to_string(row).map_err(Failure::internal)? } else { csv(row) };
+        line(format_args!("{text}"))?;
+    }
+    Ok(())
+}

@@ -2,7 +2,7 @@
 
 use anyhow::anyhow;
 use thermokin_chain::Robot;
-use thermokin_compensate::{Motion, ProgramSettings, motion_program};
+use thermokin_compensate::poses_program;
 use thermokin_identify::Effect;
 use thermokin_io::read_configurations;
 use thermokin_planner::{Candidates, Params, WorkspaceBox};
@@ -29,13 +29,8 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         }
         None => {
             let corners = a.workspace.as_deref().map(|s| parse_list("box", s)).transpose().map_err(Failure::input)?;
-            let workspace = match corners.as_deref() {
-                Some([x0, y0, z0, x1, y1, z1]) => {
-                    Some(WorkspaceBox::new([*x0, *y0, *z0].into(), [*x1, *y1, *z1].into()).map_err(Failure::input)?)
-                }
-                Some(_) => return Err(Failure::input(anyhow!("--box takes six numbers: X0,Y0,Z0,X1,Y1,Z1 (mm)"))),
-                None => None,
-            };
+            let workspace = corners.map(|c| WorkspaceBox::from_corners(&c)).transpose();
+            let workspace = workspace.map_err(|e| Failure::input(anyhow!("--{e}")))?;
             Candidates::sampled(&robot, a.samples, a.seed, workspace.as_ref()).map_err(Failure::input)?
         }
     };
@@ -59,14 +54,10 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
     say!("{}", plan.text().trim_end());
     crate::out::save_with(&a.out, |w| plan.write_csv(w))?;
     if let Some(path) = &a.program {
+        let header = format!("thermokin plan: {} poses to measure, in this order", plan.poses.len());
+        let poses: Vec<&[f64]> = plan.poses.iter().map(|p| p.joints_rad.as_slice()).collect();
         let controller = program_controller(path, a.controller)?;
-        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plan").to_string();
-        let labels: Vec<String> = (1..=plan.poses.len()).map(|k| format!("pose_{k}")).collect();
-        let motions: Vec<Motion<'_>> =
-            plan.poses.iter().zip(&labels).map(|(p, l)| Motion { label: l, joints: Ok(&p.joints_rad) }).collect();
-        let header = format!("thermokin plan: {} poses to measure, in this order", motions.len());
-        let settings = ProgramSettings { name, ..ProgramSettings::new(controller) };
-        let text = motion_program(&header, &motions, robot.chain(), &settings).map_err(Failure::input)?;
+        let text = poses_program(path, &header, &poses, robot.chain(), controller).map_err(Failure::input)?;
         crate::out::save(path, text)?;
     }
     if let Some(p) = &a.json {

@@ -3,7 +3,6 @@
 
 use std::time::Instant;
 
-use anyhow::anyhow;
 use thermokin_paper::{Inputs, check_file, reproduce};
 
 use crate::args::ReproduceArgs;
@@ -30,11 +29,13 @@ pub fn run(a: ReproduceArgs) -> Result<u8, Failure> {
     bar.finish();
 
     if let Some(dir) = &a.plot {
-        std::fs::create_dir_all(dir).map_err(|e| Failure::internal(anyhow!("{}: {e}", dir.display())))?;
-        let deviation = thermokin_plot::deviation_vs_time(&r.transient_run).map_err(Failure::internal)?;
-        crate::out::save(&dir.join("transient-deviation.svg"), deviation)?;
-        let structure = thermokin_plot::structure(&r.scene, &r.deformed, 10.0).map_err(Failure::internal)?;
-        crate::out::save(&dir.join("figure15-structure.svg"), structure)?;
+        let plots = thermokin_plot::deviation_vs_time(&r.transient_run).and_then(|deviation| {
+            Ok(vec![
+                ("transient-deviation.svg", deviation),
+                ("figure15-structure.svg", thermokin_plot::structure(&r.scene, &r.deformed, 10.0)?),
+            ])
+        });
+        crate::out::save_plots(dir, plots)?;
     }
     if let Some(p) = &a.report {
         crate::out::save(p, r.report)?;

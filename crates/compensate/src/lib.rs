@@ -27,7 +27,8 @@ pub use model_run::{
 pub use plan::{Plan, PlanError, Request};
 pub use program::{
     AbbTargets, ArmConfiguration, BranchOut, Controller, Motion, Program, ProgramError, ProgramSettings, SolutionRow,
-    SolveOut, arm_configuration, confdata, kuka_status, kuka_turn, motion_program, program_files, programs,
+    SolveOut, arm_configuration, confdata, kuka_status, kuka_turn, motion_program, poses_program, program_files,
+    programs,
 };
 pub use run::{
     Accumulation, Axes, Cycle, RunOutput, RunSettings, Summary, TargetResult, compensate_static, compensate_transient,

@@ -52,6 +52,20 @@ impl Controller {
         }
     }
 
+    /// The controller of a program written to `path`: `given` when there is one, else the one its
+    /// extension names ([`Controller::from_extension`]).
+    ///
+    /// ```
+    /// use thermokin_compensate::Controller;
+    /// let path = std::path::Path::new("warmup.SRC");
+    /// assert_eq!(Controller::for_file(path, None).unwrap(), Controller::Kuka);
+    /// assert!(Controller::for_file(std::path::Path::new("x.prg"), None).is_err());
+    /// ```
+    pub fn for_file(path: &std::path::Path, given: Option<Self>) -> Result<Self, ProgramError> {
+        let by_extension = path.extension().and_then(|e| e.to_str()).and_then(Controller::from_extension);
+        given.or(by_extension).ok_or_else(|| ProgramError::UnknownExtension { path: path.display().to_string() })
+    }
+
     /// The file extension programs of this controller use.
     pub fn extension(self) -> &'static str {
         match self {
@@ -143,6 +157,12 @@ pub enum ProgramError {
     /// that is what `confdata`'s definition assumes.
     #[error("robtargets need a six-joint robot with a spherical wrist (joint axes 4, 5, 6 meeting at one point)")]
     NotSphericalWrist,
+    /// A program file whose extension names no controller, and no controller given.
+    #[error("{path}: unknown program type; name it {known}", known = Controller::EXTENSIONS)]
+    UnknownExtension {
+        /// The file as given.
+        path: String,
+    },
 }
 
 /// The program files of a run written to `path` — one, or one per time step of a transient run, named
@@ -226,6 +246,23 @@ pub fn motion_program(
         check_spherical_wrist(nominal)?;
     }
     Ok(program_text(&settings.name, header, motions, nominal, settings))
+}
+
+/// A program for `controller` that visits `poses` (joint values, radians and mm) in order, each labelled
+/// `pose_<k>` from 1, named after `path`'s stem, with `header` as its first comment: a measurement plan
+/// as the robot runs it.
+pub fn poses_program(
+    path: &std::path::Path,
+    header: &str,
+    poses: &[&[f64]],
+    nominal: &Chain,
+    controller: Controller,
+) -> Result<String, ProgramError> {
+    let labels: Vec<String> = (1..=poses.len()).map(|k| format!("pose_{k}")).collect();
+    let motions: Vec<Motion<'_>> =
+        poses.iter().zip(&labels).map(|(q, label)| Motion { label, joints: Ok(q) }).collect();
+    let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("plan").to_string();
+    motion_program(header, &motions, nominal, &ProgramSettings { name, ..ProgramSettings::new(controller) })
 }
 
 /// The text of one program in the controller's language.

@@ -693,6 +693,23 @@ pub fn robot_file_text(model: &RobotModel, path: &Path) -> (String, Vec<String>)
     }
 }
 
+/// The robot as URDF with the geometry in force at `state` (a drifting robot at its time and sensor
+/// readings; the static geometry in the default state), and what URDF cannot hold — named in the file's
+/// header, and returned.
+pub fn urdf_in_state(
+    model: &RobotModel,
+    state: &thermokin_chain::OperatingState,
+) -> Result<(String, Vec<String>), thermokin_deform::DeformError> {
+    let chain = if *state == thermokin_chain::OperatingState::default() {
+        model.robot().chain().clone()
+    } else {
+        model.chain_at(state)?
+    };
+    let working = model.robot().with_chain(chain)?;
+    let beyond = model.beyond_urdf();
+    Ok((thermokin_urdf::export_robot_noting(&working, &beyond), beyond))
+}
+
 /// The robot with every correction it carries as TOML (what [`read_robot_model`] reads back): per joint
 /// `scale`, `cyclic_deg`, `compliance_deg_per_nm` beside the geometry; `gravity`, `[payload]` and one
 /// `[[drift]]` table per drifting row with its law. Millimetres and degrees, numbers rounded to 1e-12.

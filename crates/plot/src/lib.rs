@@ -7,6 +7,32 @@ mod diagnosis;
 pub use compensation::{deviation_vs_time, structure};
 pub use diagnosis::{heldout_per_effect, residuals};
 
+/// A set of plots as a front end writes them: each file's name and its SVG.
+pub type Plots = Vec<(&'static str, String)>;
+
+/// A diagnosis' plots: `residuals.svg` ([`residuals`]) and `heldout-per-effect.svg`
+/// ([`heldout_per_effect`]).
+pub fn diagnosis_plots(report: &thermokin_diagnose::Report) -> Result<Plots, PlotError> {
+    Ok(vec![("residuals.svg", residuals(report)?), ("heldout-per-effect.svg", heldout_per_effect(report)?)])
+}
+
+/// A compensation run's plots: `deviation-vs-time.svg` for a run over time ([`deviation_vs_time`]), and
+/// `structure.svg` where a table deformed the robot ([`structure`], the deformation magnified 20 times).
+pub fn run_plots(
+    run: &thermokin_compensate::RunOutput,
+    nominal: &thermokin_chain::Chain,
+    deformed: Option<&thermokin_chain::Chain>,
+) -> Result<Plots, PlotError> {
+    let mut plots = Vec::new();
+    if run.timed {
+        plots.push(("deviation-vs-time.svg", deviation_vs_time(run)?));
+    }
+    if let Some(deformed) = deformed {
+        plots.push(("structure.svg", structure(nominal, deformed, 20.0)?));
+    }
+    Ok(plots)
+}
+
 /// A plot that could not be drawn.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum PlotError {

@@ -8,4 +8,5 @@ mod edges;
 mod guide;
 mod page;
 mod plan;
+mod real_data;
 mod warmup_loop;
