@@ -157,19 +157,21 @@ fn run(
     let mut all_warnings: Vec<String> = not_shown(&tables, nested.as_ref()).into_iter().collect();
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
-    if let Some(g) = &screened.screen.gathered {
-        all_warnings.push(format!(
-            "{} of the {} measurements flagged as gross errors lie in one neighbourhood of arm configurations ({} poses there; independent gross errors gather so with a chance of {:.1e}): a systematic error there is likelier than gross errors — see the list below, and rerun with `--outliers keep` to let the diagnosis see it",
-            g.flagged, g.flagged_total, g.poses, g.chance
-        ));
-    }
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
+    let mut screen = screened.screen;
+    for c in &mut screen.clusters {
+        // The block's poses as the chosen model leaves them (they are in its data: kept).
+        let after = c.measurements.iter().filter_map(|&m| screened.kept.binary_search(&(m - 1)).ok());
+        let (lo, hi) = crate::stats::span(after.map(|k| nalgebra::Vector3::from(poses[k].after_mm).norm()));
+        c.after_mm = (lo <= hi).then_some([lo, hi]);
+        all_warnings.push(c.sentence(screen.threshold_mm));
+    }
     main.add(Phase::Report, report_started.elapsed().as_secs_f64());
     Ok(Report {
         outliers: screened.outliers,
-        outlier_screen: screened.screen,
+        outlier_screen: screen,
         nominal: tables.nominal,
         nested,
         holdout,

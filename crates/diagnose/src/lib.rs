@@ -12,6 +12,7 @@
 //! ([`Report::text`]).
 
 mod backward;
+mod clusters;
 mod completion;
 mod config;
 mod diagnosis;
@@ -48,9 +49,9 @@ pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};
 pub use profile::{Phase, PhaseCost, Profile};
 pub use render::ReportText;
 pub use report::{
-    Breakdown, EffectReport, FittedFrames, Gathered, HoldoutPair, HoldoutStats, Identifiability, Nested, OuterFold,
-    Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report, ScaleSource,
-    ScreenModel, Skipped, TableRow,
+    Along, Breakdown, Cluster, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested,
+    OuterFold, Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report,
+    ScaleSource, ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::Stats;

@@ -33,18 +33,17 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use thermokin_chain::{Dataset, Robot, units};
+use thermokin_chain::{Dataset, Robot};
 use thermokin_identify::{
     DriftShape, Effect, JointIndex, Model, PoseTerms, Prior, Start, fit_from, identifiable, initial_frames,
     max_gravity_torques, norms, residuals, residuals_and_jacobian,
 };
 
+use crate::clusters::blocks;
 use crate::config::{Config, Outliers};
 use crate::error::DiagnoseError;
-use crate::folds::configuration_clusters;
-use crate::report::{Gathered, Outlier, OutlierScreen, ScaleSource, ScreenModel};
+use crate::report::{Outlier, OutlierScreen, ScaleSource, ScreenModel};
 use crate::scoring::prior;
-use crate::stats::span;
 
 /// The chance that a clean set with Gaussian residuals gets one false flag, whatever its size.
 pub const FALSE_ALARM: f64 = 0.01;
@@ -114,88 +113,23 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     }
     let (scale_mm, scale_from, raw) = last;
     let threshold_mm = threshold_sigmas * scale_mm;
-    let outliers = (0..data.len())
-        .filter(|&i| kept.binary_search(&i).is_err())
-        .map(|i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] })
-        .collect();
+    // Flags that gather are a systematic effect, not gross errors: their poses are kept.
+    let flagged: Vec<usize> = (0..data.len()).filter(|&i| kept.binary_search(&i).is_err()).collect();
+    let (clusters, isolated) = blocks(robot, data, &flagged, &raw, config);
+    let kept: Vec<usize> = (0..data.len()).filter(|i| isolated.binary_search(i).is_err()).collect();
+    let outliers =
+        isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
     let screen = OutlierScreen {
         model: which,
+        with_compliance: effects.iter().any(|e| matches!(e, Effect::JointCompliance(_))),
         scale_mm,
         scale_from,
         threshold_mm,
         excluded: config.outliers == Outliers::Exclude,
-        gathered: gathered(robot, data, &kept, config),
+        clusters,
     };
     let kept = if config.outliers == Outliers::Exclude { kept } else { all };
     Ok(Screened { kept, outliers, screen })
-}
-
-/// Blocks of neighbouring configurations the gathering test compares: as many as the neighbourhood folds
-/// use (four per fold), at least ten poses each.
-fn gathering_blocks(poses: usize, folds: usize) -> usize {
-    (4 * folds).min(poses / 10).max(1)
-}
-
-/// The flagged measurements (those not `kept`) gathered in one block of neighbouring configurations
-/// beyond what independent gross errors do ([`Gathered`]).
-fn gathered(robot: &Robot, data: &Dataset, kept: &[usize], config: &Config) -> Option<Gathered> {
-    let total = data.len();
-    let flagged_total = total - kept.len();
-    let count = gathering_blocks(total, config.folds);
-    if flagged_total < 2 || count < 2 {
-        return None;
-    }
-    let blocks = configuration_clusters(data, count, config.seed);
-    let p = flagged_total as f64 / total as f64;
-    let (block, chance) = (0..count)
-        .map(|b| {
-            let members = blocks.iter().filter(|&&c| c == b).count();
-            let flagged = (0..total).filter(|&i| blocks[i] == b && kept.binary_search(&i).is_err()).count();
-            (b, (members, flagged), binomial_upper_tail(members, flagged, p))
-        })
-        .min_by(|a, b| a.2.total_cmp(&b.2))
-        .map(|(b, counts, tail)| ((b, counts), (tail * count as f64).min(1.0)))?;
-    let (b, (poses, flagged)) = block;
-    if chance >= FALSE_ALARM {
-        return None;
-    }
-    let joint_ranges = (0..robot.chain().dof())
-        .map(|j| {
-            let kind = robot.chain().joints()[j].kind;
-            let values =
-                (0..total).filter(|&i| blocks[i] == b).map(|i| units::joint_value_out(kind, data.measurements[i].q[j]));
-            let (lo, hi) = span(values);
-            [lo, hi]
-        })
-        .collect();
-    Some(Gathered { flagged, poses, flagged_total, total, chance, joint_ranges })
-}
-
-/// `P(X ≥ k)` for `X ~ Binomial(n, p)`, summed in logarithms (`n` up to a week of poses).
-fn binomial_upper_tail(n: usize, k: usize, p: f64) -> f64 {
-    if k == 0 {
-        return 1.0;
-    }
-    if p <= 0.0 {
-        return 0.0;
-    }
-    if p >= 1.0 {
-        return 1.0;
-    }
-    // ln m! for m = 0..=n, once: the sum is then linear in n.
-    let ln_factorial: Vec<f64> = std::iter::once(0.0)
-        .chain((1..=n).scan(0.0, |acc, i| {
-            *acc += (i as f64).ln();
-            Some(*acc)
-        }))
-        .collect();
-    (k..=n)
-        .map(|i| {
-            let ln_choose = ln_factorial[n] - ln_factorial[i] - ln_factorial[n - i];
-            (ln_choose + i as f64 * p.ln() + (n - i) as f64 * (1.0 - p).ln()).exp()
-        })
-        .sum::<f64>()
-        .min(1.0)
 }
 
 /// The screening model's effects for this robot and these data: the always-estimated blocks, every

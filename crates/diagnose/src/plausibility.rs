@@ -29,8 +29,8 @@ pub(crate) struct RobotScale {
     pub(crate) reach: Vec<f64>,
     /// Per joint, whether it turns (its offsets and motions are angles) rather than slides.
     pub(crate) revolute: Vec<bool>,
-    /// The smallest gap between successive distinct measurement times, minutes (`None` without time).
-    pub(crate) time_spacing_min: Option<f64>,
+    /// The measurement times, minutes, sorted (empty without time).
+    pub(crate) times_min: Vec<f64>,
 }
 
 impl RobotScale {
@@ -49,10 +49,11 @@ impl RobotScale {
                 axis_lever_mm[j] = axis_lever_mm[j].max(arm.cross(&axis).norm());
             }
         }
-        let mut times: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
-        times.sort_by(f64::total_cmp);
-        times.dedup();
-        let time_spacing_min = times.windows(2).map(|w| w[1] - w[0]).filter(|d| *d > 0.0).reduce(f64::min);
+        let mut times_min: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
+        times_min.sort_by(f64::total_cmp);
+        if times_min.first() == times_min.last() {
+            times_min.clear();
+        }
         let reach = (0..dof).map(|j| data.measurements.iter().map(|m| m.q[j].abs()).fold(0.0, f64::max)).collect();
         Self {
             extent_mm: lever_mm.first().copied().unwrap_or(0.0),
@@ -61,7 +62,7 @@ impl RobotScale {
             max_torque_nm: max_gravity_torques(robot),
             lever_mm,
             axis_lever_mm,
-            time_spacing_min,
+            times_min,
         }
     }
 }
@@ -75,8 +76,10 @@ pub(crate) enum Implausible {
     /// A compliance of the wrong sign: the joint would rise under its load (by `deflection_deg` at its
     /// largest gravity torque).
     Rising { k_deg_per_nm: f64, deflection_deg: f64 },
-    /// An exponential drift whose time constant is shorter than the measurements' spacing.
-    Instant { tau_min: f64, spacing_min: f64 },
+    /// An exponential drift over before all but `during` of the poses (those measured within three time
+    /// constants of the cold start, where it is below 95 % of its end): fewer than its parameters, so
+    /// that the data cannot tell its time law from a static deviation.
+    Instant { tau_min: f64, during: usize },
     /// A gear-ratio or cyclic error whose slope (joint-value change per unit of joint motion) is beyond
     /// what a robot file's joint correction may have.
     Steep { slope: f64 },
@@ -116,8 +119,9 @@ impl Implausible {
                 100.0 * slope,
                 100.0 * MAX_CORRECTION_SLOPE
             ),
-            Implausible::Instant { tau_min, spacing_min } => format!(
-                "its time constant fitted at {tau_min:.3} min{every}, shorter than the measurements' spacing ({spacing_min:.3} min): a drift over before the next measurement is a static deviation"
+            Implausible::Instant { tau_min, during } => format!(
+                "its time constant fitted at {tau_min:.3} min{every}: the drift is over (95 % of it) after {:.3} min, before all but {during} of the poses — indistinguishable from a static deviation in these data",
+                3.0 * tau_min
             ),
         }
     }
@@ -126,19 +130,23 @@ impl Implausible {
     pub(crate) fn refusal(&self, effect: Effect, judged: Judged) -> Refusal {
         let remedy = match self {
             Implausible::Beyond { .. } => {
-                "a value this large trades with another block or chases a few poses; if the robot truly deviates so much, raise the plausibility bound"
+                "a value this large trades with another block or chases a few poses; if the robot truly deviates so much, raise the plausibility bound".into()
             }
             Implausible::Rising { .. } => {
-                "no gravity compliance is seen here: what moves with the load is another effect"
+                "no gravity compliance is seen here: what moves with the load is another effect".into()
             }
-            Implausible::Instant { .. } => {
-                "the static effects explain it; measure more often early in the warm-up to see a fast drift"
-            }
+            Implausible::Instant { .. } => match effect.joint() {
+                Some(j) => format!(
+                    "the static row explains it: link_deviation[{n}] (or joint_offset[{n}]); measure more often early in the warm-up to see a fast drift",
+                    n = j.number()
+                ),
+                None => "a static deviation explains it; measure more often early in the warm-up to see a fast drift".into(),
+            },
             Implausible::Steep { .. } => {
-                "the joint barely moves the measured point (typically a tool point near its axis): measure with a tool offset from the axis to see its errors"
+                "the joint barely moves the measured point (typically a tool point near its axis): measure with a tool offset from the axis to see its errors".into()
             }
         };
-        Refusal { effect: effect.label(), reason: self.reason(judged), remedy: remedy.into() }
+        Refusal { effect: effect.label(), reason: self.reason(judged), remedy }
     }
 }
 
@@ -167,10 +175,11 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
     let deg = units::degrees;
     match effect {
         Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => {
-            if let (Effect::ThermalDrift(_, DriftShape::Exponential), Some(spacing)) = (effect, scale.time_spacing_min)
-                && v[6] < spacing
-            {
-                return Some(Implausible::Instant { tau_min: v[6], spacing_min: spacing });
+            if effect == Effect::ThermalDrift(j, DriftShape::Exponential) && !scale.times_min.is_empty() {
+                let during = scale.times_min.partition_point(|&t| t < 3.0 * v[6]);
+                if during < effect.len() {
+                    return Some(Implausible::Instant { tau_min: v[6], during });
+                }
             }
             let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
             let r = v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -257,7 +266,7 @@ mod tests {
             max_torque_nm: vec![0.0; 6],
             reach: vec![std::f64::consts::PI; 6],
             revolute: vec![true; 6],
-            time_spacing_min: None,
+            times_min: Vec::new(),
         };
         let j6 = JointIndex::of(&robot, 5).unwrap();
         let p = Plausibility::default();
@@ -271,5 +280,33 @@ mod tests {
         // A real gear-ratio error (1e-3) is a correction.
         assert_eq!(implausible(&scale, &[1e-3], Effect::JointScale(j6), &p), None);
         assert_eq!(implausible(&scale, &[0.02, 0.0, 0.0, 0.01], Effect::Periodic(j6), &p), None);
+    }
+
+    /// An exponential drift with τ = 0.1 min in a three-hour session whose poses came at irregular times
+    /// (two of them a thousandth of a minute apart): over after 0.3 min, before all but one pose — a
+    /// static row, whatever the smallest gap between two poses. A drift of τ = 30 min, under way for the
+    /// first 90 minutes' poses, is a drift.
+    #[test]
+    fn a_drift_over_before_all_but_a_pose_is_static_however_close_two_poses_came() {
+        let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
+        let mut times: Vec<f64> = (0..300).map(|i| 0.6 * i as f64).collect();
+        times[101] = times[100] + 0.001;
+        let scale = RobotScale {
+            extent_mm: 1000.0,
+            lever_mm: vec![1000.0; 6],
+            axis_lever_mm: vec![1000.0; 6],
+            max_torque_nm: vec![0.0; 6],
+            reach: vec![std::f64::consts::PI; 6],
+            revolute: vec![true; 6],
+            times_min: times,
+        };
+        let drift =
+            Effect::ThermalDrift(JointIndex::of(&robot, 2).unwrap(), thermokin_identify::DriftShape::Exponential);
+        let p = Plausibility::default();
+        let fast = implausible(&scale, &[0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1], drift, &p);
+        assert_eq!(fast, Some(Implausible::Instant { tau_min: 0.1, during: 1 }));
+        let refusal = fast.unwrap().refusal(drift, super::Judged::Fitted);
+        assert!(refusal.remedy.contains("link_deviation[3]"), "{}", refusal.remedy);
+        assert_eq!(implausible(&scale, &[0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 30.0], drift, &p), None);
     }
 }

@@ -48,10 +48,15 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 /// The screen for gross errors: what it judged against, and every flagged measurement by its line.
 fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let s = &r.outlier_screen;
+    let geometry = if s.with_compliance {
+        "the full geometry with gravity compliance"
+    } else {
+        "the full geometry (no gravity compliance: the robot file's masses load no joint)"
+    };
     let model = match s.model {
-        ScreenModel::FullGeometry => "the full geometry with gravity compliance".to_string(),
+        ScreenModel::FullGeometry => geometry.to_string(),
         ScreenModel::ShrunkGeometry { effective_parameters, prior_rows } => format!(
-            "the full geometry with gravity compliance, shrunk toward the nominal robot to {effective_parameters:.1} effective parameters (a prior worth {prior_rows:.2} rows of data per parameter: too few poses for it unshrunk)"
+            "{geometry}, shrunk toward the nominal robot to {effective_parameters:.1} effective parameters (a prior worth {prior_rows:.2} rows of data per parameter: too few poses for it unshrunk)"
         ),
         ScreenModel::FrameOnly => {
             "the registration and tool freedoms alone (too few poses for the full geometry, even shrunk)".to_string()
@@ -79,26 +84,19 @@ fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 let at = o.line.map_or(format!("measurement {}", o.measurement), |l| format!("line {l}"));
                 writeln!(f, "  {at:<16} residual {:.4} mm", o.residual_mm)?;
             }
-            if let Some(g) = &s.gathered {
-                let ranges: Vec<String> = g
-                    .joint_ranges
-                    .iter()
-                    .enumerate()
-                    .map(|(j, [lo, hi])| format!("q{} {lo:.0}…{hi:.0}", j + 1))
-                    .collect();
-                writeln!(
-                    f,
-                    "  {} of them lie in one neighbourhood of arm configurations ({} of the {} poses; {}), where independent gross errors gather so with a chance of {:.1e}: likelier a systematic error the screening model lacks",
-                    g.flagged,
-                    g.poses,
-                    g.total,
-                    ranges.join(", "),
-                    g.chance
-                )?;
-            }
             Ok(())
         }
+    }?;
+    for c in &s.clusters {
+        let [lo, hi] = c.residual_mm;
+        writeln!(
+            f,
+            "  not gross errors: {} poses {} depart together by {lo:.2}–{hi:.2} mm — kept, a systematic effect (see the warnings)",
+            c.kept,
+            c.place()
+        )?;
     }
+    Ok(())
 }
 
 /// One row of held-out statistics.

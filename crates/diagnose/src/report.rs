@@ -55,6 +55,9 @@ pub enum ScaleSource {
 pub struct OutlierScreen {
     /// The model whose residuals were judged.
     pub model: ScreenModel,
+    /// Whether that model holds a joint's gravity compliance (none where the robot file's masses load no
+    /// joint).
+    pub with_compliance: bool,
     /// The residual scale per axis, mm: robust (`1.4826 · median |r|`) over every measurement, or
     /// the stated noise where that is larger. With the tracker's per-point standard deviations, the
     /// residuals are first divided by each point's over their mean: the scale is then the mean point's.
@@ -65,29 +68,108 @@ pub struct OutlierScreen {
     pub threshold_mm: f64,
     /// Whether the flagged measurements were left out of everything else in the report.
     pub excluded: bool,
-    /// The flagged measurements gathered in one neighbourhood of arm configurations beyond what
-    /// independent gross errors do — a systematic error the screening model lacks is likelier there.
-    pub gathered: Option<Gathered>,
+    /// Flagged measurements that gather — in consecutive lines, in time, in one part of a joint's range,
+    /// of a sensor's, or in one neighbourhood of arm configurations — beyond what independent gross
+    /// errors do: a systematic effect, whose poses are kept (a scan statistic over each ordering, bounded
+    /// by the screen's false-alarm rate).
+    pub clusters: Vec<Cluster>,
 }
 
-/// Flagged measurements gathered in one neighbourhood of arm configurations (a k-means block of the
-/// joint values, as the folds use): more of them there than independent gross errors — each pose flagged
-/// with the same chance, wherever it is — would put in any block but with a chance below the screen's
-/// [`crate::FALSE_ALARM`] (binomial upper tail, times the number of blocks).
+/// What the poses of a [`Cluster`] gather along.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Gathered {
-    /// Flagged measurements in the block.
-    pub flagged: usize,
-    /// Measurements in the block.
-    pub poses: usize,
-    /// Flagged measurements over all.
-    pub flagged_total: usize,
-    /// Measurements over all.
-    pub total: usize,
-    /// The chance that independent gross errors gather so in some block (Bonferroni over the blocks).
-    pub chance: f64,
-    /// The block's joint ranges, degrees (mm for a prismatic joint), per joint `[lowest, highest]`.
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Along {
+    /// Consecutive lines of the measurements file (its order: the order they were measured in).
+    Lines,
+    /// A span of the measurements' time, minutes (when the file is not in time order).
+    Time,
+    /// One part of a joint's range, degrees (mm for a prismatic joint: an extension).
+    Joint {
+        /// The joint, numbered from 1.
+        joint: usize,
+        /// Whether its values are millimetres.
+        prismatic: bool,
+    },
+    /// One range of a sensor column's values.
+    Sensor {
+        /// The column's name.
+        column: String,
+    },
+    /// One neighbourhood of arm configurations (a k-means block of the joint values, as the folds use).
+    Configurations,
+}
+
+/// Flagged measurements that gather ([`OutlierScreen::clusters`]): a systematic effect the screening
+/// model lacks, kept in the data for the selection to explain.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Cluster {
+    /// What they gather along.
+    pub along: Along,
+    /// Their extent along it, `[lowest, highest]`: lines, minutes, degrees or mm, the sensor's unit
+    /// (lines for a neighbourhood of configurations).
+    pub range: [f64; 2],
+    /// Their joint ranges, degrees (mm for a prismatic joint), per joint `[lowest, highest]`.
     pub joint_ranges: Vec<[f64; 2]>,
+    /// How many were flagged there and are kept.
+    pub kept: usize,
+    /// Which: 1-based measurement numbers, and their file lines where read from a file.
+    pub measurements: Vec<usize>,
+    /// Their file lines.
+    pub lines: Vec<Option<usize>>,
+    /// How far they depart from the screening model, mm, `[least, most]`.
+    pub residual_mm: [f64; 2],
+    /// The chance that independent gross errors gather so anywhere (Bonferroni over the places looked).
+    pub chance: f64,
+    /// How far they depart from the chosen model, mm, `[least, most]` (filled once the selection has
+    /// chosen; `None` where they were not in its data).
+    pub after_mm: Option<[f64; 2]>,
+}
+
+impl Cluster {
+    /// Where the block lies, in words: `in lines 152–300`, `with joint 2 between 65.0° and 80.2°`.
+    pub fn place(&self) -> String {
+        let [lo, hi] = self.range;
+        match &self.along {
+            Along::Lines => format!("in lines {lo:.0}–{hi:.0} (measured one after the other)"),
+            Along::Time => format!("measured between {lo:.1} and {hi:.1} min"),
+            Along::Joint { joint, prismatic: true } => format!("with joint {joint} extended {lo:.1}–{hi:.1} mm"),
+            Along::Joint { joint, prismatic: false } => format!("with joint {joint} between {lo:.1}° and {hi:.1}°"),
+            Along::Sensor { column } => format!("with {column} between {lo:.3} and {hi:.3}"),
+            Along::Configurations => {
+                let ranges: Vec<String> = self
+                    .joint_ranges
+                    .iter()
+                    .enumerate()
+                    .map(|(j, [lo, hi])| format!("q{} {lo:.0}…{hi:.0}", j + 1))
+                    .collect();
+                format!("in one neighbourhood of arm configurations ({})", ranges.join(", "))
+            }
+        }
+    }
+
+    /// The block as the report's warnings say it, with what the chosen model made of it when it was in
+    /// the selection's data (`threshold_mm`: the screen's threshold, the line between explained or not).
+    pub fn sentence(&self, threshold_mm: f64) -> String {
+        let [r_lo, r_hi] = self.residual_mm;
+        let head = format!(
+            "{} poses {} depart from the screening model by {r_lo:.2}–{r_hi:.2} mm together (independent gross errors gather so with a chance of {:.1e}): kept as a systematic effect, not gross errors",
+            self.kept,
+            self.place(),
+            self.chance
+        );
+        match self.after_mm {
+            Some([_, hi]) if hi <= threshold_mm => {
+                format!(
+                    "{head}; the chosen effects explain them (now {:.2}–{hi:.2} mm)",
+                    self.after_mm.map_or(0.0, |a| a[0])
+                )
+            }
+            Some([lo, hi]) => format!(
+                "{head}; no effect of the catalogue explains them (still {lo:.2}–{hi:.2} mm): look for what changes there — a moved tracker or base, a load, a joint's end stop"
+            ),
+            None => head,
+        }
+    }
 }
 
 /// A candidate the data cannot pin down: not selectable, reported with what to measure.

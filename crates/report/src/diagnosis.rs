@@ -410,6 +410,9 @@ fn gross_errors(out: &mut String, report: &Report) {
             .collect();
         table(out, &["file line", "measurement", "residual [mm]"], &rows);
     }
+    for c in &s.clusters {
+        let _ = write!(out, "<p><strong>Not gross errors:</strong> {}</p>", escape(&c.sentence(s.threshold_mm)));
+    }
 }
 
 /// Every refusal with what to measure, and the command that plans it.

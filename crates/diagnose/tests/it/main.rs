@@ -11,6 +11,7 @@ mod identified;
 mod payload;
 mod real_data;
 mod screen;
+mod sessions;
 mod shrinkage;
 mod six_d;
 mod temperature;

@@ -299,12 +299,14 @@ fn nested_by_configuration(seed: u64, on: impl Fn(&[f64]) -> bool) -> thermokin_
 #[test]
 fn a_shape_that_gains_more_among_the_poses_than_it_costs_beyond_them_stays() {
     // Joint 3 of the IRB 140 lags by c·q3·(q2 − q2₀), a coupling of two joints that no catalogue effect
-    // describes; the poses cover 80 % of every joint's travel. Fitted on one half of joint 2's arc and
-    // scored on the other, the cyclic error of joint 3 that stands in for part of it makes the model
-    // worse (0.1217 → 0.1285 mm RMS over the half splits) — but among neighbouring poses it takes the
-    // held-out RMS from 0.0854 to 0.0750 mm, and poses drawn anew over the same travel (where this robot
-    // is used) are missed by 0.0817 mm mean with it and 0.0870 when a check on the half splits alone leaves
-    // it out. The phase weighs both: it stays.
+    // describes; the poses cover 80 % of every joint's travel. Shapes of the joint angle stand in for part
+    // of it (joint 3's and joint 5's gear ratios); fitted on one half of a joint's arc and scored on the
+    // other they may lose, but among neighbouring poses they gain, and poses drawn anew over the same
+    // travel (where this robot is used) confirm it: the phase weighs both, and they stay — the same
+    // effects, the same fresh-pose error, with the check and without it. The seven poses at the end of
+    // joint 3's range, where the coupling is largest, gather and are kept as a systematic block (before
+    // they were called gross errors, `periodic[3]` was chosen and the fresh poses were missed by 0.0819 mm
+    // mean; kept, 0.0804).
     let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let q20 = (-14.0f64).to_radians();
     let truth = |q: &[f64]| {
@@ -323,8 +325,10 @@ fn a_shape_that_gains_more_among_the_poses_than_it_costs_beyond_them_stays() {
     let (judged, judged_labels) = run(Extrapolation::HalfArcs);
     let (off, off_labels) = run(Extrapolation::Off);
     eprintln!("judged {judged:.4} {judged_labels:?}; off {off:.4} {off_labels:?}");
-    assert!(off_labels.contains(&"periodic[3]".to_string()), "{off_labels:?}");
-    assert!(judged_labels.contains(&"periodic[3]".to_string()), "{judged_labels:?}");
+    let shape = |labels: &[String]| labels.iter().any(|l| l == "periodic[3]" || l == "joint_scale[3]");
+    assert!(shape(&off_labels), "{off_labels:?}");
+    assert_eq!(judged_labels, off_labels);
+    assert!(judged < 0.0819, "{judged}");
     // The same model, the same fit: the same hold-out error (1e-9 mm: arithmetic, not a tolerance).
     assert!((judged - off).abs() < 1e-9, "{judged} vs {off}");
 }
