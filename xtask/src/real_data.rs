@@ -89,7 +89,7 @@ pub(crate) fn real_data() -> Result<()> {
         today(),
         processor()
     );
-    text.push_str("Mean 3-D error, mm, nominal robot → the diagnosis' choice: nested (each outer fold unseen by the selection run on the others), and on the hold-out file as exported (nothing refitted: the training frame) and with the registration and probe refitted on it (the effects kept). `effects`: the causes named (the completion's rows aside).\n\n");
+    text.push_str("Mean 3-D error, mm, nominal robot → the diagnosis' choice: nested (each outer fold unseen by the selection run on the others), and on the hold-out file as exported (nothing refitted: the frame the training measurements ended in) and with the registration and probe refitted on it (the effects kept). `effects`: the causes named (the completion's rows aside).\n\n");
     text.push_str("| set | poses | nested | hold-out as exported | hold-out refitted | effects | wall s | CPU s | peak MiB |\n|---|---|---|---|---|---|---|---|---|\n");
     for r in &rows {
         text.push_str(r);

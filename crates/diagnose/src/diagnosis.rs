@@ -157,6 +157,7 @@ fn run(
     let mut all_warnings: Vec<String> = not_shown(&tables, nested.as_ref()).into_iter().collect();
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
+    all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
@@ -240,4 +241,16 @@ fn pose_records(
             heldout,
         })
         .collect()
+}
+
+/// What an operator should check when the measurement frame stepped: where, by how much, and what moves
+/// a frame.
+fn frame_step_warning(e: &crate::report::EffectReport) -> String {
+    let value = |name: &str| e.parameters.iter().find(|(k, _)| k.ends_with(name)).map_or(0.0, |(_, v)| v.value);
+    let t = (value(".dx_mm").powi(2) + value(".dy_mm").powi(2) + value(".dz_mm").powi(2)).sqrt();
+    let r = (value(".rx_deg").powi(2) + value(".ry_deg").powi(2) + value(".rz_deg").powi(2)).sqrt();
+    let at = e.label.trim_start_matches("frame_step (").trim_end_matches(')');
+    format!(
+        "the measurement frame moved at {at}, by {t:.3} mm and {r:.4}°: the tracker was knocked or its stand settled, or the robot's base moved — check the tracker against its reference nests and the base's bolts; each pose is fitted in the frame it was measured in, and the export carries the frame the measurements ended in (re-register before using it if the tracker was set back)"
+    )
 }

@@ -36,6 +36,7 @@ mod selection;
 mod shrinkage;
 mod simulate;
 mod stats;
+mod steps;
 mod tables;
 mod validation;
 mod verdict;

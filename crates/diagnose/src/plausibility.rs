@@ -186,6 +186,13 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let lever = lever_of(j);
             over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
         }
+        Effect::FrameStep(_) => {
+            // A knocked tracker or a moved base: bounded as a row's deviation at the arm's extent.
+            let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let r = v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
+            let lever = scale.extent_mm.max(1.0);
+            over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
+        }
         Effect::ComplianceCoupling(j) => {
             // The larger of the two deflections it causes, each at its own joint's lever (no sign rule:
             // an off-diagonal compliance may take either).

@@ -130,7 +130,10 @@ impl Cluster {
     pub fn place(&self) -> String {
         let [lo, hi] = self.range;
         match &self.along {
-            Along::Lines => format!("in lines {lo:.0}–{hi:.0} (measured one after the other)"),
+            Along::Lines if self.lines.iter().all(Option::is_some) => {
+                format!("in lines {lo:.0}–{hi:.0} (measured one after the other)")
+            }
+            Along::Lines => format!("among measurements {lo:.0}–{hi:.0} (taken one after the other)"),
             Along::Time => format!("measured between {lo:.1} and {hi:.1} min"),
             Along::Joint { joint, prismatic: true } => format!("with joint {joint} extended {lo:.1}–{hi:.1} mm"),
             Along::Joint { joint, prismatic: false } => format!("with joint {joint} between {lo:.1}° and {hi:.1}°"),

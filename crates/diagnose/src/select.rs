@@ -1,6 +1,8 @@
 //! The selection, as phases over one state ([`Selection`]):
 //!
-//! 1. **candidates** — the catalogue for this robot and these data ([`thermokin_identify::Setup::candidates`]);
+//! 1. **candidates** — the catalogue for this robot and these data ([`thermokin_identify::Setup::candidates`]),
+//!    and where the measurements have an order, the likeliest step of the measurement frame
+//!    ([`crate::steps`]);
 //! 2. **eligibility** — what the data cannot pin down is refused before anything is scored
 //!    ([`crate::eligibility`]);
 //! 3. **forward** — the candidate with the lowest held-out error joins while it beats the current
@@ -37,6 +39,7 @@ use crate::report::TableRow;
 use crate::scoring::Scorer;
 use crate::selection::Selection;
 use crate::shrinkage::shrink;
+use crate::steps::frame_step;
 
 /// What the selection chose, and the catalogue it chose from.
 pub(crate) struct Selected {
@@ -56,7 +59,9 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
     let always = setup.always_estimated(data);
     // 1–2. Candidates and eligibility.
     let (catalogue, eligible, mut selection) = clock.time(Phase::Eligibility, || {
-        let catalogue = setup.candidates(scorer.robot, data)?;
+        let mut catalogue = setup.candidates(scorer.robot, data)?;
+        // What only the order of measuring shows: a step of the measurement frame.
+        catalogue.extend(frame_step(scorer, &always)?);
         let (eligible, refused) = check(scorer, &always, &catalogue, &config.eligibility)?;
         let (nominal, nominal_errors) = scorer.heldout_errors(&always, &scorer.folds)?;
         let (_, nominal_fit) = scorer.full_fit(&always)?;

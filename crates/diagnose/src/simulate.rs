@@ -227,7 +227,7 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
     }
     let terms = PoseTerms::of(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let inputs = PoseInputs { temp_rise: &terms.rise[i], sin_cos: None };
+        let inputs = PoseInputs::plain(&terms.rise[i]);
         let (p, rot) = model.predict(robot, &theta, m, &inputs, None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;

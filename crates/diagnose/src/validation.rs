@@ -200,7 +200,8 @@ pub(crate) fn transfer_score(
 ) -> Result<Transfer, DiagnoseError> {
     let robot = scorer.robot;
     let rows: Vec<usize> = (0..holdout.len()).collect();
-    let terms = PoseTerms::against(robot, holdout, scorer.data, config.orientation_lever_mm);
+    // A hold-out file is scored as the export is used: in the frame the training measurements ended in.
+    let terms = PoseTerms::against(robot, holdout, scorer.data, config.orientation_lever_mm).in_latest_frame();
     let (trained, f) = scorer.fit_shrunk(effects, &scorer.all(), shrinkage)?;
     let score = |model: &Model, theta: &[f64]| -> Result<Stats, DiagnoseError> {
         let r = residuals(robot, model, theta, holdout, &rows, &terms)?;

@@ -57,6 +57,40 @@ impl DriftShape {
     }
 }
 
+/// Where a step of the measurement frame happens ([`Effect::FrameStep`]): the poses measured at or after
+/// this time (minutes), or read at or after this line of the measurements file, are in the moved frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum StepAt {
+    /// At or after this time, minutes (stored as the bits of a finite `f64`, so that an effect stays
+    /// hashable and ordered: [`StepAt::time`]).
+    Time(u64),
+    /// At or after this 1-based line of the measurements file (its order: the order of measuring).
+    Line(usize),
+}
+
+impl StepAt {
+    /// A step at `minutes` (finite, not negative).
+    pub fn time(minutes: f64) -> Self {
+        StepAt::Time(minutes.max(0.0).to_bits())
+    }
+
+    /// Whether a pose measured at `time_min`, read at `line`, is in the moved frame.
+    pub fn applies(self, time_min: f64, line: Option<usize>) -> bool {
+        match self {
+            StepAt::Time(bits) => time_min >= f64::from_bits(bits),
+            StepAt::Line(at) => line.is_some_and(|l| l >= at),
+        }
+    }
+
+    /// `line 152` or `151.3 min`.
+    pub fn describe(self) -> String {
+        match self {
+            StepAt::Time(bits) => format!("{:.1} min", f64::from_bits(bits)),
+            StepAt::Line(at) => format!("line {at}"),
+        }
+    }
+}
+
 /// A joint an effect acts on: a 0-based index checked against the robot — [`JointIndex::of`] is the only
 /// way to make one, so that an effect cannot name a joint the robot lacks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
@@ -117,6 +151,10 @@ pub enum Effect {
     Periodic(JointIndex),
     /// A link deviation growing with operating time or temperature (6, +1 for τ).
     ThermalDrift(JointIndex, DriftShape),
+    /// A step of the measurement frame — the tracker knocked, its stand or the robot's base moved — at
+    /// a point of the measuring order: the poses from there on are measured in the frame moved by a
+    /// translation (3, mm) and a rotation `Rx·Ry·Rz` (3), applied in the measurement frame (6).
+    FrameStep(StepAt),
 }
 
 /// The effect names of reports and flags, in catalogue order.
@@ -187,9 +225,12 @@ impl Effect {
             | Effect::JointScale(j)
             | Effect::Periodic(j)
             | Effect::ThermalDrift(j, _) => Some(j),
-            Effect::Registration | Effect::ToolPoint | Effect::ToolRotation | Effect::BaseFrame | Effect::ToolFrame => {
-                None
-            }
+            Effect::Registration
+            | Effect::ToolPoint
+            | Effect::ToolRotation
+            | Effect::BaseFrame
+            | Effect::ToolFrame
+            | Effect::FrameStep(_) => None,
         }
     }
 
@@ -208,7 +249,11 @@ impl Effect {
     /// Number of parameters.
     pub fn len(&self) -> usize {
         match self {
-            Effect::Registration | Effect::BaseFrame | Effect::ToolFrame | Effect::LinkDeviation(_) => 6,
+            Effect::Registration
+            | Effect::BaseFrame
+            | Effect::ToolFrame
+            | Effect::LinkDeviation(_)
+            | Effect::FrameStep(_) => 6,
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
             Effect::ToolPoint | Effect::ToolRotation => 3,
@@ -240,6 +285,7 @@ impl Effect {
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
             Effect::ThermalDrift(..) => "thermal_drift",
+            Effect::FrameStep(_) => "frame_step",
         }
     }
 
@@ -249,6 +295,7 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Linear) => " (linear)",
             Effect::ThermalDrift(_, DriftShape::Exponential) => " (exponential)",
             Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
+            Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             _ => "",
         };
         match self.joint() {
@@ -296,7 +343,7 @@ impl Effect {
     }
 
     /// Whether a robot file can hold the effect: the same for every pose and time (frames, offsets, link
-    /// deviations), unlike compliance, joint-level errors and drift.
+    /// deviations), unlike compliance, joint-level errors, drift and a step of the measurement frame.
     pub fn is_static(&self) -> bool {
         !matches!(
             self,
@@ -305,6 +352,7 @@ impl Effect {
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
                 | Effect::ThermalDrift(..)
+                | Effect::FrameStep(_)
         )
     }
 

@@ -28,7 +28,9 @@ mod terms;
 
 pub use catalogue::{FrameMode, Setup, ToolMode};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
-pub use effect::{DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN};
+pub use effect::{
+    DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, StepAt, TAU_RANGE_MIN,
+};
 pub use error::IdentifyError;
 pub use fit::{CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from};
 pub use identifiability::{

@@ -144,18 +144,35 @@ impl Model {
     /// temperature drift per kelvin of the joint's own sensor (or of the mean of all, as fitted), each
     /// against its reading at the earliest measurement of `data` (the fit's reference). Gravity keeps its
     /// direction in the robot's base frame while the registration turns the base row into the tracker's.
+    /// After a step of the measurement frame ([`Effect::FrameStep`]) the base row is the frame the
+    /// measurements ended in (a knocked tracker stays where it was knocked).
     ///
-    /// Its forward model equals [`Model::predict`]'s at every measurement (a test checks it to 1e-9 mm).
+    /// Its forward model equals [`Model::predict`]'s at every measurement after the last step of the frame
+    /// (every one without a step; a test checks it to 1e-9 mm).
     pub fn robot_model(&self, robot: &Robot, theta: &[f64], data: &Dataset) -> Result<RobotModel, IdentifyError> {
         let (chain, _) = self.static_chain(robot, theta)?;
-        let down = self.gravity_down(&chain, robot);
         // A measured frame's rows in their simplest form: the tracker registration's start and correction,
         // and an unknown tool point's, are one pose each — written as one (a start of −31.66 mm and a
         // correction of +31.25 mm read as alarming numbers that cancel).
         let mut chain = chain;
-        if self.has_registration() {
-            chain = chain.with_base(thermokin_chain::FixedRow::from_isometry(&chain.base().pose()))?;
+        // The frame the measurements ended in: after every step of it (a knocked tracker stays where it was
+        // knocked; a later use is measured there).
+        let mut world_from_base = chain.base().pose();
+        let mut stepped = false;
+        for (_, &o) in self.effects.iter().zip(&self.offsets).filter(|(e, _)| matches!(e, Effect::FrameStep(_))) {
+            let rotation = thermokin_chain::xyz_rotation(&Vector3::new(theta[o + 3], theta[o + 4], theta[o + 5]));
+            let step = Isometry3::from_parts(
+                Vector3::new(theta[o], theta[o + 1], theta[o + 2]).into(),
+                nalgebra::UnitQuaternion::from_matrix(&rotation),
+            );
+            world_from_base = step * world_from_base;
+            stepped = true;
         }
+        if self.has_registration() || stepped {
+            chain = chain.with_base(thermokin_chain::FixedRow::from_isometry(&world_from_base))?;
+        }
+        // Gravity keeps its direction in the robot's base, in whichever frame the base row now puts it.
+        let down = self.gravity_down(&chain, robot);
         if self.effects.contains(&Effect::ToolPoint) {
             chain = chain.with_tool(thermokin_chain::FixedRow::from_isometry(&chain.tool().pose()))?;
         }
@@ -241,7 +258,8 @@ impl Model {
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
-                | Effect::ThermalDrift(..) => {}
+                | Effect::ThermalDrift(..)
+                | Effect::FrameStep(_) => {}
             }
         }
         let built = self.registered(chain.with_errors_and_zeros(base_err, &joint_err, tool_err, &zeros)?)?;
@@ -295,6 +313,7 @@ impl Model {
                     rows.zeros[j.index()] = true;
                     rows.zeros[j.index() + 1] = true;
                 }
+                Effect::FrameStep(_) => {}
             }
         }
         rows

@@ -50,6 +50,19 @@ pub struct PoseInputs<'a> {
     pub temp_rise: &'a [f64],
     /// `(sin q_i, cos q_i)` of the measured joints, when computed once beforehand.
     pub sin_cos: Option<&'a [(f64, f64)]>,
+    /// Its line in the measurements file, when read from one (where a step of the measurement frame at
+    /// a line puts it).
+    pub line: Option<usize>,
+    /// In the frame the training measurements ended in, whatever its time and line (a test set of
+    /// another file): every step of the frame applies.
+    pub latest_frame: bool,
+}
+
+impl PoseInputs<'_> {
+    /// Inputs with no temperature rise, no precomputed sines, no line: a pose on its own.
+    pub fn plain(temp_rise: &[f64]) -> PoseInputs<'_> {
+        PoseInputs { temp_rise, sin_cos: None, line: None, latest_frame: false }
+    }
 }
 
 impl Model {
@@ -215,7 +228,7 @@ impl Model {
                 None => registered.tool_position_rotation(&q),
             };
             cached.q = q;
-            return Ok(pose?);
+            return Ok(self.frame_steps(theta, m, inputs, pose?, None));
         };
         let pose = match sc {
             Some(sc) => registered.pose_and_parameter_jacobian_rows_sin_cos(&q, sc, &mut cached.pj, &cached.rows),
@@ -224,7 +237,58 @@ impl Model {
         cached.q = q;
         let pose = pose?;
         self.fill_jacobian(robot.chain(), theta, m, cached, jac);
-        Ok(pose)
+        Ok(self.frame_steps(theta, m, inputs, pose, Some(jac)))
+    }
+
+    /// The pose (and its Jacobian) moved by every step of the measurement frame this measurement comes
+    /// after ([`Effect::FrameStep`]), in the model's order: `p ↦ R_s p + t_s`, `R ↦ R_s R` with
+    /// `R_s = Rx(a)·Ry(b)·Rz(c)`. The columns already filled turn with the frame (positions and rotation
+    /// twists alike); the step's own are `∂p/∂t = I`, `∂p/∂a = ω_a × (p − t_s)` with `ω_a = x`,
+    /// `ω_b = Rx(a)·y`, `ω_c = Rx(a)·Ry(b)·z` (the angular velocities of `Rx·Ry·Rz` in the outer frame),
+    /// and the rotation twist of each angle its `ω`.
+    fn frame_steps(
+        &self,
+        theta: &[f64],
+        m: &Measurement,
+        inputs: &PoseInputs<'_>,
+        (mut p, mut rot): (Vector3<f64>, Matrix3<f64>),
+        mut jac: Option<&mut Matrix6xX<f64>>,
+    ) -> (Vector3<f64>, Matrix3<f64>) {
+        for (e, &o) in self.effects().iter().zip(self.offsets()) {
+            let Effect::FrameStep(at) = *e else { continue };
+            if !(inputs.latest_frame || at.applies(m.time_min, inputs.line)) {
+                continue;
+            }
+            let t = Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
+            let angles = Vector3::new(theta[o + 3], theta[o + 4], theta[o + 5]);
+            let r_s = thermokin_chain::xyz_rotation(&angles);
+            p = r_s * p + t;
+            rot = r_s * rot;
+            if let Some(jac) = jac.as_deref_mut() {
+                for c in 0..jac.ncols() {
+                    let turned_p = r_s * Vector3::new(jac[(0, c)], jac[(1, c)], jac[(2, c)]);
+                    let turned_w = r_s * Vector3::new(jac[(3, c)], jac[(4, c)], jac[(5, c)]);
+                    for a in 0..3 {
+                        jac[(a, c)] = turned_p[a];
+                        jac[(3 + a, c)] = turned_w[a];
+                    }
+                }
+                let rx = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, 0.0, 0.0));
+                let rxy = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, angles.y, 0.0));
+                let omegas = [Vector3::x(), rx * Vector3::y(), rxy * Vector3::z()];
+                for a in 0..3 {
+                    for r in 0..6 {
+                        jac[(r, o + a)] = if r == a { 1.0 } else { 0.0 };
+                    }
+                    let dp = omegas[a].cross(&(p - t));
+                    for r in 0..3 {
+                        jac[(r, o + 3 + a)] = dp[r];
+                        jac[(3 + r, o + 3 + a)] = omegas[a][r];
+                    }
+                }
+            }
+        }
+        (p, rot)
     }
 
     /// The model's 6 × len Jacobian from the chain's parameter Jacobian `cached.pj`: each effect's
@@ -276,6 +340,8 @@ impl Model {
                         copy(o + k, layout.zero(j), *b);
                     }
                 }
+                // Filled after the pose (zero for a measurement before the step): `frame_steps`.
+                Effect::FrameStep(_) => {}
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
                     let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };

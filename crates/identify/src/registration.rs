@@ -59,7 +59,7 @@ pub fn initial_frames(
 ) -> Result<StartFrames, IdentifyError> {
     let model = Model::new(robot, vec![])?;
     let zeros = vec![0.0; robot.chain().dof()];
-    let inputs = PoseInputs { temp_rise: &zeros, sin_cos: None };
+    let inputs = PoseInputs::plain(&zeros);
     let tool_rotation = robot.chain().tool().pose().rotation;
     let mut nominal = Vec::new();
     let mut measured = Vec::new();

@@ -56,7 +56,12 @@ fn evaluate(
     let lever = terms.lever_mm.unwrap_or(0.0);
     for (k, &i) in rows.iter().enumerate() {
         let m = &data.measurements[i];
-        let inputs = PoseInputs { temp_rise: &terms.rise[i], sin_cos: Some(&terms.sin_cos[i]) };
+        let inputs = PoseInputs {
+            temp_rise: &terms.rise[i],
+            sin_cos: Some(&terms.sin_cos[i]),
+            line: terms.lines[i],
+            latest_frame: terms.latest_frame,
+        };
         let (p, rot) = model.predict(robot, theta, m, &inputs, jac.is_some().then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;
         r.extend_from_slice(&[d.x, d.y, d.z]);
@@ -168,6 +173,63 @@ mod tests {
                     jac[(r, k)]
                 );
             }
+        }
+    }
+
+    /// A step of the measurement frame at minute 50 of a session, beside a link deviation and the
+    /// registration: the analytic Jacobian of every column — the step's own and those it turns — against
+    /// central differences, position and orientation rows alike, on poses before and after the step.
+    #[test]
+    fn the_frame_steps_jacobian_is_the_finite_differences() {
+        let robot = Robot::new("IRB 140", irb140_table9());
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let measurements = (0..10)
+            .map(|k| {
+                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
+                let mut m = measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng);
+                m.time_min = 10.0 * k as f64;
+                m.orientation = Some(nalgebra::UnitQuaternion::identity());
+                m
+            })
+            .collect();
+        let mut data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let joint = |j| JointIndex::of(&robot, j).unwrap();
+        let step = Effect::FrameStep(crate::StepAt::time(50.0));
+        let model = Model::new(&robot, vec![Effect::Registration, Effect::LinkDeviation(joint(2)), step]).unwrap();
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let theta: Vec<f64> = (0..model.len()).map(|k| 0.01 * ((k as f64 * 1.7).sin())).collect();
+        // Measured orientations as predicted at `theta`: the rotation rows' Gauss–Newton Jacobian (the
+        // angular twist) is the derivative of their log at zero residual.
+        for m in &mut data.measurements {
+            let zeros = [0.0; 6];
+            let (_, rot) =
+                model.predict(&robot, &theta, m, &crate::PoseInputs::plain(&zeros), None, &mut None).unwrap();
+            m.orientation = Some(nalgebra::UnitQuaternion::from_matrix(&rot));
+        }
+        let terms = PoseTerms::of(&robot, &data, 100.0);
+        assert_eq!(terms.stride(), 6);
+        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        let h = 1e-6;
+        for k in 0..theta.len() {
+            let (mut plus, mut minus) = (theta.clone(), theta.clone());
+            plus[k] += h;
+            minus[k] -= h;
+            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
+            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
+            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
+                let numeric = -(p - m) / (2.0 * h);
+                let scale = jac.col(k).norm_max().max(1.0);
+                assert!(
+                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
+                    "column {k}, row {r}: {} vs {numeric}",
+                    jac[(r, k)]
+                );
+            }
+        }
+        // Before the step the step moves nothing.
+        let o = model.offsets()[2];
+        for c in o..o + 6 {
+            assert!((0..5 * 6).all(|r| jac[(r, c)] == 0.0), "column {c} moves a pose before the step");
         }
     }
 }

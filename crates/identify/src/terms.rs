@@ -66,6 +66,12 @@ pub struct PoseTerms {
     /// Per measurement, `(sin q_i, cos q_i)` of its joint values: computed once, every evaluation of
     /// every fit reads them ([`Chain::tool_position_rotation_sin_cos`]).
     pub(crate) sin_cos: Vec<Vec<(f64, f64)>>,
+    /// Per measurement, its line in the measurements file (where a step of the measurement frame at a
+    /// line puts it: [`crate::StepAt`]).
+    pub(crate) lines: Vec<Option<usize>>,
+    /// Every measurement in the frame the training measurements ended in — after every step of it —
+    /// whatever its time or line: a test set measured in another file ([`PoseTerms::in_latest_frame`]).
+    pub(crate) latest_frame: bool,
 }
 
 impl PoseTerms {
@@ -109,6 +115,16 @@ impl PoseTerms {
             stds.iter().map(|v| v.map(|s| mean / s)).collect()
         });
         let sin_cos = data.measurements.iter().map(|m| m.q.iter().map(|q| q.sin_cos()).collect()).collect();
-        Self { torques, rise, lever_mm, weights, sin_cos }
+        let lines = (0..data.len()).map(|i| data.line_of(i)).collect();
+        Self { torques, rise, lever_mm, weights, sin_cos, lines, latest_frame: false }
+    }
+
+    /// The same terms with every measurement in the frame the training measurements ended in, after every
+    /// step of it ([`crate::Effect::FrameStep`]: a knocked tracker stays where it was knocked): how a model
+    /// is used after its training session, as exported — on a hold-out file, whose times and lines are
+    /// its own.
+    pub fn in_latest_frame(mut self) -> Self {
+        self.latest_frame = true;
+        self
     }
 }

@@ -35,7 +35,8 @@ pub fn drift_check(case: &str, robot: &Robot, report: &Report) {
 
 /// The robot `diagnose --export` writes (on `robot`), read back from its text, reproduces the report's
 /// residual of every measurement of `data` (the fit on all of it) to 1e-9 mm — whatever was chosen,
-/// compliance included: the export is the model the report scores. Position-only data.
+/// compliance included: the export is the model the report scores. Position-only data. After a step of the
+/// measurement frame the export is in the frame the measurements ended in: the poses after every step.
 pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &thermokin_chain::Dataset) {
     let export = report.export_model(robot, None, "check").unwrap();
     let text = thermokin_io::robot_model_to_toml(&export);
@@ -43,13 +44,24 @@ pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &th
     let fitted = &report.residuals_after.per_measurement_mm;
     // The fit is on the measurements the screen for gross errors kept.
     let gross: Vec<usize> = report.outliers.iter().map(|o| o.measurement - 1).collect();
-    let kept: Vec<_> =
-        data.measurements.iter().enumerate().filter(|(i, _)| !gross.contains(i)).map(|(_, m)| m).collect();
+    let kept: Vec<_> = data.measurements.iter().enumerate().filter(|(i, _)| !gross.contains(i)).collect();
     assert_eq!(fitted.len(), kept.len());
+    // The export is in the frame the measurements ended in: after every step of it the report chose.
+    let steps: Vec<&str> =
+        report.effects.iter().filter_map(|e| e.label.strip_prefix("frame_step (")?.strip_suffix(')')).collect();
+    let latest = |i: usize, m: &thermokin_chain::Measurement| {
+        steps.iter().all(|at| match (at.strip_prefix("line "), at.strip_suffix(" min")) {
+            (Some(line), _) => data.line_of(i).is_some_and(|l| l >= line.parse::<usize>().unwrap()),
+            // The label rounds the time to 0.1 min: a pose that close to it is left out of the check.
+            (_, Some(t)) => m.time_min > t.parse::<f64>().unwrap() + 0.05,
+            _ => panic!("{at}"),
+        })
+    };
     let worst = kept
         .into_iter()
         .zip(fitted)
-        .map(|(m, r)| {
+        .filter(|((i, m), _)| latest(*i, m))
+        .map(|((_, m), r)| {
             let state = thermokin_chain::OperatingState::at_time(m.time_min);
             let p = read.tool_pose(&m.q, &state).unwrap().translation.vector;
             ((p - m.position_mm).norm() - r).abs()
