@@ -137,6 +137,11 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         None => read_measurements_with(&a.measurements, &kinds, units),
     }
     .map_err(units_error)?;
+    if a.poses.is_none() {
+        // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
+        let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
+        crate::input::warn_ignored(&a.measurements, &unread);
+    }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
         None => None,

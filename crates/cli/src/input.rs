@@ -92,7 +92,7 @@ pub fn pose(text: &str, flag: &str, convention: Orientation) -> Result<Isometry3
     thermokin_io::parse_pose(text, convention).map_err(|m| Failure::input(anyhow!("--{flag}: {m}")))
 }
 
-/// Says which columns of a targets file nothing reads.
+/// Says which columns of a file nothing reads.
 pub fn warn_ignored(path: &Path, columns: &[String]) {
     for c in columns {
         eprintln!("warning: {}: column `{c}` is not read", path.display());

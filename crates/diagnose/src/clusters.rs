@@ -28,8 +28,8 @@ use thermokin_chain::{Dataset, Robot, units};
 
 use crate::config::Config;
 use crate::folds::configuration_clusters;
-use crate::outliers::FALSE_ALARM;
 use crate::report::{Along, Cluster};
+use crate::stats::FALSE_ALARM;
 use crate::stats::span;
 
 /// The fewest flagged poses that make a block: three departures in a row are still a plausible run of

@@ -46,7 +46,7 @@ pub use config::{
 };
 pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;
-pub use outliers::{FALSE_ALARM, MIN_REDUNDANCY};
+pub use outliers::MIN_REDUNDANCY;
 pub use profile::{Phase, PhaseCost, Profile};
 pub use render::ReportText;
 pub use report::{
@@ -55,5 +55,6 @@ pub use report::{
     ScaleSource, ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
+pub use stats::FALSE_ALARM;
 pub use stats::Stats;
 pub use validation::{Transfer, evaluate};

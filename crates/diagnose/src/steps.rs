@@ -25,8 +25,8 @@ use thermokin_chain::Dataset;
 use thermokin_identify::{Effect, JointIndex, StepAt, max_gravity_torques, residuals};
 
 use crate::error::DiagnoseError;
-use crate::outliers::{FALSE_ALARM, chi_square_upper_quantile};
 use crate::scoring::Scorer;
+use crate::stats::{FALSE_ALARM, chi_square_upper_quantile};
 
 /// The fewest poses on either side of a step: twice its six parameters.
 pub const MIN_SIDE: usize = 12;

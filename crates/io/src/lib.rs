@@ -26,7 +26,7 @@ pub use load::{LoadError, LoadedRobot, RobotRequest};
 pub use measurements::{
     JointRow, JointUnits, MeasurementFormat, PositionUnits, UnitsUnclear, parse_measurements, parse_measurements_with,
     read_configurations, read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with,
-    settle_units, write_measurements,
+    settle_units, unread_columns, write_measurements,
 };
 pub use notation::{
     PoseOut, PoseRow, csv_cell, outside_limits, parse_list, parse_payload, parse_pose, parse_temperatures,

@@ -206,6 +206,27 @@ pub fn parse_measurements_with(
     settle_units(path, data, kinds, format)
 }
 
+/// The columns of a measurements file that [`read_measurements_with`] does not read (an accelerometer's,
+/// a load cell's, a comment), by their header names: a front end says them, so that no column is ignored
+/// in silence. Empty for the authors' results files.
+pub fn unread_columns(path: &Path, kinds: &[JointKind], format: MeasurementFormat) -> Result<Vec<String>, IoError> {
+    let text = read_text(path)?;
+    if text.lines().next().is_some_and(|l| l.contains("Programmed coordinate")) {
+        return Ok(Vec::new());
+    }
+    let recs = records_any_dialect(path, &text)?;
+    let Some(header) = recs.first() else { return Ok(Vec::new()) };
+    let joints = JointColumns::find(path, header, kinds, format.joint_units.unwrap_or_default())?;
+    let poses = PoseColumns::find(path, header, format.orientation)?;
+    let mut read: Vec<usize> = joints.q.clone();
+    read.extend(joints.time);
+    read.extend(joints.temps.iter().map(|(c, _)| *c));
+    read.extend(&poses.p);
+    read.extend(poses.r.iter().flatten().map(|(c, _)| *c));
+    read.extend(poses.std.iter().flatten());
+    Ok(header.cells.iter().enumerate().filter(|(c, _)| !read.contains(c)).map(|(_, name)| name.clone()).collect())
+}
+
 /// Reads a measurement set kept in two files, as tracker and robot software often write them: the
 /// joints (`q1..qn`, optional `time_min` and `temp_<name>`) in one, the measured poses (`x,y,z`, optional
 /// `rx,ry,rz`) in the other, joined by the column `key` present in both (a point name, a timestamp) or,

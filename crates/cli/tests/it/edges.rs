@@ -153,3 +153,41 @@ fn no_numeric_default_is_typed_into_clap() {
         }
     }
 }
+
+#[test]
+fn a_column_the_diagnosis_does_not_read_is_said() {
+    // A simulated set with an accelerometer's column appended: the diagnosis runs and names the column.
+    let m = tmp("with-sensor.csv");
+    let o = thermokin(&[
+        "simulate",
+        "--robot",
+        "configs/irb140.toml",
+        "--effect",
+        "joint_offset:2=0.05",
+        "--poses",
+        "40",
+        "--minutes",
+        "0",
+        "-o",
+        m.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = std::fs::read_to_string(&m).unwrap();
+    let mut lines: Vec<String> = Vec::new();
+    for line in text.lines() {
+        let extra = if line.starts_with('#') {
+            ""
+        } else if lines.iter().all(|l| l.starts_with('#')) {
+            ",acc_col_x"
+        } else {
+            ",0.01"
+        };
+        lines.push(format!("{line}{extra}"));
+    }
+    std::fs::write(&m, lines.join("\n") + "\n").unwrap();
+    let o = thermokin(&["diagnose", "--robot", "configs/irb140.toml", "--measurements", m.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("column `acc_col_x` is not read"), "{}", stderr(&o));
+    // The columns it reads are not named.
+    assert!(!stderr(&o).contains("column `q1`") && !stderr(&o).contains("column `x`"), "{}", stderr(&o));
+}
