@@ -389,9 +389,10 @@ impl PyReport {
 /// estimate the tool point), `orientation_lever_mm`, `orientation_noise_deg`, `outliers` (`"exclude"`:
 /// gross errors listed and left out, or `"keep"`), `shrinkage` (`"cross-validated"` or `"off"`),
 /// `extrapolation` (`"half-arcs"`: a chosen angle- or load-dependent effect must hold beyond the poses it
-/// was fitted on, or `"off"`). Runs without the GIL.
+/// was fitted on, or `"off"`), `masses` (`"from-file"`, or `"ignore"`: every gravity compliance's loads lumped
+/// and identified from the data). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None))]
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -410,6 +411,7 @@ pub fn diagnose(
     outliers: Option<&str>,
     shrinkage: Option<&str>,
     extrapolation: Option<&str>,
+    masses: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -441,6 +443,7 @@ pub fn diagnose(
         outliers: choice("outliers", outliers, defaults.outliers)?,
         shrinkage: choice("shrinkage", shrinkage, defaults.shrinkage)?,
         extrapolation: choice("extrapolation", extrapolation, defaults.extrapolation)?,
+        masses: choice("masses", masses, defaults.masses)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -90,14 +90,15 @@ fn configurations(
         .collect()
 }
 
-/// Plans `poses` poses out of `candidates` ((N, dof) degrees; `None`: `samples` configurations sampled
+/// Plans `poses` poses out of `candidates` ((N, dof) degrees; `None`: `samples` configurations (default
+/// `thermokin_planner::DEFAULT_SAMPLES`, 3000) sampled
 /// within the joint limits, kept inside `box` — `(x0, y0, z0, x1, y1, z1)` mm of the base frame — when
 /// given), after the `measured` configurations. `effects`: `"KIND[:JOINT]"` strings (default: the
 /// catalogue's that some choice of the candidates can make eligible — the others are in
 /// `to_dict()["left_out"]`); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
 /// `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=thermokin_planner::DEFAULT_SAMPLES, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
+#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=None, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -105,7 +106,7 @@ pub fn plan(
     candidates: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
     poses: Option<usize>,
     measured: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
-    samples: usize,
+    samples: Option<usize>,
     r#box: Option<Vec<f64>>,
     effects: Option<Vec<String>>,
     noise_mm: Option<f64>,
@@ -114,6 +115,7 @@ pub fn plan(
     tool: Option<&str>,
     seed: Option<u64>,
 ) -> PyResult<PyPlan> {
+    let samples = samples.unwrap_or(thermokin_planner::DEFAULT_SAMPLES);
     let defaults = Params::default();
     let file_robot = robot.model.robot().clone();
     let effects = effects

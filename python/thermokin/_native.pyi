@@ -220,6 +220,7 @@ def diagnose(
     outliers: str | None = None,
     shrinkage: str | None = None,
     extrapolation: str | None = None,
+    masses: str | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,
@@ -227,7 +228,7 @@ def plan(
     *,
     poses: int | None = None,
     measured: _Array | None = None,
-    samples: int = 3000,
+    samples: int | None = None,
     box: Sequence[float] | None = None,
     effects: Sequence[str] | None = None,
     noise_mm: float | None = None,

@@ -6,7 +6,7 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand};
 use thermokin_compensate::{Accumulation, Controller, Cycle, ResultsFormat};
 use thermokin_deform::{SemanticsKind, TimeProfile};
-use thermokin_diagnose::{Config, Extrapolation, FoldGrouping, Outliers, Shrinkage, SimulationConfig};
+use thermokin_diagnose::{Config, Extrapolation, FoldGrouping, Masses, Outliers, Shrinkage, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
 use thermokin_planner::{Criterion, Params};
@@ -367,6 +367,10 @@ pub struct DiagnoseArgs {
     /// of every fit and figure, or kept.
     #[arg(long, value_parser = choice(Outliers::CHOICES), default_value_t = Config::default().outliers)]
     pub outliers: Outliers,
+    /// The robot file's link masses: a gravity compliance on them, or (`ignore`: CAD masses you do not
+    /// trust) each joint's loads lumped and identified from the data, as for a file that has none.
+    #[arg(long, value_parser = choice(Masses::CHOICES), default_value_t = Config::default().masses)]
+    pub masses: Masses,
     /// A Gaussian prior toward the nominal robot on the chosen model, as strong as cross-validation
     /// asks and kept only where it passes the gate (few poses: the weakly seen directions pulled back),
     /// or the least-squares fit as it is.

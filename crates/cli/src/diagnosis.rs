@@ -107,6 +107,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     let config = Config {
         folds_by: a.folds_by,
         outliers: a.outliers,
+        masses: a.masses,
         shrinkage: a.shrinkage,
         extrapolation: a.extrapolation,
         noise_mm: a.noise,

@@ -192,7 +192,7 @@ pub fn commanded_on_model(
     params: &Params,
     solution: &mut Solution,
 ) -> Result<(), thermokin_deform::DeformError> {
-    if model.joint_corrections().iter().any(|c| !c.is_none()) {
+    if model.corrects_joints() {
         command_solution(model, state, goal, params, solution)?;
     }
     Ok(())

@@ -202,6 +202,8 @@ const INVERSION_TOLERANCE: f64 = 1e-12;
 pub struct RobotModel {
     robot: Robot,
     joints: Vec<JointCorrection>,
+    /// Per joint: the weights of a gravity compliance known without masses (empty when none).
+    gravity_loads: Vec<Vec<f64>>,
     drift: Vec<DriftRow>,
     payload: Option<LinkMass>,
     down: Unit<Vector3<f64>>,
@@ -214,6 +216,7 @@ impl RobotModel {
         Self {
             robot,
             joints: vec![JointCorrection::NONE; n],
+            gravity_loads: vec![Vec::new(); n],
             drift: Vec::new(),
             payload: None,
             down: -Vector3::z_axis(),
@@ -251,6 +254,33 @@ impl RobotModel {
             }
         }
         self.joints = joints;
+        Ok(self)
+    }
+
+    /// The same model with a gravity compliance known without masses on some joints: per joint (one entry
+    /// each) none, or the weights `θ` of `Δq = Σ θ_b f_b(q)` (radians; radians per mm for a term of a
+    /// slide it carries) over the functions of [`thermokin_chain::gravity_load_basis_into`] at the
+    /// commanded joint values — the joint's stiffness lumped with the unknown first moments of the links
+    /// it carries, as calibrated (a payload given at use does not change them).
+    pub fn with_gravity_loads(mut self, loads: Vec<Vec<f64>>) -> Result<Self, DeformError> {
+        let chain = self.robot.chain();
+        if loads.len() != chain.dof() {
+            return Err(DeformError::RowCount { rows: loads.len(), joints: chain.dof() });
+        }
+        for (j, l) in loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+            let expected = thermokin_chain::gravity_load_basis_len(chain, j);
+            let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
+            if expected == 0 {
+                return bad("a gravity compliance without masses is for a revolute joint".into());
+            }
+            if l.len() != expected {
+                return bad(format!("{} gravity-load weights for the {expected} this joint's arm takes", l.len()));
+            }
+            if l.iter().any(|v| !v.is_finite()) {
+                return bad("every gravity-load weight must be finite".into());
+            }
+        }
+        self.gravity_loads = loads;
         Ok(self)
     }
 
@@ -352,6 +382,18 @@ impl RobotModel {
         &self.joints
     }
 
+    /// Per joint, the weights of a gravity compliance known without masses (empty when none):
+    /// [`RobotModel::with_gravity_loads`].
+    pub fn gravity_loads(&self) -> &[Vec<f64>] {
+        &self.gravity_loads
+    }
+
+    /// `true` when the joint values the chain sees differ from the commanded ones (a gear ratio, a cyclic
+    /// error, a compliance with or without masses).
+    pub fn corrects_joints(&self) -> bool {
+        !self.joints.iter().all(JointCorrection::is_none) || self.gravity_loads.iter().any(|l| !l.is_empty())
+    }
+
     /// The drift rows.
     pub fn drift(&self) -> &[DriftRow] {
         &self.drift
@@ -369,7 +411,7 @@ impl RobotModel {
 
     /// `true` when the model is its robot's chain alone: no joint correction and no drift.
     pub fn is_plain(&self) -> bool {
-        self.drift.is_empty() && self.joints.iter().all(JointCorrection::is_none)
+        self.drift.is_empty() && !self.corrects_joints()
     }
 
     /// `true` for the robot as designed: plain ([`RobotModel::is_plain`]) with no error parameter and no
@@ -443,6 +485,9 @@ impl RobotModel {
             if c.coupling_rad_per_nm != 0.0 {
                 out.push(format!("joints {} and {}: compliance coupling", j + 1, j + 2));
             }
+            if !self.gravity_loads[j].is_empty() {
+                out.push(format!("joint {} ({}): gravity compliance without masses", j + 1, names[j]));
+            }
         }
         for d in &self.drift {
             out.push(format!("{}: thermal drift, {}", row_name(d.row), d.law.describe()));
@@ -489,7 +534,7 @@ impl RobotModel {
     /// The joint values the chain sees when `commanded` is commanded in `state` (step 1 of the law).
     pub fn joint_values(&self, commanded: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
         self.robot.chain().check_joint_count(commanded)?;
-        if self.joints.iter().all(JointCorrection::is_none) {
+        if !self.corrects_joints() {
             return Ok(commanded.to_vec());
         }
         let torques = if self.joints.iter().any(|c| c.compliance_rad_per_nm != 0.0 || c.coupling_rad_per_nm != 0.0) {
@@ -504,6 +549,12 @@ impl RobotModel {
             actual[j] += k.coupling_rad_per_nm * torques[j + 1];
             actual[j + 1] += k.coupling_rad_per_nm * torques[j];
         }
+        let mut basis = Vec::new();
+        for (j, weights) in self.gravity_loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+            let chain = self.robot.chain();
+            thermokin_chain::gravity_load_basis_into(chain, commanded, None, &self.down, j, &mut basis)?;
+            actual[j] += basis.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
+        }
         Ok(actual)
     }
 
@@ -514,7 +565,7 @@ impl RobotModel {
     /// unless `joint_values` of the answer is `actual` to 1e-12 (1e-14 sought).
     pub fn commanded_for(&self, actual: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
         let mut c = actual.to_vec();
-        if self.joints.iter().all(JointCorrection::is_none) {
+        if !self.corrects_joints() {
             self.robot.chain().check_joint_count(actual)?;
             return Ok(c);
         }

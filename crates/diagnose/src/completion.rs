@@ -82,6 +82,8 @@ fn complete_geometry(
 ) -> Result<(), DiagnoseError> {
     let mut rows: Vec<Effect> = (0..scorer.robot.chain().dof())
         .filter_map(|j| JointIndex::of(scorer.robot, j).ok())
+        // A compliance with the file's masses is one number per joint; one without masses has a weight
+        // per load function (up to two per link carried) and enters by the selection's gate only.
         .flat_map(|j| [Effect::LinkDeviation(j), Effect::JointCompliance(j)])
         .filter(|e| eligible.contains(e) && !sel.effects.contains(e))
         .collect();
@@ -161,9 +163,10 @@ enum Judgement {
 fn judge(scorer: &Scorer<'_>, config: &Config, model: &Model, full: &Fit, rows: &[Effect]) -> Judgement {
     let proposed = || model.effects().iter().zip(model.offsets()).filter(|(e, _)| rows.contains(e));
     let unseen: Vec<Effect> = proposed()
-        .filter(|(e, _)| matches!(e, Effect::JointCompliance(_)))
-        // A fixed compliance (σ NaN) is not determined either.
-        .filter(|&(_, &o)| (full.theta[o].abs() > SEEN_STANDARD_ERRORS * full.std[o]).not())
+        .filter(|(e, _)| matches!(e, Effect::JointCompliance(_) | Effect::LumpedCompliance(..)))
+        // A fixed compliance (σ NaN) is not determined either; one without masses is seen when any of its
+        // weights is.
+        .filter(|&(e, &o)| (o..o + e.len()).any(|k| full.theta[k].abs() > SEEN_STANDARD_ERRORS * full.std[k]).not())
         .map(|(&e, _)| e)
         .collect();
     if !unseen.is_empty() {

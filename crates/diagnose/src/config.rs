@@ -58,7 +58,39 @@ pub struct Config {
     /// Whether a chosen function of a joint's angle or load must hold beyond the poses it was fitted on
     /// ([`Extrapolation`]).
     pub extrapolation: Extrapolation,
+    /// Whether the robot file's link masses are trusted ([`Masses`]).
+    pub masses: Masses,
 }
+
+/// What the diagnosis makes of the robot file's link masses ([`crate::Config::masses`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub enum Masses {
+    /// The default: a gravity compliance is the file's masses' torque times one stiffness per joint; a
+    /// file with no masses gets each joint's loads lumped and identified from the data.
+    #[default]
+    FromFile,
+    /// The masses are not trusted (CAD masses without cables and grease, a file copied from another
+    /// arm): every compliance has its loads lumped and identified from the data, as for a file without
+    /// masses, and the exported robot carries none.
+    Ignored,
+}
+
+thermokin_chain::choices!(
+    Masses,
+    "robot masses",
+    [
+        (
+            "from-file",
+            "gravity compliance on the robot file's masses (lumped from the data where it has none)",
+            Masses::FromFile
+        ),
+        (
+            "ignore",
+            "the file's masses not trusted: every compliance's loads lumped and identified from the data",
+            Masses::Ignored
+        ),
+    ]
+);
 
 /// The selection's check beyond the measured poses ([`crate::Config::extrapolation`]; the module
 /// `extrapolation` gives the why).
@@ -279,6 +311,7 @@ impl Default for Config {
             outliers: Outliers::default(),
             shrinkage: Shrinkage::default(),
             extrapolation: Extrapolation::default(),
+            masses: Masses::default(),
         }
     }
 }

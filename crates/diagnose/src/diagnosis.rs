@@ -4,7 +4,7 @@
 
 use thermokin_chain::{Dataset, Robot};
 
-use crate::config::{Config, Validation};
+use crate::config::{Config, Masses, Validation};
 use crate::error::DiagnoseError;
 use crate::outliers::screen;
 use crate::profile::{Clock, Phase, Profile, profile};
@@ -97,6 +97,16 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
+/// The robot as the diagnosis reads it: without its masses where the configuration does not trust them
+/// ([`Masses::Ignored`]: every compliance's loads lumped then).
+fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r, Robot>, DiagnoseError> {
+    Ok(if config.masses == Masses::Ignored && robot.masses().iter().any(Option::is_some) {
+        std::borrow::Cow::Owned(robot.clone().with_masses(vec![None; robot.chain().dof()])?)
+    } else {
+        std::borrow::Cow::Borrowed(robot)
+    })
+}
+
 /// The diagnosis, its phases on all measurements timed into `main`, those of the outer folds into `outer`.
 fn run(
     robot: &Robot,
@@ -108,6 +118,7 @@ fn run(
     outer_clock: &Clock,
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
+    let robot = &*trusted(robot, config)?;
     let outer = match config.validation {
         Validation::Nested { outer } => nested_folds(data, config, outer).len(),
         Validation::SelectionOnly => 0,

@@ -53,7 +53,11 @@ use crate::stats::Stats;
 fn shaped(e: Effect) -> bool {
     matches!(
         e,
-        Effect::JointScale(_) | Effect::Periodic(_) | Effect::JointCompliance(_) | Effect::ComplianceCoupling(_)
+        Effect::JointScale(_)
+            | Effect::Periodic(_)
+            | Effect::JointCompliance(_)
+            | Effect::LumpedCompliance(..)
+            | Effect::ComplianceCoupling(_)
     )
 }
 

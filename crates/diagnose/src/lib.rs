@@ -42,7 +42,8 @@ mod validation;
 mod verdict;
 
 pub use config::{
-    Completion, Config, Eligibility, Extrapolation, FoldGrouping, Outliers, Plausibility, Screen, Shrinkage, Validation,
+    Completion, Config, Eligibility, Extrapolation, FoldGrouping, Masses, Outliers, Plausibility, Screen, Shrinkage,
+    Validation,
 };
 pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;

@@ -35,8 +35,8 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use thermokin_chain::{Dataset, Robot};
 use thermokin_identify::{
-    DriftShape, Effect, JointIndex, Model, PoseTerms, Prior, Start, fit_from, identifiable, initial_frames,
-    max_gravity_torques, norms, residuals, residuals_and_jacobian,
+    DriftShape, Effect, JointIndex, Model, PoseTerms, Prior, Start, fit_from, identifiable, initial_frames, norms,
+    residuals, residuals_and_jacobian,
 };
 
 use crate::clusters::blocks;
@@ -119,7 +119,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
     let screen = OutlierScreen {
         model: which,
-        with_compliance: effects.iter().any(|e| matches!(e, Effect::JointCompliance(_))),
+        with_compliance: effects.iter().any(|e| matches!(e, Effect::JointCompliance(_) | Effect::LumpedCompliance(..))),
         scale_mm,
         scale_from,
         threshold_mm,
@@ -132,14 +132,15 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
 
 /// The screening model's effects for this robot and these data: the always-estimated blocks, every
 /// joint row and every loaded joint's compliance (and, for a warm-up, every row's drifts).
-fn screening_effects(robot: &Robot, data: &Dataset, config: &Config) -> Vec<Effect> {
-    let loaded = max_gravity_torques(robot);
+fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usize) -> Vec<Effect> {
     let mut effects = config.setup().always_estimated(data);
     let spans_time = data.time_span() > 0.0;
+    let mut lumped = Vec::new();
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         effects.push(Effect::LinkDeviation(j));
-        if loaded[j.index()] > 0.0 {
-            effects.push(Effect::JointCompliance(j));
+        match thermokin_identify::gravity_compliance(robot, data, j) {
+            Some(e @ Effect::LumpedCompliance(..)) => lumped.push(e),
+            other => effects.extend(other),
         }
         if spans_time {
             // A warm-up: each row may drift (in time, and with its logged temperature), so that a drift's
@@ -149,6 +150,13 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config) -> Vec<Effe
                 effects.push(Effect::ThermalDrift(j, DriftShape::Temperature));
             }
         }
+    }
+    // A compliance without masses (up to two weights per link carried) screens where the rows hold
+    // [`MIN_REDUNDANCY`] per parameter with it; on fewer it would only make the screen shrink the rows
+    // that explain a small set's millimetres, and hide the pose that is off.
+    let parameters: usize = effects.iter().chain(&lumped).map(Effect::len).sum();
+    if data.len() * stride >= MIN_REDUNDANCY * parameters {
+        effects.extend(lumped);
     }
     effects
 }
@@ -172,7 +180,7 @@ fn screening_model(
     config: &Config,
     terms: &PoseTerms,
 ) -> Result<(Vec<Effect>, ScreenModel, Option<Prior>), DiagnoseError> {
-    let full = screening_effects(robot, data, config);
+    let full = screening_effects(robot, data, config, terms.stride());
     let rows = data.len() * terms.stride();
     let parameters: usize = full.iter().map(Effect::len).sum();
     if rows >= MIN_REDUNDANCY * parameters {

@@ -150,6 +150,18 @@ impl Implausible {
     }
 }
 
+/// The larger of the two deflections a coupling `c` of joint `a` and the next causes at the largest
+/// gravity torques, and the lever it moves the tool point at.
+fn coupled_deflection(scale: &RobotScale, a: usize, c: f64) -> (f64, f64) {
+    let b = a + 1;
+    let moved = |from: usize, at: usize| (c * scale.max_torque_nm[from]).abs() * scale.axis_lever_mm[at].max(1.0);
+    if moved(b, a) >= moved(a, b) {
+        (c * scale.max_torque_nm[b], scale.axis_lever_mm[a].max(1.0))
+    } else {
+        (c * scale.max_torque_nm[a], scale.axis_lever_mm[b].max(1.0))
+    }
+}
+
 /// Whether the values `v` of `effect` (internal units) are implausible for a robot of `scale` under the
 /// bound `p`, and why.
 pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Plausibility) -> Option<Implausible> {
@@ -196,14 +208,7 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
         Effect::ComplianceCoupling(j) => {
             // The larger of the two deflections it causes, each at its own joint's lever (no sign rule:
             // an off-diagonal compliance may take either).
-            let (a, b) = (j.index(), j.index() + 1);
-            let moved =
-                |from: usize, at: usize| (v[0] * scale.max_torque_nm[from]).abs() * scale.axis_lever_mm[at].max(1.0);
-            let (deflection, lever) = if moved(b, a) >= moved(a, b) {
-                (v[0] * scale.max_torque_nm[b], scale.axis_lever_mm[a].max(1.0))
-            } else {
-                (v[0] * scale.max_torque_nm[a], scale.axis_lever_mm[b].max(1.0))
-            };
+            let (deflection, lever) = coupled_deflection(scale, j.index(), v[0]);
             over(
                 "the coupled deflection at the largest gravity torque",
                 deg(deflection),
@@ -211,6 +216,12 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
                 lever,
                 "°",
             )
+        }
+        Effect::LumpedCompliance(j, _) => {
+            // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of
+            // the weights bounds the deflection over every pose.
+            let (lever, deflection) = (scale.axis_lever_mm[j.index()].max(1.0), v.iter().map(|x| x.abs()).sum::<f64>());
+            over("the largest deflection under gravity", deg(deflection), deflection * lever, lever, "°")
         }
         Effect::JointOffset(j) | Effect::JointScale(j) | Effect::Periodic(j) | Effect::JointCompliance(j) => {
             let lever = scale.axis_lever_mm[j.index()].max(1.0);

@@ -91,6 +91,7 @@ impl HiddenEffect {
                     rng.random_range(0.02..0.06) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }
                 (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
+                (Effect::LumpedCompliance(..), _) => rng.random_range(-0.02..0.02),
                 (Effect::ComplianceCoupling(_), _) => {
                     rng.random_range(3e-4..1e-3) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }

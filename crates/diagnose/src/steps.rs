@@ -22,7 +22,7 @@
 
 use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 use thermokin_chain::Dataset;
-use thermokin_identify::{Effect, JointIndex, StepAt, max_gravity_torques, residuals};
+use thermokin_identify::{Effect, JointIndex, StepAt, residuals};
 
 use crate::error::DiagnoseError;
 use crate::scoring::Scorer;
@@ -70,13 +70,10 @@ pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Optio
     }
     let Some((order, at)) = order(data) else { return Ok(None) };
     let robot = scorer.robot;
-    let loaded = max_gravity_torques(robot);
     let mut flexible = always.to_vec();
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         flexible.push(Effect::LinkDeviation(j));
-        if loaded[j.index()] > 0.0 {
-            flexible.push(Effect::JointCompliance(j));
-        }
+        flexible.extend(thermokin_identify::gravity_compliance(robot, data, j));
     }
     // Its geometry pinned down by at most FIT_POSES poses spread evenly over the set (a week of poses
     // adds nothing to a static robot's rows but time), its residuals taken on every pose.

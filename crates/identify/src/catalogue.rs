@@ -8,6 +8,34 @@ use crate::effect::{DriftShape, Effect, JointIndex};
 use crate::error::IdentifyError;
 use crate::terms::max_gravity_torques;
 
+/// Whether gravity loads revolute joint `j` at some of the data's poses (a vertical axis it never does):
+/// its gravity-load functions ([`thermokin_chain::gravity_load_basis_into`]) are not all zero there.
+fn gravity_loads(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
+    let chain = robot.chain();
+    if thermokin_chain::gravity_load_basis_len(chain, j.index()) == 0 {
+        return false;
+    }
+    let down = -nalgebra::Vector3::z_axis();
+    let mut basis = Vec::new();
+    data.measurements.iter().take(500).any(|m| {
+        thermokin_chain::gravity_load_basis_into(chain, &m.q, None, &down, j.index(), &mut basis).is_ok()
+            && basis.iter().any(|f| f.abs() > 1e-6)
+    })
+}
+
+/// The gravity compliance of joint `j` a model of these data can carry: with the file's masses where
+/// the joint carries some ([`Effect::JointCompliance`]), with its loads lumped where the file has no
+/// masses and gravity loads the joint in the data ([`Effect::LumpedCompliance`]); `None` otherwise.
+pub fn gravity_compliance(robot: &Robot, data: &Dataset, j: JointIndex) -> Option<Effect> {
+    if max_gravity_torques(robot)[j.index()] > 0.0 {
+        Some(Effect::JointCompliance(j))
+    } else if robot.masses().iter().all(Option::is_none) && gravity_loads(robot, data, j) {
+        Effect::lumped_compliance(robot, j).ok()
+    } else {
+        None
+    }
+}
+
 /// In which frame the measurements are.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 pub enum FrameMode {
@@ -92,10 +120,14 @@ impl Setup {
         }
         c.extend(joints.iter().map(|&j| Effect::JointOffset(j)));
         c.extend(joints.iter().map(|&j| Effect::LinkDeviation(j)));
+        let massless = robot.masses().iter().all(Option::is_none);
         for &j in &joints {
             let carries_mass = robot.masses().iter().skip(j.index()).any(Option::is_some);
             if carries_mass {
                 c.push(Effect::JointCompliance(j));
+            } else if massless && gravity_loads(robot, data, j) {
+                // No masses in the file: the compliance with its loads lumped, identified from the data.
+                c.push(Effect::lumped_compliance(robot, j)?);
             }
         }
         // A compliance coupling of two neighbouring revolute joints that gravity both loads (a drive the

@@ -140,6 +140,13 @@ pub enum Effect {
     LinkDeviation(JointIndex),
     /// Gravity compliance of a joint: Δq = k · τ_gravity(q) (1).
     JointCompliance(JointIndex),
+    /// Gravity compliance of a revolute joint when the robot file carries no masses: `Δq = Σ θ_b f_b(q)`,
+    /// the functions of [`thermokin_chain::gravity_load_basis_into`] whose span holds the joint's
+    /// gravity torque under any masses of the links it carries, the weights lumping the joint's
+    /// stiffness with those links' unknown first moments (radians; radians per mm for a slide it
+    /// carries). The count is the basis' length ([`thermokin_chain::gravity_load_basis_len`]), fixed by
+    /// the robot: make one with [`Effect::named`] (`"joint_compliance"` on a robot without masses).
+    LumpedCompliance(JointIndex, u8),
     /// The coupling of the gravity compliances of joint `j` and the next, `j + 1` — a drive the two
     /// share (a differential, a cable pair): `Δq_j += c · τ_{j+1}` and `Δq_{j+1} += c · τ_j`, the
     /// symmetric off-diagonal term of the two joints' compliance matrix (Maxwell–Betti reciprocity) (1).
@@ -187,6 +194,9 @@ impl Effect {
             "tool_frame" => global(Effect::ToolFrame),
             "joint_offset" => Ok(Effect::JointOffset(on(joint)?)),
             "link_deviation" => Ok(Effect::LinkDeviation(on(joint)?)),
+            "joint_compliance" if robot.masses().iter().all(Option::is_none) => {
+                Effect::lumped_compliance(robot, on(joint)?)
+            }
             "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
             "compliance_coupling" => {
                 let j = on(joint)?;
@@ -199,6 +209,16 @@ impl Effect {
             "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
             "thermal_drift_exp" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Exponential)),
             _ => Err(IdentifyError::UnknownEffect { name: name.to_string(), known: EFFECT_NAMES.join(", ") }),
+        }
+    }
+
+    /// Gravity compliance of joint `j` with no masses known ([`Effect::LumpedCompliance`]); an error for a
+    /// prismatic joint or one whose basis does not fit the effect's count.
+    pub fn lumped_compliance(robot: &Robot, j: JointIndex) -> Result<Self, IdentifyError> {
+        let n = thermokin_chain::gravity_load_basis_len(robot.chain(), j.index());
+        match u8::try_from(n) {
+            Ok(count) if count > 0 => Ok(Effect::LumpedCompliance(j, count)),
+            _ => Err(IdentifyError::NotRevolute { effect: "joint_compliance".into(), joint: j.number() }),
         }
     }
 
@@ -221,6 +241,7 @@ impl Effect {
             Effect::JointOffset(j)
             | Effect::LinkDeviation(j)
             | Effect::JointCompliance(j)
+            | Effect::LumpedCompliance(j, _)
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
@@ -262,6 +283,7 @@ impl Effect {
             | Effect::ComplianceCoupling(_)
             | Effect::JointScale(_) => 1,
             Effect::Periodic(_) => 4,
+            Effect::LumpedCompliance(_, n) => *n as usize,
         }
     }
 
@@ -280,7 +302,7 @@ impl Effect {
             Effect::ToolFrame => "tool_frame",
             Effect::JointOffset(_) => "joint_offset",
             Effect::LinkDeviation(_) => "link_deviation",
-            Effect::JointCompliance(_) => "joint_compliance",
+            Effect::JointCompliance(_) | Effect::LumpedCompliance(..) => "joint_compliance",
             Effect::ComplianceCoupling(_) => "compliance_coupling",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
@@ -295,6 +317,7 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Linear) => " (linear)",
             Effect::ThermalDrift(_, DriftShape::Exponential) => " (exponential)",
             Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
+            Effect::LumpedCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             _ => "",
         };
@@ -313,6 +336,7 @@ impl Effect {
             Effect::ToolRotation => six[3..].iter().map(|n| format!("{prefix}.{n}")).collect(),
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
+            Effect::LumpedCompliance(_, n) => (1..=*n as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
             Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
             Effect::Periodic(_) => {
@@ -348,6 +372,7 @@ impl Effect {
         !matches!(
             self,
             Effect::JointCompliance(_)
+                | Effect::LumpedCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -374,6 +399,7 @@ impl Effect {
             (
                 Effect::JointOffset(_)
                 | Effect::JointCompliance(_)
+                | Effect::LumpedCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::Periodic(_)
                 | Effect::ToolRotation,

@@ -44,6 +44,14 @@ pub enum IdentifyError {
         /// The effect's name.
         effect: String,
     },
+    /// An effect of a revolute joint's angle given a prismatic joint (or one with no gravity basis).
+    #[error("{effect} acts on a revolute joint; joint {joint} is not one")]
+    NotRevolute {
+        /// The effect's name.
+        effect: String,
+        /// 1-based joint number.
+        joint: usize,
+    },
     /// A name that is not in the catalogue.
     #[error("unknown effect `{name}` (known: {known})")]
     UnknownEffect {

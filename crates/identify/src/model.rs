@@ -178,11 +178,17 @@ impl Model {
         }
         let dof = robot.chain().dof();
         let mut joints = vec![JointCorrection::NONE; dof];
+        let mut loads: Vec<Vec<f64>> = vec![Vec::new(); dof];
         let mut drift = Vec::new();
         let first = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min));
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
+                Effect::LumpedCompliance(j, n) => {
+                    let own = &mut loads[j.index()];
+                    own.resize(n as usize, 0.0);
+                    own.iter_mut().zip(&theta[o..o + n as usize]).for_each(|(l, t)| *l += t);
+                }
                 Effect::ComplianceCoupling(j) => joints[j.index()].coupling_rad_per_nm += theta[o],
                 Effect::JointScale(j) => joints[j.index()].scale += theta[o],
                 Effect::Periodic(j) => {
@@ -204,7 +210,11 @@ impl Model {
             }
         }
         let base = robot.with_chain(chain)?;
-        Ok(RobotModel::new(base).with_gravity(down).with_joint_corrections(joints)?.with_drift(drift)?)
+        Ok(RobotModel::new(base)
+            .with_gravity(down)
+            .with_joint_corrections(joints)?
+            .with_gravity_loads(loads)?
+            .with_drift(drift)?)
     }
 
     /// The sensors a temperature drift of joint `j` follows (its own, or all), named as in files
@@ -255,6 +265,7 @@ impl Model {
                 Effect::JointOffset(j) => zeros[j.index()] += theta[o],
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
                 Effect::JointCompliance(_)
+                | Effect::LumpedCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -306,9 +317,11 @@ impl Model {
                 Effect::Registration | Effect::BaseFrame => rows.base = true,
                 Effect::ToolPoint | Effect::ToolRotation | Effect::ToolFrame => rows.tool = true,
                 Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => rows.joints[j.index()] = true,
-                Effect::JointOffset(j) | Effect::JointCompliance(j) | Effect::JointScale(j) | Effect::Periodic(j) => {
-                    rows.zeros[j.index()] = true
-                }
+                Effect::JointOffset(j)
+                | Effect::JointCompliance(j)
+                | Effect::LumpedCompliance(j, _)
+                | Effect::JointScale(j)
+                | Effect::Periodic(j) => rows.zeros[j.index()] = true,
                 Effect::ComplianceCoupling(j) => {
                     rows.zeros[j.index()] = true;
                     rows.zeros[j.index() + 1] = true;

@@ -30,6 +30,10 @@ pub struct ChainCache {
     /// current measurement.
     gravity: Option<(Chain, Unit<Vector3<f64>>)>,
     torques: Vec<f64>,
+    /// A compliance without masses ([`Effect::LumpedCompliance`]): its basis at the current measurement,
+    /// at the effect's parameter offsets (zero elsewhere), and a buffer for one joint's basis.
+    loads: Vec<f64>,
+    basis: Vec<f64>,
 }
 
 /// A drift's factor at one measurement: `s = f(t) / f(180)` and `∂s/∂τ`, for the effect at `effect` in
@@ -102,7 +106,12 @@ impl Model {
                 let gravity = self
                     .effects()
                     .iter()
-                    .any(|e| matches!(e, Effect::JointCompliance(_) | Effect::ComplianceCoupling(_)))
+                    .any(|e| {
+                        matches!(
+                            e,
+                            Effect::JointCompliance(_) | Effect::LumpedCompliance(..) | Effect::ComplianceCoupling(_)
+                        )
+                    })
                     .then(|| (chain.clone(), self.gravity_down(&chain, robot)));
                 cache.insert(ChainCache {
                     chain,
@@ -115,6 +124,8 @@ impl Model {
                     sin_cos: Vec::with_capacity(dof),
                     gravity,
                     torques: Vec::with_capacity(dof),
+                    loads: vec![0.0; self.len()],
+                    basis: Vec::new(),
                 })
             }
         })
@@ -152,6 +163,22 @@ impl Model {
                 Effect::JointCompliance(j) => {
                     let j = j.index();
                     q[j] += theta[o] * cached.torques[j];
+                }
+                Effect::LumpedCompliance(j, n) => {
+                    // The basis at the measured joint values (as the torques are), kept for the Jacobian.
+                    let (j, n) = (j.index(), n as usize);
+                    if let Some((chain, down)) = &cached.gravity {
+                        thermokin_chain::gravity_load_basis_into(
+                            chain,
+                            &m.q,
+                            inputs.sin_cos,
+                            down,
+                            j,
+                            &mut cached.basis,
+                        )?;
+                    }
+                    cached.loads[o..o + n].copy_from_slice(&cached.basis[..n]);
+                    q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
                 }
                 Effect::ComplianceCoupling(j) => {
                     let j = j.index();
@@ -324,6 +351,11 @@ impl Model {
                     let j = j.index();
                     let scale = if chain.joints()[j].kind == JointKind::Revolute { cached.torques[j] } else { 0.0 };
                     copy(o, layout.zero(j), scale);
+                }
+                Effect::LumpedCompliance(j, n) => {
+                    // ∂p/∂θ_b = ∂p/∂zero_j · f_b(q).
+                    let zero = layout.zero(j.index());
+                    (0..n as usize).for_each(|b| copy(o + b, zero, cached.loads[o + b]));
                 }
                 Effect::ComplianceCoupling(j) => {
                     // Both joints move: ∂p/∂c = ∂p/∂zero_j · τ_{j+1} + ∂p/∂zero_{j+1} · τ_j.

@@ -176,6 +176,69 @@ mod tests {
         }
     }
 
+    /// A gravity compliance known without masses on joints 2 and 3 of an IRB 140 whose file carries no
+    /// masses: the analytic Jacobian against central differences, and the exported robot's forward model
+    /// against the fit's prediction at every measurement.
+    #[test]
+    fn a_compliance_without_masses_matches_the_differences_and_its_export() {
+        let robot = Robot::new("IRB 140", irb140_table9());
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let measurements = (0..8)
+            .map(|_| {
+                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
+                measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
+            })
+            .collect();
+        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let joint = |j| JointIndex::of(&robot, j).unwrap();
+        let effects = vec![
+            Effect::named(&robot, "joint_compliance", Some(1)).unwrap(),
+            Effect::named(&robot, "joint_compliance", Some(2)).unwrap(),
+        ];
+        assert_eq!(effects, vec![Effect::LumpedCompliance(joint(1), 10), Effect::LumpedCompliance(joint(2), 8)]);
+        let model = Model::new(&robot, effects).unwrap();
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let theta: Vec<f64> = (0..model.len()).map(|k| 1e-4 * ((k as f64 * 0.7).sin() + 0.3)).collect();
+        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        let h = 1e-7;
+        for k in 0..theta.len() {
+            let (mut plus, mut minus) = (theta.clone(), theta.clone());
+            plus[k] += h;
+            minus[k] -= h;
+            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
+            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
+            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
+                let numeric = -(p - m) / (2.0 * h);
+                let scale = jac.col(k).norm_max().max(1.0);
+                assert!(
+                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
+                    "column {k}, row {r}: {} vs {numeric}",
+                    jac[(r, k)]
+                );
+            }
+        }
+        // The export evaluates the same law by another route (the robot model's joint values, then its
+        // chain's forward kinematics): the same points to 1e-9 mm.
+        let exported = model.robot_model(&robot, &theta, &data).unwrap();
+        assert!(exported.gravity_loads()[1].len() == 10 && exported.gravity_loads()[2].len() == 8);
+        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        for (i, m) in data.measurements.iter().enumerate() {
+            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
+            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
+        }
+        // And the law moves the tool: a milli-radian of load weight is not nothing.
+        let plain = Robot::new("IRB 140", irb140_table9())
+            .chain()
+            .tool_pose(&data.measurements[0].q)
+            .unwrap()
+            .translation
+            .vector;
+        let moved = exported.tool_pose(&data.measurements[0].q, &Default::default()).unwrap().translation.vector;
+        assert!((moved - plain).norm() > 1e-3);
+    }
+
     /// A step of the measurement frame at minute 50 of a session, beside a link deviation and the
     /// registration: the analytic Jacobian of every column — the step's own and those it turns — against
     /// central differences, position and orientation rows alike, on poses before and after the step.

@@ -138,6 +138,9 @@ struct JointSpec {
     compliance_deg_per_nm: Option<f64>,
     /// The coupling of this joint's compliance with the next joint's, degrees per N·m.
     compliance_coupling_deg_per_nm: Option<f64>,
+    /// Gravity compliance known without masses, degrees (degrees per mm for a slide the joint carries):
+    /// the weights of `thermokin_chain::gravity_load_basis_into`'s functions.
+    gravity_load_deg: Option<Vec<f64>>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
     /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
@@ -182,7 +185,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -388,6 +391,7 @@ fn dh_chain(
 fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Result<RobotModel, IoError> {
     let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
     let mut joints = vec![JointCorrection::NONE; robot.chain().dof()];
+    let mut loads = vec![Vec::new(); robot.chain().dof()];
     for (i, spanned) in file.joint.iter().enumerate() {
         let (line, spec) = (at(spanned.span()), spanned.get_ref());
         let field = |f: &str| format!("joint[{}].{f}", i + 1);
@@ -408,15 +412,22 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
             finite(path, line, &field("compliance_coupling_deg_per_nm"), &[v])?;
             c.coupling_rad_per_nm = units::radians(v);
         }
+        if let Some(v) = &spec.gravity_load_deg {
+            finite(path, line, &field("gravity_load_deg"), v)?;
+            loads[i] = v.iter().map(|&d| units::radians(d)).collect();
+        }
     }
-    let mut model = RobotModel::new(robot).with_joint_corrections(joints).map_err(|e| {
-        let joint = match &e {
-            thermokin_deform::DeformError::BadCorrection { joint, .. } => *joint,
-            _ => 1,
-        };
-        let line = file.joint.get(joint - 1).and_then(|s| at(s.span()));
-        IoError::input(path, line, format!("joint[{joint}]"), e.to_string())
-    })?;
+    let mut model = RobotModel::new(robot)
+        .with_joint_corrections(joints)
+        .and_then(|m| m.with_gravity_loads(loads))
+        .map_err(|e| {
+            let joint = match &e {
+                thermokin_deform::DeformError::BadCorrection { joint, .. } => *joint,
+                _ => 1,
+            };
+            let line = file.joint.get(joint - 1).and_then(|s| at(s.span()));
+            IoError::input(path, line, format!("joint[{joint}]"), e.to_string())
+        })?;
     let mut drift = Vec::with_capacity(file.drift.len());
     for (i, spanned) in file.drift.iter().enumerate() {
         let (line, spec) = (at(spanned.span()), spanned.get_ref());
@@ -727,6 +738,14 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
     }
     for (i, j) in robot.chain().joints().iter().enumerate() {
         joint_toml(&mut s, robot, i, j, &model.joint_corrections()[i]);
+        if !model.gravity_loads()[i].is_empty() {
+            let deg: Vec<String> =
+                model.gravity_loads()[i].iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
+            s.push_str(&format!(
+                "# gravity compliance without masses: the weights of the gravity-load functions of this joint\ngravity_load_deg = [{}]\n",
+                deg.join(", ")
+            ));
+        }
     }
     if robot.chain().base() != &FixedRow::identity() {
         row_toml(&mut s, "base", robot.chain().base());

@@ -2,6 +2,7 @@
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail.
 
 mod catalogue;
+mod causes;
 mod export;
 mod frames;
 mod golden;

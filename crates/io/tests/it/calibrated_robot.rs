@@ -34,8 +34,13 @@ fn calibrated() -> RobotModel {
             law: DriftLaw::PerKelvin { sensors: vec![("temp_j2".into(), 22.25), ("temp_j3".into(), 21.0)] },
         },
     ];
+    // Joint 3's gravity compliance known without masses: 8 weights (two per revolute link it carries).
+    let mut loads = vec![Vec::new(); 6];
+    loads[2] = (0..8).map(|k| (0.01 * (k as f64 - 3.5)).to_radians()).collect();
     RobotModel::new(robot)
         .with_joint_corrections(joints)
+        .unwrap()
+        .with_gravity_loads(loads)
         .unwrap()
         .with_drift(drift)
         .unwrap()
@@ -70,6 +75,11 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
     // The robot alone would drop the corrections: refused, naming them.
     let e = parse_robot_toml("cal.toml".as_ref(), &text).unwrap_err().to_string();
     assert!(e.contains("gear-ratio") && e.contains("thermal drift") && e.contains("compliance coupling"), "{e}");
+    assert!(e.contains("joint 3 (") && e.contains("gravity compliance without masses"), "{e}");
+    // A weight count that is not the joint's is refused, naming the joint and its line.
+    let wrong = text.replacen("gravity_load_deg = [", "gravity_load_deg = [0.1, ", 1);
+    let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
+    assert!(e.contains("cal.toml") && e.contains("joint[3]") && e.contains("9 gravity-load weights for the 8"), "{e}");
 }
 
 #[test]

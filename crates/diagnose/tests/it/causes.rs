@@ -1,0 +1,75 @@
+//! Causes the robot file does not tell (issue #47), each simulated with a truth the diagnosis does not
+//! share: the independent tracker of `tracker.rs` measuring a robot whose joints deflect by the physics
+//! of its real masses, diagnosed from a file that carries none.
+
+use nalgebra::Vector3;
+use thermokin_chain::{LinkMass, Robot, gravity_torques};
+use thermokin_diagnose::{Config, Masses, Validation, diagnose};
+use thermokin_identify::FrameMode;
+use thermokin_testdata::workspace;
+
+/// Joints 2 and 3 of an IRB 140 deflect under gravity (1.2e-3 and 0.9e-3 °/N·m on the masses of its
+/// file: deflections up to ~0.1°), measured by a tracker; the diagnosis gets the file with its masses
+/// removed. It names a compliance of each of the two joints (with no masses, its loads lumped), nothing
+/// the truth lacks (the registration and probe aside), no gross error, and fresh poses at the noise in
+/// both protocols — where the full geometry alone cannot reach it.
+#[test]
+fn gravity_compliance_is_found_when_the_file_has_no_masses() {
+    compliance_found_without(Masses::FromFile);
+}
+
+/// The same robot diagnosed from a file whose masses are wrong (each link's mass halved, its centre
+/// moved 80 mm), which the user says not to trust (`--masses ignore`): the same answer.
+#[test]
+fn gravity_compliance_is_found_when_the_files_masses_are_not_trusted() {
+    compliance_found_without(Masses::Ignored);
+}
+
+fn compliance_found_without(masses: Masses) {
+    let with_masses = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    assert!(with_masses.masses().iter().all(Option::is_some));
+    let truth = |q: &[f64]| {
+        let down = -Vector3::z_axis();
+        let tau = gravity_torques(with_masses.chain(), with_masses.masses(), q, &down).unwrap();
+        let mut a = q.to_vec();
+        a[1] += 1.2e-3f64.to_radians() * tau[1];
+        a[2] += 0.9e-3f64.to_radians() * tau[2];
+        a
+    };
+    let data = crate::tracker::measure(with_masses.chain(), 300, 4701, truth);
+    let fresh = crate::tracker::measure(with_masses.chain(), 150, 4702, truth);
+    let robot: Robot = match masses {
+        Masses::FromFile => with_masses.clone().with_masses(vec![None; 6]).unwrap(),
+        Masses::Ignored => {
+            let wrong = with_masses
+                .masses()
+                .iter()
+                .map(|m| {
+                    m.map(|m| LinkMass { mass_kg: 0.5 * m.mass_kg, com_mm: m.com_mm + Vector3::new(80.0, 0.0, 0.0) })
+                })
+                .collect();
+            with_masses.clone().with_masses(wrong).unwrap()
+        }
+    };
+    let config =
+        Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, masses, ..Config::default() };
+    let report = diagnose(&robot, &data, Some(&fresh), &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    eprintln!("chose {chosen:?}; {} gross errors", report.outliers.len());
+    for joint in [2, 3] {
+        assert!(chosen.contains(&format!("joint_compliance[{joint}] (no masses)").as_str()), "{chosen:?}");
+    }
+    assert!(chosen.iter().all(|e| e.starts_with("joint_compliance") || e.starts_with("link_deviation")), "{chosen:?}");
+    assert!(report.outliers.is_empty(), "{:?}", report.outliers);
+    let noise_rms = crate::tracker::NOISE_MM * 3f64.sqrt();
+    let holdout = report.holdout.as_ref().unwrap();
+    for (protocol, nominal, selected) in [
+        ("as exported", &holdout.same_frame.nominal, &holdout.same_frame.selected),
+        ("refitted", &holdout.nominal, &holdout.selected),
+    ] {
+        eprintln!("{protocol}: {} -> {} mm RMS", nominal.heldout_rms_mm, selected.heldout_rms_mm);
+        assert!(selected.heldout_rms_mm < 1.5 * noise_rms, "{protocol}: {}", selected.heldout_rms_mm);
+    }
+    // The poses deflect by far more than the noise: without the compliance they could not be at it.
+    assert!(holdout.nominal.heldout_rms_mm > 20.0 * noise_rms, "{}", holdout.nominal.heldout_rms_mm);
+}
