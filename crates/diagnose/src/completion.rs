@@ -120,9 +120,29 @@ fn complete_geometry(
             Judgement::Joins => break (effects, lambda, held.1.stats, held.1.errors),
         }
     };
-    if !joins(&sel.errors, &errors, config.gate_standard_errors, &scorer.blocks) {
-        return Ok(());
+    let completed = Completed { effects, lambda, stats, errors, rows };
+    if joins(&sel.errors, &completed.errors, config.gate_standard_errors, &scorer.blocks) {
+        adopt(sel, completed, "not significantly worse");
+    } else {
+        sel.fallback = Some(completed);
     }
+    Ok(())
+}
+
+/// A completed model: the chosen effects and the rows that join them, the prior's strength, its held-out
+/// statistics and errors on the selection's folds.
+#[derive(Clone, Debug)]
+pub(crate) struct Completed {
+    pub(crate) effects: Vec<Effect>,
+    pub(crate) lambda: f64,
+    stats: crate::stats::Stats,
+    errors: Vec<f64>,
+    rows: Vec<Effect>,
+}
+
+/// `completed` becomes the selection's model, the additive table saying so and `why`.
+pub(crate) fn adopt(sel: &mut Selection, completed: Completed, why: &str) {
+    let Completed { effects, lambda, stats, errors, rows } = completed;
     // A row refused beside a partial model (its fit running away on every fold there) is plausible beside
     // the complete geometry, and in the model: its earlier refusal no longer holds.
     sel.refused.retain(|r| !rows.iter().any(|e| e.label() == r.effect));
@@ -132,13 +152,13 @@ fn complete_geometry(
     } else {
         String::new()
     };
-    let row = format!("completed for use: + {}{prior} (not significantly worse)", names.join(", "));
+    let row = format!("completed for use: + {}{prior} ({why})", names.join(", "));
     for &e in &rows {
         sel.steps.push(Step { effect: e, before_mm: None, after_mm: stats.heldout_rms_mm, joined: Joined::Completion });
     }
     sel.replace(effects, stats, errors, row);
     sel.shrinkage = lambda;
-    Ok(())
+    sel.fallback = None;
 }
 
 /// What the completed fit says of the rows it proposes.

@@ -8,7 +8,7 @@ use crate::config::{Config, Masses, Validation};
 use crate::error::DiagnoseError;
 use crate::outliers::screen;
 use crate::profile::{Clock, Phase, Profile, profile};
-use crate::report::{HoldoutPair, HoldoutStats, PoseHeldOut, PoseRecord, Report};
+use crate::report::{HoldoutPair, HoldoutStats, Nested, PoseHeldOut, PoseRecord, Report};
 use crate::scoring::Scorer;
 use crate::select::select;
 use crate::tables::tables;
@@ -97,6 +97,26 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
+/// A selection the nested validation cannot tell from the completed geometry it turned down (the
+/// procedure not better than the outer folds' completed models by [`Config::gate_standard_errors`]
+/// standard errors of the paired difference): its choice rests on folds that cannot carry it — a small
+/// set, whose few-effect model extrapolates beyond the poses as the shrunk complete geometry does not —
+/// and the completed model is taken. The sentence the report gives, if it falls back.
+fn fall_back(sel: &mut crate::selection::Selection, nested: Option<&Nested>, config: &Config) -> Option<String> {
+    let n = nested?;
+    let mut completed = sel.fallback.take()?;
+    // What a later phase refused (a compliance coupling no positive semidefinite pair holds) stays out.
+    completed.effects.retain(|e| !sel.refused.iter().any(|r| r.effect == e.label()));
+    if n.versus_complete_mm < -config.gate_standard_errors * n.versus_complete_se_mm {
+        return None;
+    }
+    crate::completion::adopt(sel, completed, "taken: the selection is not better than it on the nested outer folds");
+    Some(format!(
+        "the selection was not better on the nested outer folds than the completed geometry it turned down ({:+.4} ± {:.4} mm): the completed geometry is used",
+        n.versus_complete_mm, n.versus_complete_se_mm
+    ))
+}
+
 /// The robot as the diagnosis reads it: without its masses where the configuration does not trust them
 /// ([`Masses::Ignored`]: every compliance's loads lumped then).
 fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r, Robot>, DiagnoseError> {
@@ -141,8 +161,7 @@ fn run(
         &kept_data
     };
     let scorer = Scorer::new(robot, data, config);
-    let selected = select(&scorer, config, main)?;
-    let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
+    let mut selected = select(&scorer, config, main)?;
     tell("selection on all measurements".into());
     let (nested, heldout_per_pose) = match config.validation {
         Validation::Nested { outer } => {
@@ -152,6 +171,8 @@ fn run(
         }
         Validation::SelectionOnly => (None, vec![None; data.len()]),
     };
+    let fell_back = fall_back(&mut selected.selection, nested.as_ref(), config);
+    let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     let holdout = match holdout {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
@@ -165,7 +186,7 @@ fn run(
     };
     let report_started = std::time::Instant::now();
     // A transfer the poses cannot show is said first.
-    let mut all_warnings: Vec<String> = not_shown(&tables, nested.as_ref()).into_iter().collect();
+    let mut all_warnings: Vec<String> = fell_back.into_iter().chain(not_shown(&tables, nested.as_ref())).collect();
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
     all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));

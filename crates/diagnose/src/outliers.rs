@@ -136,9 +136,10 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
     let mut effects = config.setup().always_estimated(data);
     let spans_time = data.time_span() > 0.0;
     let mut lumped = Vec::new();
+    let loaded = thermokin_identify::max_gravity_torques(robot);
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         effects.push(Effect::LinkDeviation(j));
-        match thermokin_identify::gravity_compliance(robot, data, j) {
+        match thermokin_identify::gravity_compliance(robot, data, j, &loaded) {
             Some(e @ Effect::LumpedCompliance(..)) => lumped.push(e),
             other => effects.extend(other),
         }

@@ -124,6 +124,10 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         header(f)?;
         line(f, "nominal", &n.nominal)?;
         line(f, "the effects each outer selection chose", &n.selected)?;
+        // Shown where an outer fold's completion was turned down: the model a small set falls back to.
+        if n.complete != n.selected {
+            line(f, "the completed geometry each fold judged", &n.complete)?;
+        }
         for fold in &n.folds {
             let chosen = if fold.effects.is_empty() { "none".to_string() } else { fold.effects.join(", ") };
             let flag =

@@ -310,6 +310,15 @@ pub struct Nested {
     pub mean_difference_mm: f64,
     /// The standard error of [`Nested::mean_difference_mm`], mm.
     pub mean_difference_se_mm: f64,
+    /// The completed geometry on the outer test parts: in each outer fold the model its completion
+    /// judged (the chosen effects and every determined row, shrunk toward the nominal robot as its folds
+    /// ask), whether the selection took it or not — the model a small set falls back to.
+    pub complete: Stats,
+    /// The mean over the outer folds' test poses of (selected − complete) error, mm, and its standard
+    /// error: whether the selection beats the completed geometry.
+    pub versus_complete_mm: f64,
+    /// The standard error of [`Nested::versus_complete_mm`], mm.
+    pub versus_complete_se_mm: f64,
 }
 
 /// One outer fold of the nested validation.

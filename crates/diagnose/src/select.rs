@@ -77,6 +77,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
             skipped: Vec::new(),
             refused,
             shrinkage: 0.0,
+            fallback: None,
         };
         Ok::<_, DiagnoseError>((catalogue, eligible, selection))
     })?;

@@ -91,6 +91,10 @@ pub(crate) struct Selection {
     /// The prior's strength the model is fitted with (rows of data per parameter; 0: none —
     /// [`crate::shrinkage`]).
     pub(crate) shrinkage: f64,
+    /// The completed model the completion judged and did not take (the selected one was significantly
+    /// better on the selection's folds): the fallback where the nested validation cannot tell the two
+    /// apart ([`crate::completion::Completed`]).
+    pub(crate) fallback: Option<crate::completion::Completed>,
 }
 
 impl Selection {

@@ -71,9 +71,10 @@ pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Optio
     let Some((order, at)) = order(data) else { return Ok(None) };
     let robot = scorer.robot;
     let mut flexible = always.to_vec();
+    let loaded = thermokin_identify::max_gravity_torques(robot);
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         flexible.push(Effect::LinkDeviation(j));
-        flexible.extend(thermokin_identify::gravity_compliance(robot, data, j));
+        flexible.extend(thermokin_identify::gravity_compliance(robot, data, j, &loaded));
     }
     // Its geometry pinned down by at most FIT_POSES poses spread evenly over the set (a week of poses
     // adds nothing to a static robot's rows but time), its residuals taken on every pose.

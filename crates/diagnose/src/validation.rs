@@ -27,6 +27,8 @@ struct OuterOutcome {
     test: Vec<usize>,
     nominal: Vec<f64>,
     selected: Vec<f64>,
+    /// The completed geometry's errors (the selected model's where the completion took it).
+    complete: Vec<f64>,
 }
 
 /// Nested cross-validation of the whole procedure: for each outer fold, the selection runs on the
@@ -88,17 +90,23 @@ fn outer_fold(
     let subset = data.subset(train);
     let scorer = Scorer::new(robot, &subset, inner);
     let selection = select(&scorer, inner, clock)?.selection;
+    let complete = selection.fallback.as_ref().map(|c| (c.effects.clone(), c.lambda));
     let (effects, shrinkage) = (selection.effects, selection.shrinkage);
     let always = inner.setup().always_estimated(data);
     let test_set = data.subset(test);
     let test_terms = PoseTerms::against(robot, &test_set, &subset, inner.orientation_lever_mm);
     let rows: Vec<usize> = (0..test.len()).collect();
-    let mut fold_norms = Vec::with_capacity(2);
-    for (e, lambda) in [(&always, 0.0), (&effects, shrinkage)] {
+    let mut fold_norms = Vec::with_capacity(3);
+    let mut models = vec![(&always, 0.0), (&effects, shrinkage)];
+    if let Some((e, lambda)) = &complete {
+        models.push((e, *lambda));
+    }
+    for (e, lambda) in models {
         let (model, f) = scorer.fit_shrunk(e, &scorer.all(), lambda)?;
         let r = residuals(robot, &model, &f.theta, &test_set, &rows, &test_terms)?;
         fold_norms.push(norms(&r, test_terms.stride()));
     }
+    let complete = if complete.is_some() { fold_norms.pop().unwrap_or_default() } else { fold_norms[1].clone() };
     let selected = fold_norms.pop().unwrap_or_default();
     let nominal = fold_norms.pop().unwrap_or_default();
     let fold = OuterFold {
@@ -108,7 +116,7 @@ fn outer_fold(
         selected: Stats::of(&selected),
         effects: effects.iter().filter(|e| e.is_reported()).map(Effect::label).collect(),
     };
-    Ok(OuterOutcome { fold, test: test.to_vec(), nominal, selected })
+    Ok(OuterOutcome { fold, test: test.to_vec(), nominal, selected, complete })
 }
 
 /// How many standard errors of its own paired difference a fold's chosen model must be worse than the
@@ -156,12 +164,14 @@ pub(crate) fn worse_beyond_uncertainty(n: &Nested) -> bool {
 fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
     let mut nominal_norms = Vec::new();
     let mut selected_norms = Vec::new();
+    let mut complete_norms = Vec::new();
     let mut folds = Vec::new();
     let worse_than_nominal =
         outcomes.iter().filter(|o| significantly_worse(&o.nominal, &o.selected)).map(|o| o.fold.fold).collect();
     for o in outcomes {
         nominal_norms.extend(o.nominal);
         selected_norms.extend(o.selected);
+        complete_norms.extend(o.complete);
         folds.push(o.fold);
     }
     let total: f64 = selected_norms.iter().map(|x| x * x).sum();
@@ -173,6 +183,7 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
         })
         .map(|f| f.fold);
     let (mean_difference_mm, mean_difference_se_mm) = paired_difference(&nominal_norms, &selected_norms);
+    let (versus_complete_mm, versus_complete_se_mm) = paired_difference(&complete_norms, &selected_norms);
     Nested {
         mean_difference_mm,
         mean_difference_se_mm,
@@ -183,6 +194,9 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
         worse_than_nominal,
         dominated_by,
         folds,
+        complete: Stats::of(&complete_norms),
+        versus_complete_mm,
+        versus_complete_se_mm,
     }
 }
 
@@ -281,6 +295,7 @@ mod tests {
                 effects: Vec::new(),
             },
             nominal,
+            complete: selected.clone(),
             selected,
         };
         // Four folds better by a third, one far off: the mean rises, within its scatter.

@@ -26,8 +26,9 @@ fn gravity_loads(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
 /// The gravity compliance of joint `j` a model of these data can carry: with the file's masses where
 /// the joint carries some ([`Effect::JointCompliance`]), with its loads lumped where the file has no
 /// masses and gravity loads the joint in the data ([`Effect::LumpedCompliance`]); `None` otherwise.
-pub fn gravity_compliance(robot: &Robot, data: &Dataset, j: JointIndex) -> Option<Effect> {
-    if max_gravity_torques(robot)[j.index()] > 0.0 {
+/// `loaded` is [`max_gravity_torques`] of the robot (computed once by the caller).
+pub fn gravity_compliance(robot: &Robot, data: &Dataset, j: JointIndex, loaded: &[f64]) -> Option<Effect> {
+    if loaded.get(j.index()).is_some_and(|&t| t > 0.0) {
         Some(Effect::JointCompliance(j))
     } else if robot.masses().iter().all(Option::is_none) && gravity_loads(robot, data, j) {
         Effect::lumped_compliance(robot, j).ok()
