@@ -41,7 +41,7 @@ use crate::config::{Completion, Config};
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::{Joined, Selection, Step};
+use crate::selection::{Completed, Joined, Selection, Step};
 use crate::shrinkage::completion_strength;
 
 /// How many of its standard errors a compliance's fitted value must be from zero to join the completion
@@ -127,17 +127,6 @@ fn complete_geometry(
         sel.fallback = Some(completed);
     }
     Ok(())
-}
-
-/// A completed model: the chosen effects and the rows that join them, the prior's strength, its held-out
-/// statistics and errors on the selection's folds.
-#[derive(Clone, Debug)]
-pub(crate) struct Completed {
-    pub(crate) effects: Vec<Effect>,
-    pub(crate) lambda: f64,
-    stats: crate::stats::Stats,
-    errors: Vec<f64>,
-    rows: Vec<Effect>,
 }
 
 /// `completed` becomes the selection's model, the additive table saying so and `why`.

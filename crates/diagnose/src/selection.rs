@@ -93,8 +93,19 @@ pub(crate) struct Selection {
     pub(crate) shrinkage: f64,
     /// The completed model the completion judged and did not take (the selected one was significantly
     /// better on the selection's folds): the fallback where the nested validation cannot tell the two
-    /// apart ([`crate::completion::Completed`]).
-    pub(crate) fallback: Option<crate::completion::Completed>,
+    /// apart.
+    pub(crate) fallback: Option<Completed>,
+}
+
+/// A completed model ([`crate::completion`]): the chosen effects and the rows that join them, the prior's
+/// strength, its held-out statistics and errors on the selection's folds.
+#[derive(Clone, Debug)]
+pub(crate) struct Completed {
+    pub(crate) effects: Vec<Effect>,
+    pub(crate) lambda: f64,
+    pub(crate) stats: Stats,
+    pub(crate) errors: Vec<f64>,
+    pub(crate) rows: Vec<Effect>,
 }
 
 impl Selection {
