@@ -85,23 +85,24 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
             let (lo, hi) = arc(scorer.data, j.index());
             let t = travel(robot, j.index());
             let need = arc_needed(robot, e, rules).map_or(0.0, |(_, need)| need);
+            // A slide's stroke in millimetres, a revolute joint's arc in degrees.
+            let (shown, unit): (fn(f64) -> f64, &str) = match robot.chain().joints()[j.index()].kind {
+                thermokin_chain::JointKind::Revolute => (units::degrees, "°"),
+                thermokin_chain::JointKind::Prismatic => (|v| v, " mm"),
+            };
             (hi - lo < need).then(|| Refusal {
                 effect: e.label(),
                 reason: format!(
-                    "joint {} covers {:.1}° … {:.1}° only ({:.0}% of its {:.0}° travel); {} needs {:.0}°",
+                    "joint {} covers {:.1}{unit} … {:.1}{unit} only ({:.0}% of its {:.0}{unit} travel); {} needs {:.0}{unit}",
                     j.number(),
-                    units::degrees(lo),
-                    units::degrees(hi),
+                    shown(lo),
+                    shown(hi),
                     100.0 * (hi - lo) / t,
-                    units::degrees(t),
+                    shown(t),
                     e.kind_name(),
-                    units::degrees(need)
+                    shown(need)
                 ),
-                remedy: format!(
-                    "measure joint {} over at least {:.0}° of its travel",
-                    j.number(),
-                    units::degrees(need)
-                ),
+                remedy: format!("measure joint {} over at least {:.0}{unit} of its travel", j.number(), shown(need)),
             })
         }
         Effect::JointCompliance(j) => {

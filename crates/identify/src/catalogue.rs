@@ -145,10 +145,11 @@ impl Setup {
                 }
             }
         }
-        // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity).
+        // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity); the scale
+        // of a slide (a lead screw's or a rack's error, growing with the extension).
         for &j in &joints {
+            c.push(Effect::JointScale(j));
             if robot.chain().joints()[j.index()].kind == JointKind::Revolute {
-                c.push(Effect::JointScale(j));
                 c.push(Effect::Periodic(j));
             }
         }

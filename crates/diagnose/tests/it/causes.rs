@@ -73,3 +73,52 @@ fn compliance_found_without(masses: Masses) {
     // The poses deflect by far more than the noise: without the compliance they could not be at it.
     assert!(holdout.nominal.heldout_rms_mm > 20.0 * noise_rms, "{}", holdout.nominal.heldout_rms_mm);
 }
+
+/// The IRB 140 on a vertical lift (a prismatic first joint of 800 mm stroke, with the arm's masses).
+fn lifted_irb140() -> Robot {
+    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
+    let at = text.find("[[joint]]").unwrap();
+    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\nmass_kg = 40.0\ncom_mm = [0.0, 0.0, 100.0]\n\n";
+    let text = format!("{}{lift}{}", &text[..at], &text[at..]);
+    thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap()
+}
+
+/// A lift whose rack runs 0.8 mm long per metre of extension (scale 8e-4) under an arm whose joint 3 is
+/// 0.03° off: both named — the slide's scale as `joint_scale[1]` — nothing flagged, fresh poses at the
+/// noise. Over a tenth of the stroke only, the scale is refused with the stroke in millimetres.
+#[test]
+fn a_lifts_scale_is_found_and_its_stroke_judged_like_an_arc() {
+    let robot = lifted_irb140();
+    let truth = |q: &[f64]| {
+        let mut a = q.to_vec();
+        a[0] *= 1.0 + 8e-4;
+        a[3] += 0.03f64.to_radians();
+        a
+    };
+    let data = crate::tracker::measure(robot.chain(), 300, 4711, truth);
+    let fresh = crate::tracker::measure(robot.chain(), 150, 4712, truth);
+    let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, Some(&fresh), &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    eprintln!("chose {chosen:?}; {} gross errors", report.outliers.len());
+    assert!(chosen.contains(&"joint_scale[1]"), "{chosen:?}");
+    let scale = report.effects.iter().find(|e| e.label == "joint_scale[1]").unwrap();
+    let value = scale.parameters.values().next().unwrap().value;
+    assert!((value - 8e-4).abs() < 2e-5, "{value}");
+    assert!(report.outliers.is_empty(), "{:?}", report.outliers);
+    let noise_rms = crate::tracker::NOISE_MM * 3f64.sqrt();
+    let holdout = report.holdout.as_ref().unwrap();
+    assert!(holdout.selected.heldout_rms_mm < 1.5 * noise_rms, "{}", holdout.selected.heldout_rms_mm);
+    assert!(holdout.same_frame.selected.heldout_rms_mm < 1.5 * noise_rms);
+
+    // The lift kept within its lowest 80 mm (a tenth of the stroke): its scale is refused, in mm.
+    let mut low = data.clone();
+    for m in &mut low.measurements {
+        m.q[0] = 80.0 * m.q[0] / 800.0;
+    }
+    let report = diagnose(&robot, &low, None, &config).unwrap();
+    let refusal = report.identifiability.not_identifiable.iter().find(|r| r.effect == "joint_scale[1]");
+    let reason = &refusal.expect("the scale refused").reason;
+    eprintln!("{reason}");
+    assert!(reason.contains(" mm travel") && reason.contains("needs 200 mm"), "{reason}");
+}
