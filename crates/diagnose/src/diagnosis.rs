@@ -97,6 +97,20 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
+/// What the nested validation and the selection's folds say of the chosen model beside its alternatives:
+/// a fallback to the completed geometry ([`fall_back`]), and whether the data disagree with the file's
+/// masses ([`crate::masses`]); the sentences the report gives.
+fn judged_beside_the_folds(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut crate::selection::Selection,
+    nested: Option<&Nested>,
+) -> Result<Vec<String>, DiagnoseError> {
+    let mut said: Vec<String> = fall_back(sel, nested, config).into_iter().collect();
+    said.extend(crate::masses::disagreement(scorer, config, sel)?);
+    Ok(said)
+}
+
 /// A selection the nested validation cannot tell from the completed geometry it turned down (the
 /// procedure not better than the outer folds' completed models by [`Config::gate_standard_errors`]
 /// standard errors of the paired difference): its choice rests on folds that cannot carry it — a small
@@ -171,7 +185,7 @@ fn run(
         }
         Validation::SelectionOnly => (None, vec![None; data.len()]),
     };
-    let fell_back = fall_back(&mut selected.selection, nested.as_ref(), config);
+    let fell_back = judged_beside_the_folds(&scorer, config, &mut selected.selection, nested.as_ref())?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     let holdout = match holdout {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the

@@ -21,6 +21,7 @@ mod error;
 mod extrapolation;
 mod folds;
 mod forward;
+mod masses;
 mod outliers;
 mod pairs;
 mod parsimony;
