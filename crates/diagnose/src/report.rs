@@ -304,6 +304,11 @@ pub struct Nested {
     pub worse_than_nominal: Vec<usize>,
     /// The outer fold (1-based) holding more than half of the squared held-out error, if one does.
     pub dominated_by: Option<usize>,
+    /// The outer fold (1-based) that carries the gain over the nominal model, if one does: the gain over
+    /// all folds is beyond twice its standard error, and without that fold's poses it is not — a region
+    /// of the poses (the folds are blocks of neighbouring configurations, or of time) that the claim
+    /// rests on alone.
+    pub carried_by: Option<usize>,
     /// The mean over the outer folds' test poses of (selected − nominal) error, mm, and its standard
     /// error (paired, over the poses): how far the procedure is from the nominal model, and how well
     /// these poses can tell.

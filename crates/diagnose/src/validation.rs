@@ -158,6 +158,29 @@ pub(crate) fn worse_beyond_uncertainty(n: &Nested) -> bool {
     n.mean_difference_mm > WORSE_STANDARD_ERRORS * n.mean_difference_se_mm
 }
 
+/// The fold (1-based) whose poses alone carry the gain of `selected` over `nominal` (the errors of every
+/// outer fold's test poses, in `folds`' order): the gain is beyond [`WORSE_STANDARD_ERRORS`] standard
+/// errors of the paired difference over all poses, and within them over the poses of every other fold.
+fn carried_by(folds: &[OuterFold], nominal: &[f64], selected: &[f64]) -> Option<usize> {
+    let significant = |n: &[f64], s: &[f64]| {
+        let (mean, se) = paired_difference(n, s);
+        -mean > WORSE_STANDARD_ERRORS * se
+    };
+    if !significant(nominal, selected) || folds.len() < 3 {
+        return None;
+    }
+    let mut start = 0;
+    for f in folds {
+        let end = start + f.poses;
+        let rest = |v: &[f64]| -> Vec<f64> { v[..start].iter().chain(&v[end.min(v.len())..]).copied().collect() };
+        if !significant(&rest(nominal), &rest(selected)) {
+            return Some(f.fold);
+        }
+        start = end;
+    }
+    None
+}
+
 /// The outer folds' outcomes as the report gives them: pooled statistics, each fold, the folds worse
 /// than nominal, and a fold holding more than half of the squared error with at most twice its share of
 /// the poses.
@@ -183,6 +206,7 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
         })
         .map(|f| f.fold);
     let (mean_difference_mm, mean_difference_se_mm) = paired_difference(&nominal_norms, &selected_norms);
+    let carried_by = carried_by(&folds, &nominal_norms, &selected_norms);
     let (versus_complete_mm, versus_complete_se_mm) = paired_difference(&complete_norms, &selected_norms);
     Nested {
         mean_difference_mm,
@@ -193,6 +217,7 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
         selections: folds.iter().map(|f| f.effects.clone()).collect(),
         worse_than_nominal,
         dominated_by,
+        carried_by,
         folds,
         complete: Stats::of(&complete_norms),
         versus_complete_mm,
@@ -311,6 +336,34 @@ mod tests {
             .map(|k| outcome(k, vec![3.4, 3.6, 3.5, 3.3, 3.7, 3.5], vec![3.9, 4.1, 4.0, 3.8, 4.2, 4.0]))
             .collect();
         assert!(worse_beyond_uncertainty(&gather(5, worse)));
+    }
+
+    #[test]
+    fn a_gain_one_fold_carries_alone_is_named() {
+        let outcome = |fold: usize, nominal: Vec<f64>, selected: Vec<f64>| OuterOutcome {
+            test: (0..nominal.len()).collect(),
+            fold: OuterFold {
+                fold,
+                poses: nominal.len(),
+                nominal: Stats::of(&nominal),
+                selected: Stats::of(&selected),
+                effects: Vec::new(),
+            },
+            nominal,
+            complete: selected.clone(),
+            selected,
+        };
+        // Four folds where the model changes nothing beyond scatter, one where it gains 1 mm per pose.
+        let same =
+            |k: usize| outcome(k, vec![1.0, 1.1, 0.9, 1.0, 1.05, 0.95], vec![1.02, 1.08, 0.93, 0.97, 1.06, 0.96]);
+        let mut folds: Vec<OuterOutcome> = (1..5).map(same).collect();
+        folds.insert(2, outcome(3, vec![2.0; 6], vec![1.0, 1.1, 0.9, 1.0, 1.05, 0.95]));
+        assert_eq!(gather(5, folds).carried_by, Some(3));
+        // The gain in every fold: no fold carries it alone.
+        let every: Vec<OuterOutcome> = (1..6)
+            .map(|k| outcome(k, vec![2.0, 2.1, 1.9, 2.0, 2.2, 1.8], vec![1.0, 1.1, 0.9, 1.0, 1.05, 0.95]))
+            .collect();
+        assert_eq!(gather(5, every).carried_by, None);
     }
 
     #[test]

@@ -136,6 +136,11 @@ pub(crate) fn verdict(config: &Config, tables: &Tables, nested: Option<&Nested>)
                 t +=
                     &format!("; outer fold {k} holds more than half of the squared error: the RMS is mostly that fold");
             }
+            if let Some(k) = n.carried_by {
+                t += &format!(
+                    "; the gain over the nominal model rests on outer fold {k} alone: the other folds show none beyond their scatter"
+                );
+            }
             t + ")"
         }
         None => String::new(),
