@@ -74,6 +74,9 @@ pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Optio
     let loaded = thermokin_identify::max_gravity_torques(robot);
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         flexible.push(Effect::LinkDeviation(j));
+        if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Prismatic {
+            flexible.push(Effect::JointScale(j));
+        }
         flexible.extend(thermokin_identify::gravity_compliance(robot, data, j, &loaded));
     }
     // Its geometry pinned down by at most FIT_POSES poses spread evenly over the set (a week of poses

@@ -152,3 +152,26 @@ fn a_lifts_scale_is_found_and_its_stroke_judged_like_an_arc() {
     eprintln!("{reason}");
     assert!(reason.contains(" mm travel") && reason.contains("needs 200 mm"), "{reason}");
 }
+
+/// A lift whose rack runs 3 mm long per metre (2.4 mm at the top of the stroke), three poses knocked by
+/// 0.2 mm: the screen carries the slide's scale, so its scale is the noise's, the three knocked poses
+/// are the gross errors and no pose of the upper stroke is.
+#[test]
+fn a_lifts_upper_poses_are_not_gross_errors_and_knocked_ones_are() {
+    let robot = lifted_irb140();
+    let mut data = crate::tracker::measure(robot.chain(), 300, 4713, |q| {
+        let mut a = q.to_vec();
+        a[0] *= 1.0 + 3e-3;
+        a
+    });
+    let knocked = [40, 150, 260];
+    for &k in &knocked {
+        data.measurements[k].position_mm += Vector3::new(0.2, 0.0, 0.0);
+    }
+    let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let flagged: Vec<usize> = report.outliers.iter().map(|o| o.measurement).collect();
+    eprintln!("flagged {flagged:?}; screen scale {} mm", report.outlier_screen.scale_mm);
+    assert_eq!(flagged, knocked.iter().map(|k| k + 1).collect::<Vec<_>>());
+    assert!(report.outlier_screen.scale_mm < 2.0 * crate::tracker::NOISE_MM, "{}", report.outlier_screen.scale_mm);
+}
