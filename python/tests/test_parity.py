@@ -105,6 +105,7 @@ def test_compensate_field_by_field(root, cli, warm, tmp_path):
           "--outliers", "keep", "--shrinkage", "off", "--extrapolation", "off"],
          {"frame": "tracker", "tool": "unknown", "folds": 4, "folds_by": "time", "noise_mm": 0.005,
           "outliers": "keep", "shrinkage": "off", "extrapolation": "off"}),
+        (["--masses", "ignore", "--noise", "0.005"], {"masses": "ignore", "noise_mm": 0.005}),
     ],
 )
 def test_diagnose_field_by_field(root, cli, tmp_path, flags, kw):
