@@ -124,7 +124,7 @@ impl PyMeasurements {
             })
             .collect::<PyResult<Vec<_>>>()?;
         let kinds = kinds(robot);
-        let data = Dataset { measurements, temperature_names: names, source_lines: Vec::new() };
+        let data = Dataset { measurements, temperature_names: names, source_lines: Vec::new(), ..Default::default() };
         let data =
             thermokin_io::settle_units(std::path::Path::new("arrays"), data, &kinds, format).map_err(units_error)?;
         Ok(Self { data, kinds, source: "arrays".to_string() })

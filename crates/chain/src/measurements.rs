@@ -33,6 +33,12 @@ pub struct Dataset {
     /// 1; of the poses file when joints and poses are kept apart), one per measurement — empty when the
     /// set was not read from a file. What a report names a measurement by ([`Dataset::line_of`]).
     pub source_lines: Vec<usize>,
+    /// Names of the sensor columns (an accelerometer's or inclinometer's tilt, a load): the readings a
+    /// row's error may follow linearly; empty when the set has none.
+    pub sensor_names: Vec<String>,
+    /// Per measurement, its reading of each sensor column (in [`Dataset::sensor_names`]' order); empty
+    /// when the set has no sensor columns.
+    pub sensor_values: Vec<Vec<f64>>,
 }
 
 impl Dataset {
@@ -43,6 +49,12 @@ impl Dataset {
             temperature_names: self.temperature_names.clone(),
             source_lines: if self.source_lines.len() == self.measurements.len() {
                 rows.iter().filter_map(|&i| self.source_lines.get(i).copied()).collect()
+            } else {
+                Vec::new()
+            },
+            sensor_names: self.sensor_names.clone(),
+            sensor_values: if self.sensor_values.len() == self.measurements.len() {
+                rows.iter().filter_map(|&i| self.sensor_values.get(i).cloned()).collect()
             } else {
                 Vec::new()
             },

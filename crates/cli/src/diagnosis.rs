@@ -142,6 +142,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
         let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
         crate::input::warn_ignored(&a.measurements, &unread);
+        for s in &data.sensor_names {
+            eprintln!("note: {}: column `{s}` read as a sensor (a joint row may follow it)", a.measurements.display());
+        }
     }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),

@@ -126,7 +126,10 @@ impl DriftLaw {
             DriftLaw::PerKelvin { sensors } => {
                 let mut rise = 0.0;
                 for (name, reference) in sensors {
-                    let now = state.temperature(name).ok_or_else(|| DeformError::MissingState {
+                    // A sensor that is not a temperature (an accelerometer's column, named as its file
+                    // names it) is given at run time as the command lines give readings: `temp_` + name.
+                    let given = state.temperature(name).or_else(|| state.temperature(&format!("temp_{name}")));
+                    let now = given.ok_or_else(|| DeformError::MissingState {
                         needed: format!("the reading of sensor `{name}` (°C)"),
                         why: format!("{} drifts {}", row_name(row), self.describe()),
                     })?;

@@ -97,6 +97,35 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
+/// The hold-out set after [`check_joint_counts`], its sensor columns as `data`'s ([`with_sensors_of`]).
+fn checked_holdout<'h>(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&'h Dataset>,
+) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
+    check_joint_counts(robot, data, holdout)?;
+    Ok(holdout.map(|h| with_sensors_of(h, data)))
+}
+
+/// `holdout` with its sensor columns in `data`'s order, by name (an effect follows a column by its place
+/// in the training set); a column it lacks reads 0.
+fn with_sensors_of<'h>(holdout: &'h Dataset, data: &Dataset) -> std::borrow::Cow<'h, Dataset> {
+    if holdout.sensor_names == data.sensor_names {
+        return std::borrow::Cow::Borrowed(holdout);
+    }
+    let mut aligned = holdout.clone();
+    let place: Vec<Option<usize>> =
+        data.sensor_names.iter().map(|n| holdout.sensor_names.iter().position(|h| h == n)).collect();
+    aligned.sensor_values = (0..holdout.len())
+        .map(|i| {
+            let row = holdout.sensor_values.get(i);
+            place.iter().map(|p| p.and_then(|k| row.and_then(|r| r.get(k).copied())).unwrap_or(0.0)).collect()
+        })
+        .collect();
+    aligned.sensor_names = data.sensor_names.clone();
+    std::borrow::Cow::Owned(aligned)
+}
+
 /// What the nested validation and the selection's folds say of the chosen model beside its alternatives:
 /// a fallback to the completed geometry ([`fall_back`]), and whether the data disagree with the file's
 /// masses ([`crate::masses`]); the sentences the report gives.
@@ -163,7 +192,7 @@ fn run(
         done += 1;
         progress(Progress { done, total, stage });
     };
-    check_joint_counts(robot, data, holdout)?;
+    let holdout = checked_holdout(robot, data, holdout)?;
     // Gross errors first: everything after works on the measurements the screen keeps.
     let screened = main.time(Phase::Screen, || screen(robot, data, config))?;
     let kept_data;
@@ -187,7 +216,7 @@ fn run(
     };
     let fell_back = judged_beside_the_folds(&scorer, config, &mut selected.selection, nested.as_ref())?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
-    let holdout = match holdout {
+    let holdout = match holdout.as_deref() {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.

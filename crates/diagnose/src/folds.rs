@@ -298,6 +298,7 @@ mod tests {
                 .collect(),
             temperature_names: Vec::new(),
             source_lines: Vec::new(),
+            ..Default::default()
         };
         let p = neighbourhood_folds(&data, 5, 3);
         let mut tested = vec![0; 200];

@@ -158,9 +158,18 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
             }
         }
     }
-    // A compliance without masses (up to two weights per link carried) screens where the rows hold
-    // [`MIN_REDUNDANCY`] per parameter with it; on fewer it would only make the screen shrink the rows
-    // that explain a small set's millimetres, and hide the pose that is off.
+    // Every row following each sensor column (a tilt the column's accelerometer reads moves the poses
+    // it reads high, which are no gross errors).
+    for k in 0..data.sensor_names.len() {
+        let (lo, hi) = crate::stats::span(data.sensor_values.iter().filter_map(|v| v.get(k).copied()));
+        if let Some(sensor) = thermokin_identify::SensorId::of(data, k).filter(|_| hi > lo) {
+            let rows = (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok());
+            lumped.extend(rows.map(|j| Effect::SensorDrift(j, sensor)));
+        }
+    }
+    // A compliance without masses (up to two weights per link carried) and the sensors' rows screen where
+    // the rows hold [`MIN_REDUNDANCY`] per parameter with them; on fewer they would only make the screen
+    // shrink the rows that explain a small set's millimetres, and hide the pose that is off.
     let parameters: usize = effects.iter().chain(&lumped).map(Effect::len).sum();
     if data.len() * stride >= MIN_REDUNDANCY * parameters {
         effects.extend(lumped);

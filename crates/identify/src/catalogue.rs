@@ -4,7 +4,7 @@
 use serde::Serialize;
 use thermokin_chain::{Dataset, JointKind, Robot};
 
-use crate::effect::{DriftShape, Effect, JointIndex};
+use crate::effect::{DriftShape, Effect, JointIndex, SensorId};
 use crate::error::IdentifyError;
 use crate::terms::max_gravity_torques;
 
@@ -161,6 +161,17 @@ impl Setup {
         }
         if !data.temperature_names.is_empty() {
             c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
+        }
+        // A sensor column that varies may drive any row (a column's tilt, a base's, a load's bending).
+        for k in 0..data.sensor_names.len() {
+            let (lo, hi) = data
+                .sensor_values
+                .iter()
+                .filter_map(|v| v.get(k))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+            if let Some(sensor) = SensorId::of(data, k).filter(|_| hi > lo) {
+                c.extend(joints.iter().map(|&j| Effect::SensorDrift(j, sensor)));
+            }
         }
         Ok(c)
     }

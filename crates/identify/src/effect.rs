@@ -91,6 +91,42 @@ impl StepAt {
     }
 }
 
+/// A sensor column of the measurements ([`thermokin_chain::Dataset::sensor_names`]) an effect follows:
+/// its index and its name (up to [`SensorId::NAME_BYTES`] bytes kept, so that an effect stays `Copy`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SensorId {
+    index: u8,
+    len: u8,
+    name: [u8; SensorId::NAME_BYTES],
+}
+
+impl SensorId {
+    /// The most bytes of a sensor's name an effect keeps (a longer name is cut at a character boundary).
+    pub const NAME_BYTES: usize = 30;
+
+    /// Sensor column `index` of `data`; `None` past its columns or beyond 255.
+    pub fn of(data: &thermokin_chain::Dataset, index: usize) -> Option<Self> {
+        let full = data.sensor_names.get(index)?;
+        let mut end = full.len().min(Self::NAME_BYTES);
+        while !full.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut name = [0u8; Self::NAME_BYTES];
+        name[..end].copy_from_slice(&full.as_bytes()[..end]);
+        Some(Self { index: u8::try_from(index).ok()?, len: end as u8, name })
+    }
+
+    /// The column's index among the set's sensor columns.
+    pub fn index(self) -> usize {
+        self.index as usize
+    }
+
+    /// The column's name (as kept).
+    pub fn name(&self) -> &str {
+        std::str::from_utf8(&self.name[..self.len as usize]).unwrap_or("sensor")
+    }
+}
+
 /// A joint an effect acts on: a 0-based index checked against the robot — [`JointIndex::of`] is the only
 /// way to make one, so that an effect cannot name a joint the robot lacks.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
@@ -158,6 +194,9 @@ pub enum Effect {
     Periodic(JointIndex),
     /// A link deviation growing with operating time or temperature (6, +1 for τ).
     ThermalDrift(JointIndex, DriftShape),
+    /// A joint row's six error parameters following a sensor column linearly: `δ · s`, `s` the pose's
+    /// reading (an accelerometer's tilt of a column, a load) — per unit of the reading (6).
+    SensorDrift(JointIndex, SensorId),
     /// A step of the measurement frame — the tracker knocked, its stand or the robot's base moved — at
     /// a point of the measuring order: the poses from there on are measured in the frame moved by a
     /// translation (3, mm) and a rotation `Rx·Ry·Rz` (3), applied in the measurement frame (6).
@@ -245,7 +284,8 @@ impl Effect {
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
-            | Effect::ThermalDrift(j, _) => Some(j),
+            | Effect::ThermalDrift(j, _)
+            | Effect::SensorDrift(j, _) => Some(j),
             Effect::Registration
             | Effect::ToolPoint
             | Effect::ToolRotation
@@ -274,6 +314,7 @@ impl Effect {
             | Effect::BaseFrame
             | Effect::ToolFrame
             | Effect::LinkDeviation(_)
+            | Effect::SensorDrift(..)
             | Effect::FrameStep(_) => 6,
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
@@ -308,6 +349,7 @@ impl Effect {
             Effect::Periodic(_) => "periodic",
             Effect::ThermalDrift(..) => "thermal_drift",
             Effect::FrameStep(_) => "frame_step",
+            Effect::SensorDrift(..) => "sensor_drift",
         }
     }
 
@@ -319,6 +361,7 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
             Effect::LumpedCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
+            Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
             _ => "",
         };
         match self.joint() {
@@ -377,6 +420,7 @@ impl Effect {
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
                 | Effect::ThermalDrift(..)
+                | Effect::SensorDrift(..)
                 | Effect::FrameStep(_)
         )
     }

@@ -470,7 +470,7 @@ mod convergence {
                 measured_point(q, p, 0.005, &mut rng)
             })
             .collect();
-        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let data = Dataset { measurements, ..Dataset::default() };
         let robot = Robot::new("IRB 140", nominal);
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let model = Model::new(&robot, vec![Effect::JointOffset(joint(1)), Effect::LinkDeviation(joint(3))]).unwrap();
@@ -524,7 +524,7 @@ mod prior {
                 measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
             })
             .collect();
-        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let data = Dataset { measurements, ..Dataset::default() };
         let model = Model::new(&robot, vec![Effect::ToolPoint]).unwrap();
         let all: Vec<usize> = (0..data.len()).collect();
         let terms = PoseTerms::of(&robot, &data, 0.0);

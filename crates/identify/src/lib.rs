@@ -29,7 +29,8 @@ mod terms;
 pub use catalogue::{FrameMode, Setup, ToolMode, gravity_compliance};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
 pub use effect::{
-    DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, StepAt, TAU_RANGE_MIN,
+    DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, SensorId, StepAt,
+    TAU_RANGE_MIN,
 };
 pub use error::IdentifyError;
 pub use fit::{CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from};

@@ -206,6 +206,14 @@ impl Model {
                     let deviation = at_reference.scaled(1.0 / shape.reference_factor(tau));
                     drift.push(DriftRow { row: Row::Joint(j.index()), deviation, law });
                 }
+                // Per unit of the reading: the law of a per-kelvin row with the sensor's name and a
+                // reference of zero (the row moves by `δ · s`); `fk`, `ik` and `compensate` take the
+                // reading by name as they take a temperature.
+                Effect::SensorDrift(j, sensor) => drift.push(DriftRow {
+                    row: Row::Joint(j.index()),
+                    deviation: six_at(theta, o),
+                    law: DriftLaw::PerKelvin { sensors: vec![(sensor.name().to_string(), 0.0)] },
+                }),
                 _ => {}
             }
         }
@@ -270,6 +278,7 @@ impl Model {
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
                 | Effect::ThermalDrift(..)
+                | Effect::SensorDrift(..)
                 | Effect::FrameStep(_) => {}
             }
         }
@@ -316,7 +325,9 @@ impl Model {
             match *e {
                 Effect::Registration | Effect::BaseFrame => rows.base = true,
                 Effect::ToolPoint | Effect::ToolRotation | Effect::ToolFrame => rows.tool = true,
-                Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) => rows.joints[j.index()] = true,
+                Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) | Effect::SensorDrift(j, _) => {
+                    rows.joints[j.index()] = true
+                }
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)
                 | Effect::LumpedCompliance(j, _)

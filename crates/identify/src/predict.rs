@@ -60,12 +60,14 @@ pub struct PoseInputs<'a> {
     /// In the frame the training measurements ended in, whatever its time and line (a test set of
     /// another file): every step of the frame applies.
     pub latest_frame: bool,
+    /// Its reading of each sensor column ([`thermokin_chain::Dataset::sensor_values`]; empty: none).
+    pub sensors: &'a [f64],
 }
 
 impl PoseInputs<'_> {
     /// Inputs with no temperature rise, no precomputed sines, no line: a pose on its own.
     pub fn plain(temp_rise: &[f64]) -> PoseInputs<'_> {
-        PoseInputs { temp_rise, sin_cos: None, line: None, latest_frame: false }
+        PoseInputs { temp_rise, sin_cos: None, line: None, latest_frame: false, sensors: &[] }
     }
 }
 
@@ -198,6 +200,14 @@ impl Model {
                         None => drift_rows.push((j, six_at(theta, o).scaled(s))),
                     }
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau });
+                }
+                Effect::SensorDrift(j, sensor) => {
+                    let (j, s) = (j.index(), inputs.sensors.get(sensor.index()).copied().unwrap_or(0.0));
+                    match drift_rows.iter_mut().find(|(row, _)| *row == j) {
+                        Some((_, d)) => *d = d.add(&six_at(theta, o).scaled(s)),
+                        None => drift_rows.push((j, six_at(theta, o).scaled(s))),
+                    }
+                    cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
                 }
                 _ => {}
             }
@@ -374,6 +384,11 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
+                Effect::SensorDrift(j, _) => {
+                    let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };
+                    let f = drift.next().filter(|d| d.effect == k).copied().unwrap_or(none);
+                    (0..6).for_each(|c| copy(o + c, layout.joint(j.index()) + c, f.s));
+                }
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
                     let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };

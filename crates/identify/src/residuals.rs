@@ -61,6 +61,7 @@ fn evaluate(
             sin_cos: Some(&terms.sin_cos[i]),
             line: terms.lines[i],
             latest_frame: terms.latest_frame,
+            sensors: data.sensor_values.get(i).map_or(&[], Vec::as_slice),
         };
         let (p, rot) = model.predict(robot, theta, m, &inputs, jac.is_some().then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;
@@ -146,7 +147,7 @@ mod tests {
                 measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
             })
             .collect();
-        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let data = Dataset { measurements, ..Dataset::default() };
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let model =
             Model::new(&robot, vec![Effect::JointCompliance(joint(1)), Effect::ComplianceCoupling(joint(1))]).unwrap();
@@ -189,7 +190,7 @@ mod tests {
                 measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
             })
             .collect();
-        let data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let data = Dataset { measurements, ..Dataset::default() };
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let effects = vec![
             Effect::named(&robot, "joint_compliance", Some(1)).unwrap(),
@@ -255,7 +256,7 @@ mod tests {
                 m
             })
             .collect();
-        let mut data = Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() };
+        let mut data = Dataset { measurements, ..Dataset::default() };
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let step = Effect::FrameStep(crate::StepAt::time(50.0));
         let model = Model::new(&robot, vec![Effect::Registration, Effect::LinkDeviation(joint(2)), step]).unwrap();

@@ -188,7 +188,7 @@ pub fn parse_measurements_with(
                 temps: Vec::new(),
             })
             .collect();
-        return Ok(Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() });
+        return Ok(Dataset { measurements, ..Dataset::default() });
     }
     let recs = records_any_dialect(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
@@ -197,12 +197,13 @@ pub fn parse_measurements_with(
     let joints = JointColumns::find(path, header, kinds, format.joint_units.unwrap_or_default())?;
     let poses = PoseColumns::find(path, header, format.orientation)?;
     let pairs = rows.iter().map(|r| expect_fields(path, r, header.cells.len()).map(|()| (r, r)));
-    let data = assemble(
+    let mut data = assemble(
         &joints,
         &poses,
         pairs,
         IoError::input(path, Some(header.line + 1), "rows", "no measurements after the header"),
     )?;
+    (data.sensor_names, data.sensor_values) = sensor_columns(header, rows, &read_columns(&joints, &poses));
     settle_units(path, data, kinds, format)
 }
 
@@ -218,13 +219,41 @@ pub fn unread_columns(path: &Path, kinds: &[JointKind], format: MeasurementForma
     let Some(header) = recs.first() else { return Ok(Vec::new()) };
     let joints = JointColumns::find(path, header, kinds, format.joint_units.unwrap_or_default())?;
     let poses = PoseColumns::find(path, header, format.orientation)?;
+    let mut read = read_columns(&joints, &poses);
+    let (sensors, _) = sensor_columns(header, &recs[1..], &read);
+    read.extend(header.cells.iter().enumerate().filter(|(_, n)| sensors.contains(n)).map(|(c, _)| c));
+    Ok(header.cells.iter().enumerate().filter(|(c, _)| !read.contains(c)).map(|(_, name)| name.clone()).collect())
+}
+
+/// The columns a measurement set's joint and pose readers read.
+fn read_columns(joints: &JointColumns<'_>, poses: &PoseColumns<'_>) -> Vec<usize> {
     let mut read: Vec<usize> = joints.q.clone();
     read.extend(joints.time);
     read.extend(joints.temps.iter().map(|(c, _)| *c));
     read.extend(&poses.p);
     read.extend(poses.r.iter().flatten().map(|(c, _)| *c));
     read.extend(poses.std.iter().flatten());
-    Ok(header.cells.iter().enumerate().filter(|(c, _)| !read.contains(c)).map(|(_, name)| name.clone()).collect())
+    read
+}
+
+/// The sensor columns of a measurement set — the rule: every column the readers do not read whose every
+/// cell is a finite number (an accelerometer's or inclinometer's tilt, a load, a current) — by name,
+/// and each row's readings in that order. A column with any other cell (a point's name) is not a sensor.
+fn sensor_columns(header: &Record, rows: &[Record], read: &[usize]) -> (Vec<String>, Vec<Vec<f64>>) {
+    let numeric = |c: usize| {
+        rows.iter().all(|r| r.cells.get(c).and_then(|v| v.trim().parse::<f64>().ok()).is_some_and(f64::is_finite))
+    };
+    let columns: Vec<usize> =
+        (0..header.cells.len()).filter(|c| !read.contains(c) && !rows.is_empty() && numeric(*c)).collect();
+    if columns.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let names = columns.iter().map(|&c| header.cells[c].clone()).collect();
+    let values = rows
+        .iter()
+        .map(|r| columns.iter().map(|&c| r.cells[c].trim().parse::<f64>().unwrap_or(f64::NAN)).collect())
+        .collect();
+    (names, values)
 }
 
 /// Reads a measurement set kept in two files, as tracker and robot software often write them: the
@@ -382,7 +411,7 @@ fn assemble<'r>(
     if measurements.is_empty() {
         return Err(empty);
     }
-    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines })
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines, ..Dataset::default() })
 }
 
 /// Where a file's joint-side columns are: `q1..qn`, `time_min`, `temp_<name>`.

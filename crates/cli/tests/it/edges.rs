@@ -156,7 +156,8 @@ fn no_numeric_default_is_typed_into_clap() {
 
 #[test]
 fn a_column_the_diagnosis_does_not_read_is_said() {
-    // A simulated set with an accelerometer's column appended: the diagnosis runs and names the column.
+    // A simulated set with an accelerometer's column and a point-name column appended: the diagnosis runs,
+    // reads the numbers as a sensor and names the text column it does not read.
     let m = tmp("with-sensor.csv");
     let o = thermokin(&[
         "simulate",
@@ -174,20 +175,21 @@ fn a_column_the_diagnosis_does_not_read_is_said() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = std::fs::read_to_string(&m).unwrap();
     let mut lines: Vec<String> = Vec::new();
-    for line in text.lines() {
+    for (k, line) in text.lines().enumerate() {
         let extra = if line.starts_with('#') {
-            ""
+            String::new()
         } else if lines.iter().all(|l| l.starts_with('#')) {
-            ",acc_col_x"
+            ",acc_col_x,point".to_string()
         } else {
-            ",0.01"
+            format!(",{},P{k}", 0.01 * (k % 7) as f64)
         };
         lines.push(format!("{line}{extra}"));
     }
     std::fs::write(&m, lines.join("\n") + "\n").unwrap();
     let o = thermokin(&["diagnose", "--robot", "configs/irb140.toml", "--measurements", m.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("column `acc_col_x` is not read"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("column `point` is not read"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("column `acc_col_x` read as a sensor"), "{}", stderr(&o));
     // The columns it reads are not named.
     assert!(!stderr(&o).contains("column `q1`") && !stderr(&o).contains("column `x`"), "{}", stderr(&o));
 }

@@ -56,7 +56,12 @@ fn day1(nominal: &Chain, truth: &Truth, n: usize, seed: u64) -> Dataset {
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: vec!["j2".into(), "j3".into()], source_lines: Vec::new() }
+    Dataset {
+        measurements,
+        temperature_names: vec!["j2".into(), "j3".into()],
+        source_lines: Vec::new(),
+        ..Default::default()
+    }
 }
 
 /// Runs the loop; returns (compensated RMS, uncompensated RMS), mm.

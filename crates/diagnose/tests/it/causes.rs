@@ -175,3 +175,72 @@ fn a_lifts_upper_poses_are_not_gross_errors_and_knocked_ones_are() {
     assert_eq!(flagged, knocked.iter().map(|k| k + 1).collect::<Vec<_>>());
     assert!(report.outlier_screen.scale_mm < 2.0 * crate::tracker::NOISE_MM, "{}", report.outlier_screen.scale_mm);
 }
+
+/// A tilt an accelerometer reads: each pose's reading `s` (a column `acc_col_x`, within ±1) tilts joint
+/// 2's row by `s · (0.02°, −0.01°, 0)` and shifts it by `s · 0.05 mm` along x — the truth moves the chain's
+/// own row (not the diagnosis's model), the tracker measures. The diagnosis names `sensor_drift[2]
+/// (driven by acc_col_x)`, nothing flagged, fresh poses with their own readings at the noise in both
+/// protocols, and the exported robot gives the truth's pose when told the reading.
+#[test]
+fn a_sensor_column_drives_a_rows_error_and_is_named_with_it() {
+    let robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
+    let tilt = |s: f64| {
+        thermokin_chain::ErrorParams::from_array([
+            0.05 * s,
+            0.0,
+            0.0,
+            (0.02 * s).to_radians(),
+            (-0.01 * s).to_radians(),
+            0.0,
+        ])
+    };
+    let reading = |seed: u64, i: usize| (i as f64 * 0.618_034 + seed as f64 * 0.1).fract() * 2.0 - 1.0;
+    let session = |n: usize, seed: u64| {
+        let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
+        for (i, m) in data.measurements.iter_mut().enumerate() {
+            let s = reading(seed, i);
+            let mut tilted = robot.chain().clone();
+            tilted.set_joint_error(1, tilt(s)).unwrap();
+            let moved = tilted.tool_pose(&m.q).unwrap().translation.vector;
+            let plain = robot.chain().tool_pose(&m.q).unwrap().translation.vector;
+            m.position_mm += moved - plain;
+        }
+        data.sensor_names = vec!["acc_col_x".into()];
+        data.sensor_values = (0..n).map(|i| vec![reading(seed, i)]).collect();
+        data
+    };
+    let (data, fresh) = (session(300, 4721), session(150, 4722));
+    let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, Some(&fresh), &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    eprintln!("chose {chosen:?}; {} gross errors", report.outliers.len());
+    assert_eq!(chosen, vec!["sensor_drift[2] (driven by acc_col_x)"]);
+    assert!(report.outliers.is_empty(), "{:?}", report.outliers);
+    let noise_rms = crate::tracker::NOISE_MM * 3f64.sqrt();
+    let holdout = report.holdout.as_ref().unwrap();
+    eprintln!("fresh: {} -> {}", holdout.nominal.heldout_rms_mm, holdout.selected.heldout_rms_mm);
+    assert!(holdout.nominal.heldout_rms_mm > 10.0 * noise_rms);
+    assert!(holdout.selected.heldout_rms_mm < 1.5 * noise_rms, "{}", holdout.selected.heldout_rms_mm);
+    assert!(holdout.same_frame.selected.heldout_rms_mm < 1.5 * noise_rms);
+    // The export follows the reading by name, as it follows a temperature.
+    let export = &report.identified;
+    let q = &fresh.measurements[3].q;
+    let at = |s: f64| {
+        let state =
+            thermokin_chain::OperatingState { temperatures_c: vec![("acc_col_x".into(), s)], ..Default::default() };
+        export.tool_pose(q, &state).unwrap().translation.vector
+    };
+    let mut tilted = robot.chain().clone();
+    tilted.set_joint_error(1, tilt(0.8)).unwrap();
+    let truth_shift =
+        tilted.tool_pose(q).unwrap().translation.vector - robot.chain().tool_pose(q).unwrap().translation.vector;
+    let export_shift = at(0.8) - at(0.0);
+    assert!((truth_shift - export_shift).norm() < 0.01, "{truth_shift:?} vs {export_shift:?}");
+    // As the command line gives a reading (`--temperature acc_col_x=0.8` is read as `temp_acc_col_x`).
+    let prefixed =
+        thermokin_chain::OperatingState { temperatures_c: vec![("temp_acc_col_x".into(), 0.8)], ..Default::default() };
+    assert!((export.tool_pose(q, &prefixed).unwrap().translation.vector - at(0.8)).norm() < 1e-12);
+    // Without the reading, the export says what it needs.
+    let e = export.tool_pose(q, &Default::default()).unwrap_err().to_string();
+    assert!(e.contains("acc_col_x"), "{e}");
+}

@@ -71,7 +71,12 @@ fn sample(chain: &Chain, truth: &Truth, n: usize, seed: u64) -> Dataset {
         })
         .collect();
     measurements.sort_by(|a, b| a.time_min.total_cmp(&b.time_min));
-    Dataset { measurements, temperature_names: vec!["j2".into(), "j3".into()], source_lines: Vec::new() }
+    Dataset {
+        measurements,
+        temperature_names: vec!["j2".into(), "j3".into()],
+        source_lines: Vec::new(),
+        ..Default::default()
+    }
 }
 
 /// Gravity torque about joint 2, N·m, from the link masses (gravity along −Z), computed here.

@@ -50,10 +50,7 @@ pub fn rokae() -> (Robot, Dataset) {
             temps: Vec::new(),
         })
         .collect();
-    (
-        Robot::new("Rokae robot B", chain),
-        Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() },
-    )
+    (Robot::new("Rokae robot B", chain), Dataset { measurements, ..Dataset::default() })
 }
 
 #[test]

@@ -33,7 +33,7 @@ fn measure(truth: &Chain, n: usize, seed: u64, fraction: f64, noise_mm: f64) -> 
             measured_point(q, p, noise_mm, &mut rng)
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
+    Dataset { measurements, ..Dataset::default() }
 }
 
 #[test]

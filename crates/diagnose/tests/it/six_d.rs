@@ -95,6 +95,7 @@ fn positions_alone_cannot_see_a_tool_rotation_and_say_so() {
             .collect(),
         temperature_names: Vec::new(),
         source_lines: Vec::new(),
+        ..Default::default()
     };
     let report = diagnose(&robot, &data, None, &Config::default()).unwrap();
     assert!(report.orientation_lever_mm.is_none());

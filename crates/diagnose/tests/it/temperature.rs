@@ -46,7 +46,15 @@ fn measure(names: [&str; 3]) -> (thermokin_chain::Robot, Dataset) {
             }
         })
         .collect();
-    (robot, Dataset { measurements, temperature_names: names.map(String::from).to_vec(), source_lines: Vec::new() })
+    (
+        robot,
+        Dataset {
+            measurements,
+            temperature_names: names.map(String::from).to_vec(),
+            source_lines: Vec::new(),
+            ..Default::default()
+        },
+    )
 }
 
 #[test]

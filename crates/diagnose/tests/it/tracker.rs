@@ -24,7 +24,7 @@ pub fn measure(chain: &Chain, n: usize, seed: u64, actual: impl Fn(&[f64]) -> Ve
             measured_point(q, p, NOISE_MM, &mut rng)
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
+    Dataset { measurements, ..Dataset::default() }
 }
 
 /// 200 poses as [`measure`] draws them with `seed`, on a robot whose joint 2 stands 0.1° off wherever
@@ -78,7 +78,7 @@ pub fn measure_6d(
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
+    Dataset { measurements, ..Dataset::default() }
 }
 
 /// `n` poses as [`random_q`] draws them, but joint `joint` (0-based) kept between `lo_deg` and `hi_deg`
@@ -106,5 +106,5 @@ pub fn measure_short_arc(
             }
         })
         .collect();
-    Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() }
+    Dataset { measurements, ..Dataset::default() }
 }

@@ -33,7 +33,7 @@ fn data(stated: bool) -> (thermokin_chain::Robot, Dataset) {
             }
         })
         .collect();
-    (robot, Dataset { measurements, temperature_names: Vec::new(), source_lines: Vec::new() })
+    (robot, Dataset { measurements, ..Dataset::default() })
 }
 
 #[test]

@@ -105,6 +105,26 @@ fn measurements_convert_per_joint_kind() {
 }
 
 #[test]
+fn numeric_columns_nothing_else_reads_are_sensors_and_text_columns_are_not() {
+    use thermokin_chain::JointKind;
+    let kinds = [JointKind::Revolute];
+    let text = "q1,x,y,z,acc_col_x,point,temp_j1\n10,1,2,3,0.25,P1,21.5\n20,4,5,6,-0.5,P2,22.0\n";
+    let path = std::path::Path::new("m.csv");
+    let data = thermokin_io::parse_measurements(path, text, &kinds).unwrap();
+    assert_eq!(data.sensor_names, vec!["acc_col_x".to_string()]);
+    assert_eq!(data.sensor_values, vec![vec![0.25], vec![-0.5]]);
+    // A temperature stays a temperature; the point names are said as not read.
+    assert_eq!(data.temperature_names, vec!["j1".to_string()]);
+    let fmt = thermokin_io::MeasurementFormat::default();
+    std::fs::write(std::env::temp_dir().join("sensors-m.csv"), text).unwrap();
+    let unread = thermokin_io::unread_columns(&std::env::temp_dir().join("sensors-m.csv"), &kinds, fmt).unwrap();
+    assert_eq!(unread, vec!["point".to_string()]);
+    // One cell that is not a number: the column is no sensor.
+    let text = "q1,x,y,z,acc_col_x\n10,1,2,3,0.25\n20,4,5,6,n/a\n";
+    assert!(thermokin_io::parse_measurements(path, text, &kinds).unwrap().sensor_names.is_empty());
+}
+
+#[test]
 fn tracker_exports_in_every_dialect_and_unit_read_alike() {
     use thermokin_chain::JointKind;
     use thermokin_io::{JointUnits, MeasurementFormat, parse_measurements, parse_measurements_with};
