@@ -31,6 +31,8 @@ pub(crate) struct RobotScale {
     pub(crate) revolute: Vec<bool>,
     /// The measurement times, minutes, sorted (empty without time).
     pub(crate) times_min: Vec<f64>,
+    /// Per sensor column, the largest |reading| over the data.
+    pub(crate) sensor_reach: Vec<f64>,
 }
 
 impl RobotScale {
@@ -55,6 +57,9 @@ impl RobotScale {
             times_min.clear();
         }
         let reach = (0..dof).map(|j| data.measurements.iter().map(|m| m.q[j].abs()).fold(0.0, f64::max)).collect();
+        let sensor_reach = (0..data.sensor_names.len())
+            .map(|k| data.sensor_values.iter().filter_map(|v| v.get(k)).fold(0.0, |a: f64, x| a.max(x.abs())))
+            .collect();
         Self {
             extent_mm: lever_mm.first().copied().unwrap_or(0.0),
             reach,
@@ -63,6 +68,7 @@ impl RobotScale {
             lever_mm,
             axis_lever_mm,
             times_min,
+            sensor_reach,
         }
     }
 }
@@ -162,6 +168,16 @@ fn coupled_deflection(scale: &RobotScale, a: usize, c: f64) -> (f64, f64) {
     }
 }
 
+/// The bound's test of [`implausible`]: `(what, value, moved mm, lever, unit)`.
+type Over<'a> = dyn Fn(&'static str, f64, f64, f64, &'static str) -> Option<Implausible> + 'a;
+/// What a bound on a row's six values (`v`, times `per`: a reading) says at `lever`: its translation
+/// (mm) or its rotation (as the displacement at the lever), `words` naming each.
+fn row_bound(v: &[f64], per: f64, lever: f64, words: [&'static str; 2], over: &Over<'_>) -> Option<Implausible> {
+    let t = per * v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
+    let r = per * v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
+    over(words[0], t, t, lever, " mm").or_else(|| over(words[1], units::degrees(r), r * lever, lever, "°"))
+}
+
 /// Whether the values `v` of `effect` (internal units) are implausible for a robot of `scale` under the
 /// bound `p`, and why.
 pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Plausibility) -> Option<Implausible> {
@@ -193,18 +209,16 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
                     return Some(Implausible::Instant { tau_min: v[6], during });
                 }
             }
-            let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
-            let r = v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
-            let lever = lever_of(j);
-            over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
+            row_bound(v, 1.0, lever_of(j), ["its translation", "its rotation"], &over)
         }
-        Effect::FrameStep(_) => {
-            // A knocked tracker or a moved base: bounded as a row's deviation at the arm's extent.
-            let t = v[..3].iter().map(|x| x * x).sum::<f64>().sqrt();
-            let r = v[3..6].iter().map(|x| x * x).sum::<f64>().sqrt();
-            let lever = scale.extent_mm.max(1.0);
-            over("its translation", t, t, lever, " mm").or_else(|| over("its rotation", deg(r), r * lever, lever, "°"))
+        Effect::SensorDrift(j, sensor) => {
+            // Per unit of the reading: bounded as a row's deviation at the largest reading of the data.
+            let most = scale.sensor_reach.get(sensor.index()).copied().unwrap_or(0.0);
+            let words = ["its translation at the largest reading", "its rotation at the largest reading"];
+            row_bound(v, most, lever_of(j), words, &over)
         }
+        // A knocked tracker or a moved base: bounded as a row's deviation at the arm's extent.
+        Effect::FrameStep(_) => row_bound(v, 1.0, scale.extent_mm.max(1.0), ["its translation", "its rotation"], &over),
         Effect::ComplianceCoupling(j) => {
             // The larger of the two deflections it causes, each at its own joint's lever (no sign rule:
             // an off-diagonal compliance may take either).
@@ -285,6 +299,7 @@ mod tests {
             reach: vec![std::f64::consts::PI; 6],
             revolute: vec![true; 6],
             times_min: Vec::new(),
+            sensor_reach: Vec::new(),
         };
         let j6 = JointIndex::of(&robot, 5).unwrap();
         let p = Plausibility::default();
@@ -309,15 +324,7 @@ mod tests {
         let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
         let mut times: Vec<f64> = (0..300).map(|i| 0.6 * i as f64).collect();
         times[101] = times[100] + 0.001;
-        let scale = RobotScale {
-            extent_mm: 1000.0,
-            lever_mm: vec![1000.0; 6],
-            axis_lever_mm: vec![1000.0; 6],
-            max_torque_nm: vec![0.0; 6],
-            reach: vec![std::f64::consts::PI; 6],
-            revolute: vec![true; 6],
-            times_min: times,
-        };
+        let scale = RobotScale { times_min: times, ..metre_arm() };
         let drift =
             Effect::ThermalDrift(JointIndex::of(&robot, 2).unwrap(), thermokin_identify::DriftShape::Exponential);
         let p = Plausibility::default();
@@ -326,5 +333,34 @@ mod tests {
         let refusal = fast.unwrap().refusal(drift, super::Judged::Fitted);
         assert!(refusal.remedy.contains("link_deviation[3]"), "{}", refusal.remedy);
         assert_eq!(implausible(&scale, &[0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 30.0], drift, &p), None);
+    }
+
+    /// A 6-joint arm of 1 m extent, every lever 1 m, no gravity, no time, no sensor.
+    fn metre_arm() -> RobotScale {
+        RobotScale {
+            extent_mm: 1000.0,
+            lever_mm: vec![1000.0; 6],
+            axis_lever_mm: vec![1000.0; 6],
+            max_torque_nm: vec![0.0; 6],
+            reach: vec![std::f64::consts::PI; 6],
+            revolute: vec![true; 6],
+            times_min: Vec::new(),
+            sensor_reach: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_sensors_row_is_bounded_at_the_largest_reading() {
+        let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
+        let scale = RobotScale { sensor_reach: vec![50.0], ..metre_arm() };
+        let data = thermokin_chain::Dataset { sensor_names: vec!["acc".into()], ..Default::default() };
+        let sensor = thermokin_identify::SensorId::of(&data, 0).unwrap();
+        let e = Effect::SensorDrift(JointIndex::of(&robot, 1).unwrap(), sensor);
+        let p = Plausibility::default();
+        // 0.5 mm per unit is 25 mm at the largest reading: beyond 2 % of a 1 m arm (20 mm); 0.3 mm per
+        // unit (15 mm) is not — whatever the per-unit value alone would say.
+        let at = |v: f64| implausible(&scale, &[v, 0.0, 0.0, 0.0, 0.0, 0.0], e, &p);
+        assert!(matches!(at(0.5), Some(Implausible::Beyond { .. })), "{:?}", at(0.5));
+        assert_eq!(at(0.3), None);
     }
 }
