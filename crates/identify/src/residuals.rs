@@ -130,6 +130,51 @@ mod tests {
     use super::{residuals, residuals_and_jacobian};
     use crate::{Effect, JointIndex, Model, PoseTerms};
 
+    /// The analytic Jacobian of `model` at `theta` on every measurement of `data`, checked column by column
+    /// against central differences of step `h` of the residuals (which are `measured − predicted`: the
+    /// Jacobian is the prediction's, the negative of the residuals'), to 1e-5 of each column's largest entry.
+    fn jacobian_is_the_differences(
+        robot: &Robot,
+        model: &Model,
+        theta: &[f64],
+        data: &Dataset,
+        terms: &PoseTerms,
+        h: f64,
+    ) -> faer::Mat<f64> {
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let (_, jac) = residuals_and_jacobian(robot, model, theta, data, &rows, terms).unwrap();
+        for k in 0..theta.len() {
+            let (mut plus, mut minus) = (theta.to_vec(), theta.to_vec());
+            plus[k] += h;
+            minus[k] -= h;
+            let rp = residuals(robot, model, &plus, data, &rows, terms).unwrap();
+            let rm = residuals(robot, model, &minus, data, &rows, terms).unwrap();
+            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
+                let numeric = -(p - m) / (2.0 * h);
+                let scale = jac.col(k).norm_max().max(1.0);
+                assert!(
+                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
+                    "column {k}, row {r}: {} vs {numeric}",
+                    jac[(r, k)]
+                );
+            }
+        }
+        jac
+    }
+
+    /// Eight poses of the IRB 140 (joints drawn around zero with `seed`, within ±1.5 rad), measured at a
+    /// fixed point: where only the Jacobian's shape matters.
+    fn eight_poses(seed: u64) -> Dataset {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let measurements = (0..8)
+            .map(|_| {
+                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
+                measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
+            })
+            .collect();
+        Dataset { measurements, ..Dataset::default() }
+    }
+
     /// The analytic Jacobian of the joint-level effects that move with gravity — a compliance and a
     /// compliance coupling of two joints — against central differences of the residuals (which are
     /// `measured − predicted`: the Jacobian is the prediction's, the negative of the residuals').
@@ -140,41 +185,16 @@ mod tests {
             .map(|j| Some(LinkMass { mass_kg: 10.0 - j as f64, com_mm: Vector3::new(50.0, 20.0 * j as f64, 100.0) }))
             .collect();
         let robot = Robot::new("IRB 140", chain).with_masses(masses).unwrap();
-        let mut rng = ChaCha8Rng::seed_from_u64(5);
-        let measurements = (0..8)
-            .map(|_| {
-                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
-                measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
-            })
-            .collect();
-        let data = Dataset { measurements, ..Dataset::default() };
+        let data = eight_poses(5);
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let model =
             Model::new(&robot, vec![Effect::JointCompliance(joint(1)), Effect::ComplianceCoupling(joint(1))]).unwrap();
-        let rows: Vec<usize> = (0..data.len()).collect();
         let terms = PoseTerms::of(&robot, &data, 0.0);
         // At a non-zero point, so that the coupling's terms interact with the compliance's.
         let theta = vec![2e-5, -1.5e-5];
-        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
         // A step of 1e-9 rad/(N·m) moves a joint by ~1e-7 rad at 100 N·m: small against the curvature,
         // large against rounding of ~1e-12 mm.
-        let h = 1e-9;
-        for k in 0..theta.len() {
-            let (mut plus, mut minus) = (theta.clone(), theta.clone());
-            plus[k] += h;
-            minus[k] -= h;
-            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
-            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
-            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
-                let numeric = -(p - m) / (2.0 * h);
-                let scale = jac.col(k).norm_max().max(1.0);
-                assert!(
-                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
-                    "column {k}, row {r}: {} vs {numeric}",
-                    jac[(r, k)]
-                );
-            }
-        }
+        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
     }
 
     /// A gravity compliance known without masses on joints 2 and 3 of an IRB 140 whose file carries no
@@ -183,14 +203,7 @@ mod tests {
     #[test]
     fn a_compliance_without_masses_matches_the_differences_and_its_export() {
         let robot = Robot::new("IRB 140", irb140_table9());
-        let mut rng = ChaCha8Rng::seed_from_u64(8);
-        let measurements = (0..8)
-            .map(|_| {
-                let q = (0..6).map(|_| gauss(&mut rng).clamp(-1.5, 1.5)).collect();
-                measured_point(q, Vector3::new(500.0, 0.0, 600.0), 0.0, &mut rng)
-            })
-            .collect();
-        let data = Dataset { measurements, ..Dataset::default() };
+        let data = eight_poses(8);
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let effects = vec![
             Effect::named(&robot, "joint_compliance", Some(1)).unwrap(),
@@ -201,24 +214,7 @@ mod tests {
         let rows: Vec<usize> = (0..data.len()).collect();
         let terms = PoseTerms::of(&robot, &data, 0.0);
         let theta: Vec<f64> = (0..model.len()).map(|k| 1e-4 * ((k as f64 * 0.7).sin() + 0.3)).collect();
-        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
-        let h = 1e-7;
-        for k in 0..theta.len() {
-            let (mut plus, mut minus) = (theta.clone(), theta.clone());
-            plus[k] += h;
-            minus[k] -= h;
-            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
-            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
-            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
-                let numeric = -(p - m) / (2.0 * h);
-                let scale = jac.col(k).norm_max().max(1.0);
-                assert!(
-                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
-                    "column {k}, row {r}: {} vs {numeric}",
-                    jac[(r, k)]
-                );
-            }
-        }
+        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
         // The export evaluates the same law by another route (the robot model's joint values, then its
         // chain's forward kinematics): the same points to 1e-9 mm.
         let exported = model.robot_model(&robot, &theta, &data).unwrap();
@@ -260,7 +256,6 @@ mod tests {
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let step = Effect::FrameStep(crate::StepAt::time(50.0));
         let model = Model::new(&robot, vec![Effect::Registration, Effect::LinkDeviation(joint(2)), step]).unwrap();
-        let rows: Vec<usize> = (0..data.len()).collect();
         let theta: Vec<f64> = (0..model.len()).map(|k| 0.01 * ((k as f64 * 1.7).sin())).collect();
         // Measured orientations as predicted at `theta`: the rotation rows' Gauss–Newton Jacobian (the
         // angular twist) is the derivative of their log at zero residual.
@@ -272,24 +267,7 @@ mod tests {
         }
         let terms = PoseTerms::of(&robot, &data, 100.0);
         assert_eq!(terms.stride(), 6);
-        let (_, jac) = residuals_and_jacobian(&robot, &model, &theta, &data, &rows, &terms).unwrap();
-        let h = 1e-6;
-        for k in 0..theta.len() {
-            let (mut plus, mut minus) = (theta.clone(), theta.clone());
-            plus[k] += h;
-            minus[k] -= h;
-            let rp = residuals(&robot, &model, &plus, &data, &rows, &terms).unwrap();
-            let rm = residuals(&robot, &model, &minus, &data, &rows, &terms).unwrap();
-            for (r, (p, m)) in rp.iter().zip(&rm).enumerate() {
-                let numeric = -(p - m) / (2.0 * h);
-                let scale = jac.col(k).norm_max().max(1.0);
-                assert!(
-                    (jac[(r, k)] - numeric).abs() < 1e-5 * scale,
-                    "column {k}, row {r}: {} vs {numeric}",
-                    jac[(r, k)]
-                );
-            }
-        }
+        let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-6);
         // Before the step the step moves nothing.
         let o = model.offsets()[2];
         for c in o..o + 6 {

@@ -8,6 +8,18 @@ use thermokin_diagnose::{Config, Masses, Validation, diagnose};
 use thermokin_identify::FrameMode;
 use thermokin_testdata::workspace;
 
+/// Where `robot` stands when commanded `q`: joints 2 and 3 deflected by 1.2e-3 and 0.9e-3 °/N·m of the
+/// gravity torques its masses make (computed by the chain, not by the diagnosis's model).
+fn sagging(robot: &Robot) -> impl Fn(&[f64]) -> Vec<f64> + '_ {
+    move |q: &[f64]| {
+        let tau = gravity_torques(robot.chain(), robot.masses(), q, &-Vector3::z_axis()).unwrap();
+        let mut a = q.to_vec();
+        a[1] += 1.2e-3f64.to_radians() * tau[1];
+        a[2] += 0.9e-3f64.to_radians() * tau[2];
+        a
+    }
+}
+
 /// Joints 2 and 3 of an IRB 140 deflect under gravity (1.2e-3 and 0.9e-3 °/N·m on the masses of its
 /// file: deflections up to ~0.1°), measured by a tracker; the diagnosis gets the file with its masses
 /// removed. It names a compliance of each of the two joints (with no masses, its loads lumped), nothing
@@ -28,16 +40,9 @@ fn gravity_compliance_is_found_when_the_files_masses_are_not_trusted() {
 fn compliance_found_without(masses: Masses) {
     let with_masses = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     assert!(with_masses.masses().iter().all(Option::is_some));
-    let truth = |q: &[f64]| {
-        let down = -Vector3::z_axis();
-        let tau = gravity_torques(with_masses.chain(), with_masses.masses(), q, &down).unwrap();
-        let mut a = q.to_vec();
-        a[1] += 1.2e-3f64.to_radians() * tau[1];
-        a[2] += 0.9e-3f64.to_radians() * tau[2];
-        a
-    };
-    let data = crate::tracker::measure(with_masses.chain(), 300, 4701, truth);
-    let fresh = crate::tracker::measure(with_masses.chain(), 150, 4702, truth);
+    let truth = sagging(&with_masses);
+    let data = crate::tracker::measure(with_masses.chain(), 300, 4701, &truth);
+    let fresh = crate::tracker::measure(with_masses.chain(), 150, 4702, &truth);
     let robot: Robot = match masses {
         Masses::FromFile => with_masses.clone().with_masses(vec![None; 6]).unwrap(),
         Masses::Ignored => {
@@ -80,14 +85,7 @@ fn compliance_found_without(masses: Masses) {
 #[test]
 fn the_data_say_when_they_disagree_with_the_files_masses() {
     let with_masses = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
-    let truth = |q: &[f64]| {
-        let down = -Vector3::z_axis();
-        let tau = gravity_torques(with_masses.chain(), with_masses.masses(), q, &down).unwrap();
-        let mut a = q.to_vec();
-        a[1] += 1.2e-3f64.to_radians() * tau[1];
-        a[2] += 0.9e-3f64.to_radians() * tau[2];
-        a
-    };
+    let truth = sagging(&with_masses);
     let data = crate::tracker::measure(with_masses.chain(), 300, 4703, truth);
     let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
     let said = |robot: &Robot| {
