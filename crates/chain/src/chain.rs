@@ -505,7 +505,9 @@ impl Chain {
         Ok(out)
     }
 
-    /// Calls `visit(i, rotation, origin)` with every joint frame after the joint's motion (no quaternion,
+    /// Calls `visit(i, parent_rotation, rotation, origin)` with every joint frame after the joint's motion,
+    /// beside the orientation of the frame its row's errors are in (the previous joint's after its motion,
+    /// or the base's) (no quaternion,
     /// no allocation: the fast path of [`crate::gravity_torques_into`], which runs per pose per fit
     /// evaluation of a compliance); `given` is `(sin q_i, cos q_i)` of each joint value when the caller
     /// has them ([`Chain::tool_position_rotation_sin_cos`]'s rule).
@@ -513,7 +515,7 @@ impl Chain {
         &self,
         q: &[f64],
         given: Option<&[(f64, f64)]>,
-        mut visit: impl FnMut(usize, &Matrix3<f64>, &Vector3<f64>),
+        mut visit: impl FnMut(usize, &Matrix3<f64>, &Matrix3<f64>, &Vector3<f64>),
     ) -> Result<(), ChainError> {
         self.check_q(q)?;
         if let Some(g) = given {
@@ -521,9 +523,10 @@ impl Chain {
         }
         let mut base_from_link = self.base_frame;
         for (i, (link, &qi)) in self.links.iter().zip(q).enumerate() {
+            let parent = base_from_link.rot;
             base_from_link = link.behind(&base_from_link);
             Self::apply_joint(link, &mut base_from_link, qi, given.map(|g| g[i]));
-            visit(i, &base_from_link.rot, &base_from_link.trans);
+            visit(i, &parent, &base_from_link.rot, &base_from_link.trans);
         }
         Ok(())
     }

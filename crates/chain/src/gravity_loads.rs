@@ -25,7 +25,7 @@ use nalgebra::{Matrix3, Unit, Vector3};
 use crate::{Chain, ChainError, JointKind};
 
 /// Two unit directions perpendicular to `axis` (and to each other), the same for the same axis.
-fn perpendiculars(axis: &Vector3<f64>) -> [Vector3<f64>; 2] {
+pub(crate) fn perpendiculars(axis: &Vector3<f64>) -> [Vector3<f64>; 2] {
     let a = axis.normalize();
     // The base axis least aligned with `a` makes a well-conditioned first perpendicular.
     let pick = if a.x.abs() <= a.y.abs() && a.x.abs() <= a.z.abs() {
@@ -95,7 +95,7 @@ pub fn gravity_load_basis_into(
     }
     let joints = chain.joints();
     let mut w = Vector3::zeros();
-    chain.visit_joint_frames(q, given, |i, rot: &Matrix3<f64>, _origin| {
+    chain.visit_joint_frames(q, given, |i, _parent, rot: &Matrix3<f64>, _origin| {
         if i < joint {
             return;
         }

@@ -4,6 +4,7 @@
 //! Units inside: millimetres and radians. Degrees exist only at the file and CLI boundary (other crates).
 //! This crate does no I/O.
 
+mod bending;
 mod chain;
 mod choices;
 mod dh;
@@ -17,6 +18,7 @@ mod so3;
 mod trig;
 pub mod units;
 
+pub use bending::{lateral_directions, lateral_gravity_moments_into};
 pub use chain::{
     Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,
 };

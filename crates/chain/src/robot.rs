@@ -9,7 +9,7 @@ use crate::{Chain, ChainError, JointKind};
 
 /// Standard gravity, m/s²: a link mass in kg and a lever in mm give N·mm ([`crate::units::newton_metres`]
 /// for N·m).
-const STANDARD_GRAVITY: f64 = 9.806_65;
+pub(crate) const STANDARD_GRAVITY: f64 = 9.806_65;
 
 /// Mass (kg) and centre of mass (mm, in the same-orientation frame of the joint that moves the link) of
 /// one link: what gravity compliance needs. Description data carried beside the chain.
@@ -218,7 +218,7 @@ pub fn gravity_torques_into(
         large.resize(n, none);
         &mut large[..]
     };
-    chain.visit_joint_frames(q, q_sin_cos, |i, rot, origin| {
+    chain.visit_joint_frames(q, q_sin_cos, |i, _parent, rot, origin| {
         let (moment, mass) = match masses.get(i).copied().flatten() {
             Some(m) => ((rot * m.com_mm + origin).cross(&(weight * m.mass_kg)), m.mass_kg),
             None => (Vector3::zeros(), 0.0),

@@ -120,9 +120,26 @@ fn solve_in_states(
             let t = &program[start];
             CompensateError::TargetState { label: t.label.clone(), line: t.line, message: e.to_string() }
         };
-        let chain = model.chain_at(state).map_err(in_state)?;
         let goals: Vec<Goal> = program[start..end].iter().map(|t| Goal::Pose(t.pose)).collect();
-        let solutions = solve_batch(&chain, &goals, Seeds::PerTarget(&seeds[start..end]), &settings.ik)?;
+        let solutions = if model.bends() {
+            // The chain in force differs per target (its tilt follows the configuration): one solve each.
+            let mut ws = thermokin_ik::Workspace::new(model.robot().chain().dof());
+            let mut out = Vec::with_capacity(goals.len());
+            for (k, goal) in goals.iter().enumerate() {
+                let seed = &seeds[start + k];
+                let index = (start + k) as u64;
+                out.push(solve_bending(model, state, goal, seed, &settings.ik, &mut ws, index).map_err(
+                    |e| match e {
+                        CompensateError::Deform(d) => in_state(d),
+                        other => other,
+                    },
+                )?);
+            }
+            out
+        } else {
+            let chain = model.chain_at(state).map_err(in_state)?;
+            solve_batch(&chain, &goals, Seeds::PerTarget(&seeds[start..end]), &settings.ik)?
+        };
         for (k, s) in solutions.iter().enumerate() {
             let i = start + k;
             rows.push(record(model, &program[i], &states[i], s, &nominal[i].q, settings).map_err(in_state)?);
@@ -146,10 +163,49 @@ pub fn solve_on_model(
     ws: &mut thermokin_ik::Workspace,
     index: u64,
 ) -> Result<Solution, CompensateError> {
-    let chain = model.chain_at(state)?;
-    let seed = model.joint_values(seed, state)?;
-    let mut solution = thermokin_ik::solve(&chain, goal, &seed, params, ws, index)?;
+    let mut solution = if model.bends() {
+        solve_bending(model, state, goal, &model.joint_values(seed, state)?, params, ws, index)?
+    } else {
+        let chain = model.chain_at(state)?;
+        let seed = model.joint_values(seed, state)?;
+        thermokin_ik::solve(&chain, goal, &seed, params, ws, index)?
+    };
     commanded_on_model(model, state, goal, params, &mut solution)?;
+    Ok(solution)
+}
+
+/// Most solves of the fixed point in [`solve_bending`]: a tilt of ~1e-4 rad per N·m·radian of motion
+/// contracts by that factor per solve, so a few reach the IK's own tolerance.
+const MAX_BENDING_SOLVES: usize = 8;
+
+/// IK on a model whose chain in force depends on the configuration ([`RobotModel::bends`]): solved on the
+/// chain at the commanded values of the last answer (from the seed's), again until those stop moving
+/// (by 1e-12 rad or mm) or [`MAX_BENDING_SOLVES`]. Returns the chain values of the last solve; whether
+/// they reach the goal is checked afterwards through the whole model ([`command_solution`]), which is
+/// what makes a solve that did not settle `Unverified`.
+fn solve_bending(
+    model: &RobotModel,
+    state: &OperatingState,
+    goal: &Goal,
+    seed_chain: &[f64],
+    params: &Params,
+    ws: &mut thermokin_ik::Workspace,
+    index: u64,
+) -> Result<Solution, CompensateError> {
+    let commanded = model.commanded_for(seed_chain, state).unwrap_or_else(|_| seed_chain.to_vec());
+    let mut solution =
+        thermokin_ik::solve(&model.chain_at_joints(state, &commanded)?, goal, seed_chain, params, ws, index)?;
+    let mut commanded = commanded;
+    for _ in 1..MAX_BENDING_SOLVES {
+        let next = model.commanded_for(&solution.q, state).unwrap_or_else(|_| solution.q.clone());
+        let moved = next.iter().zip(&commanded).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if moved <= 1e-12 {
+            break;
+        }
+        commanded = next;
+        let seed = solution.q.clone();
+        solution = thermokin_ik::solve(&model.chain_at_joints(state, &commanded)?, goal, &seed, params, ws, index)?;
+    }
     Ok(solution)
 }
 
@@ -183,8 +239,9 @@ pub fn solve_rows(
 }
 
 /// A solution on the chain in force made the joints to command on `model`: [`command_solution`] when the
-/// model corrects its joint values (gear ratio, cyclic error, compliance), nothing otherwise — a plain
-/// or drifting robot's chain values are the joints to command.
+/// model corrects its joint values (gear ratio, cyclic error, compliance) or bends (a lateral compliance:
+/// the pose is re-measured through the whole model), nothing otherwise — a plain or drifting robot's
+/// chain values are the joints to command.
 pub fn commanded_on_model(
     model: &RobotModel,
     state: &OperatingState,
@@ -192,7 +249,7 @@ pub fn commanded_on_model(
     params: &Params,
     solution: &mut Solution,
 ) -> Result<(), thermokin_deform::DeformError> {
-    if model.corrects_joints() {
+    if model.corrects_joints() || model.bends() {
         command_solution(model, state, goal, params, solution)?;
     }
     Ok(())

@@ -11,7 +11,10 @@
 //!    under the gravity torque `τ_j` of the link masses and the payload at the commanded configuration;
 //! 2. the chain in force: the chain's own error parameters plus, for each drift row, its deviation times
 //!    its law's factor at the state — a [`TimeProfile`]'s `f(t)` (the paper's table grown with operating
-//!    time, section 4) or the mean temperature rise of named sensors over their reference (per kelvin);
+//!    time, section 4) or the mean temperature rise of named sensors over their reference (per kelvin) —
+//!    and, for a joint with a lateral compliance, its row tilted (and a slide's shifted) by the gravity
+//!    moments across the joint at the commanded configuration ([`lateral_row_error`],
+//!    [`thermokin_chain::lateral_gravity_moments_into`]);
 //! 3. eq. 22 of that chain at `q`.
 //!
 //! The authors' case studies — one deviation table, one profile for every row — are the special case
@@ -41,16 +44,32 @@ pub struct JointCorrection {
     /// moves by `c · τ_next` and the next by `c · τ_this` (a drive the two share; revolute joints only,
     /// zero on the last joint).
     pub coupling_rad_per_nm: f64,
+    /// Lateral compliance `[c₁, c₂, c′₁, c′₂, s₁, s₂]` under the gravity moments `Mₖ` across the joint
+    /// ([`lateral_row_error`]): its row tilts by `cₖ Mₖ` (rad per N·m); a slide's also as a beam of its
+    /// extension's length, `c′ₖ` (rad per N·m per mm), and shifts by `sₖ Mₖ` (mm per N·m) — `c′` and `s`
+    /// zero for a revolute joint.
+    pub lateral: [f64; 6],
 }
 
 impl JointCorrection {
     /// No correction.
-    pub const NONE: JointCorrection =
-        JointCorrection { scale: 0.0, cyclic_rad: [0.0; 4], compliance_rad_per_nm: 0.0, coupling_rad_per_nm: 0.0 };
+    pub const NONE: JointCorrection = JointCorrection {
+        scale: 0.0,
+        cyclic_rad: [0.0; 4],
+        compliance_rad_per_nm: 0.0,
+        coupling_rad_per_nm: 0.0,
+        lateral: [0.0; 6],
+    };
 
     /// `true` when every coefficient is zero.
     pub fn is_none(&self) -> bool {
         *self == Self::NONE
+    }
+
+    /// `true` when the correction moves the joint's value (anything but a lateral compliance, which tilts
+    /// its row).
+    pub fn moves_joint(&self) -> bool {
+        JointCorrection { lateral: [0.0; 6], ..*self } != Self::NONE
     }
 
     /// `Δq` at commanded value `q` under gravity torque `torque_nm`.
@@ -63,6 +82,35 @@ impl JointCorrection {
         };
         self.scale * q + cyclic + self.compliance_rad_per_nm * torque_nm
     }
+}
+
+/// The error a lateral compliance adds to a joint's row (eq. 19's angles and the row's translation, in
+/// its parent's frame) under the gravity moments `[M₁, M₂]` across it (N·m) along its two lateral
+/// `directions` `eₖ` ([`thermokin_chain::lateral_directions`]), `axis` its unit axis, `d` a slide's
+/// extension (mm), `c` the coefficients `[c₁, c₂, c′₁, c′₂, s₁, s₂]` (missing ones zero: a revolute
+/// joint's two):
+///
+/// `Δθ = Σₖ (cₖ + c′ₖ d) Mₖ eₖ`, `Δp = Σₖ (sₖ − c′ₖ d²/2) Mₖ (eₖ × a)`.
+///
+/// The row sits at the slide's foot, before its travel: `c′` is a beam of the extension's length under
+/// the moment at its tip — curvature `c′M`, so the tip turns by `c′Md` and moves across by `c′Md²/2`:
+/// the row's turn at the foot moves it by `c′Md²`, its shift takes `c′Md²/2` back — and `c`, `s` a
+/// compliant foot (a mount, the column's fixed part) turning and shifting in proportion to the moment.
+/// For a revolute joint the first term alone: a bearing tilting under the arm's moment.
+pub fn lateral_row_error(
+    c: &[f64],
+    directions: &[Vector3<f64>; 2],
+    axis: &Vector3<f64>,
+    moments: [f64; 2],
+    d: f64,
+) -> ErrorParams {
+    let at = |i: usize| c.get(i).copied().unwrap_or(0.0);
+    let (mut rotation, mut translation) = (Vector3::zeros(), Vector3::zeros());
+    for k in 0..2 {
+        rotation += directions[k] * ((at(k) + at(2 + k) * d) * moments[k]);
+        translation += directions[k].cross(axis) * ((at(4 + k) - 0.5 * at(2 + k) * d * d) * moments[k]);
+    }
+    ErrorParams::new(translation, rotation)
 }
 
 /// How much of a drift row's deviation is in force in a given state.
@@ -235,7 +283,10 @@ impl RobotModel {
         }
         for (j, (c, joint)) in joints.iter().zip(chain.joints()).enumerate() {
             let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
-            let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm].into_iter().chain(c.cyclic_rad);
+            let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm]
+                .into_iter()
+                .chain(c.cyclic_rad)
+                .chain(c.lateral);
             if all.clone().any(|v| !v.is_finite()) {
                 return bad("every coefficient must be finite".into());
             }
@@ -243,6 +294,9 @@ impl RobotModel {
                 && (c.cyclic_rad != [0.0; 4] || c.compliance_rad_per_nm != 0.0 || c.coupling_rad_per_nm != 0.0)
             {
                 return bad("cyclic terms and gravity compliance are for revolute joints".into());
+            }
+            if joint.kind == JointKind::Revolute && c.lateral[2..] != [0.0; 4] {
+                return bad("a lateral compliance's extension and shift terms are a slide's".into());
             }
             if c.coupling_rad_per_nm != 0.0
                 && chain.joints().get(j + 1).is_none_or(|next| next.kind != JointKind::Revolute)
@@ -394,7 +448,13 @@ impl RobotModel {
     /// `true` when the joint values the chain sees differ from the commanded ones (a gear ratio, a cyclic
     /// error, a compliance with or without masses).
     pub fn corrects_joints(&self) -> bool {
-        !self.joints.iter().all(JointCorrection::is_none) || self.gravity_loads.iter().any(|l| !l.is_empty())
+        self.joints.iter().any(JointCorrection::moves_joint) || self.gravity_loads.iter().any(|l| !l.is_empty())
+    }
+
+    /// `true` when some joint's row tilts with the configuration (a lateral compliance): the chain in force
+    /// then depends on the joint values ([`RobotModel::chain_at_joints`]).
+    pub fn bends(&self) -> bool {
+        self.joints.iter().any(|c| c.lateral != [0.0; 6])
     }
 
     /// The drift rows.
@@ -414,7 +474,7 @@ impl RobotModel {
 
     /// `true` when the model is its robot's chain alone: no joint correction and no drift.
     pub fn is_plain(&self) -> bool {
-        self.drift.is_empty() && !self.corrects_joints()
+        self.drift.is_empty() && !self.corrects_joints() && !self.bends()
     }
 
     /// `true` for the robot as designed: plain ([`RobotModel::is_plain`]) with no error parameter and no
@@ -491,6 +551,9 @@ impl RobotModel {
             if !self.gravity_loads[j].is_empty() {
                 out.push(format!("joint {} ({}): gravity compliance without masses", j + 1, names[j]));
             }
+            if c.lateral != [0.0; 6] {
+                out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
+            }
         }
         for d in &self.drift {
             out.push(format!("{}: thermal drift, {}", row_name(d.row), d.law.describe()));
@@ -520,18 +583,51 @@ impl RobotModel {
         self.drift_at(state)?.apply(self.robot.chain(), &TableSemantics::Canonical)
     }
 
-    /// Gravity torques at commanded `q` with the state's payload (or the model's) on the last link, N·m —
-    /// the masses merged as [`Robot::with_payload`] merges them, without copying the chain (this runs at
-    /// every step of every inversion).
-    fn torques(&self, q: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+    /// The chain in force at `state` when `commanded` is commanded: [`RobotModel::chain_at`] with each
+    /// lateral compliance's tilt at the configuration added to its row (step 2 of the law). The same chain
+    /// as `chain_at` for a model that does not bend.
+    pub fn chain_at_joints(&self, state: &OperatingState, commanded: &[f64]) -> Result<Chain, DeformError> {
+        let mut chain = self.chain_at(state)?;
+        if !self.bends() {
+            return Ok(chain);
+        }
+        let mut moments = Vec::new();
+        let masses = self.masses_in(state);
+        thermokin_chain::lateral_gravity_moments_into(
+            self.robot.chain(),
+            &masses,
+            commanded,
+            None,
+            &self.down,
+            &mut moments,
+        )?;
+        for (j, c) in self.joints.iter().enumerate().filter(|(_, c)| c.lateral != [0.0; 6]) {
+            let Some(directions) = thermokin_chain::lateral_directions(self.robot.chain(), j) else { continue };
+            let axis = self.robot.chain().joints()[j].axis.into_inner();
+            let bend = lateral_row_error(&c.lateral, &directions, &axis, moments[j], commanded[j]);
+            let row = chain.joints()[j].error.add(&bend);
+            chain.set_joint_error(j, row)?;
+        }
+        Ok(chain)
+    }
+
+    /// The link masses with the state's payload (or the model's) merged into the last link's, as
+    /// [`Robot::with_payload`] merges them, without copying the chain.
+    fn masses_in(&self, state: &OperatingState) -> std::borrow::Cow<'_, [Option<LinkMass>]> {
         let Some(payload) = state.payload.or(self.payload) else {
-            return Ok(self.robot.gravity_torques(q, &self.down)?);
+            return std::borrow::Cow::Borrowed(self.robot.masses());
         };
         let mut masses = self.robot.masses().to_vec();
         if let Some(last) = masses.last_mut() {
             *last = Some(last.map_or(payload, |link| link.combined_with(payload)));
         }
-        Ok(thermokin_chain::gravity_torques(self.robot.chain(), &masses, q, &self.down)?)
+        std::borrow::Cow::Owned(masses)
+    }
+
+    /// Gravity torques at commanded `q` with the state's payload (or the model's) on the last link, N·m
+    /// (this runs at every step of every inversion).
+    fn torques(&self, q: &[f64], state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+        Ok(thermokin_chain::gravity_torques(self.robot.chain(), &self.masses_in(state), q, &self.down)?)
     }
 
     /// The joint values the chain sees when `commanded` is commanded in `state` (step 1 of the law).
@@ -593,6 +689,6 @@ impl RobotModel {
     /// `base_from_tcp` when `commanded` is commanded in `state`: steps 1–3 of the law.
     pub fn tool_pose(&self, commanded: &[f64], state: &OperatingState) -> Result<Isometry3<f64>, DeformError> {
         let q = self.joint_values(commanded, state)?;
-        Ok(self.chain_at(state)?.tool_pose(&q)?)
+        Ok(self.chain_at_joints(state, commanded)?.tool_pose(&q)?)
     }
 }

@@ -57,6 +57,7 @@ fn shaped(e: Effect) -> bool {
             | Effect::Periodic(_)
             | Effect::JointCompliance(_)
             | Effect::LumpedCompliance(..)
+            | Effect::LateralCompliance(..)
             | Effect::ComplianceCoupling(_)
     )
 }

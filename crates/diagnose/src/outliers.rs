@@ -119,7 +119,9 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
     let screen = OutlierScreen {
         model: which,
-        with_compliance: effects.iter().any(|e| matches!(e, Effect::JointCompliance(_) | Effect::LumpedCompliance(..))),
+        with_compliance: effects.iter().any(|e| {
+            matches!(e, Effect::JointCompliance(_) | Effect::LumpedCompliance(..) | Effect::LateralCompliance(..))
+        }),
         scale_mm,
         scale_from,
         threshold_mm,
@@ -144,6 +146,10 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
         // whose top poses would stand out as gross errors.
         if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Prismatic {
             effects.push(Effect::JointScale(j));
+            // A column bending under what it carries, more at its top extensions: its tilt, with masses.
+            if robot.masses().iter().skip(j.index()).any(Option::is_some) {
+                lumped.push(Effect::lateral_compliance(robot, j));
+            }
         }
         match thermokin_identify::gravity_compliance(robot, data, j, &loaded) {
             Some(e @ Effect::LumpedCompliance(..)) => lumped.push(e),

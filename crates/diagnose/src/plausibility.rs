@@ -10,6 +10,17 @@ use thermokin_identify::{DriftShape, Effect, max_gravity_torques};
 use crate::config::Plausibility;
 use crate::report::Refusal;
 
+/// A lateral compliance's tilt at the largest moment across joint `j` (a slide's at its largest
+/// extension), radians, and what it moves the tool point by at most: the tilt at the row's lever, plus a
+/// slide's shift, mm.
+fn lateral_reach(scale: &RobotScale, j: usize, n: u8, v: &[f64]) -> (f64, f64) {
+    let (most, d) = (scale.max_lateral_nm[j], if n == 6 { scale.reach[j] } else { 0.0 });
+    let at = |k: usize| v.get(k).copied().unwrap_or(0.0);
+    let tilt = (at(0).hypot(at(1)) + d * at(2).hypot(at(3))) * most;
+    let shift = (at(4).hypot(at(5)) + 0.5 * d * d * at(2).hypot(at(3))) * most;
+    (tilt, tilt * scale.lever_mm[j].max(1.0) + shift)
+}
+
 /// The robot's scale over a data set, what plausibility is judged against: the arm's extent, each joint
 /// row's lever to the tool point, each joint's largest gravity torque, the measurements' time spacing.
 #[derive(Clone, Debug, PartialEq)]
@@ -33,6 +44,8 @@ pub(crate) struct RobotScale {
     pub(crate) times_min: Vec<f64>,
     /// Per sensor column, the largest |reading| over the data.
     pub(crate) sensor_reach: Vec<f64>,
+    /// Per joint, the largest gravity moment across its axis over the data (the file's masses), N·m.
+    pub(crate) max_lateral_nm: Vec<f64>,
 }
 
 impl RobotScale {
@@ -42,7 +55,19 @@ impl RobotScale {
         let dof = chain.dof();
         let mut lever_mm = vec![0.0f64; dof];
         let mut axis_lever_mm = vec![0.0f64; dof];
+        let mut max_lateral_nm = vec![0.0f64; dof];
+        let mut moments = Vec::new();
+        let down = -nalgebra::Vector3::z_axis();
+        let massive = robot.masses().iter().any(Option::is_some);
         for m in &data.measurements {
+            if massive
+                && thermokin_chain::lateral_gravity_moments_into(chain, robot.masses(), &m.q, None, &down, &mut moments)
+                    .is_ok()
+            {
+                for (most, [a, b]) in max_lateral_nm.iter_mut().zip(&moments) {
+                    *most = most.max(a.hypot(*b));
+                }
+            }
             let (Ok(frames), Ok(tool)) = (chain.joint_frames(&m.q), chain.tool_pose(&m.q)) else { continue };
             for (j, f) in frames.iter().take(dof).enumerate() {
                 let arm = tool.translation.vector - f.translation.vector;
@@ -69,6 +94,7 @@ impl RobotScale {
             axis_lever_mm,
             times_min,
             sensor_reach,
+            max_lateral_nm,
         }
     }
 }
@@ -231,6 +257,10 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
                 "°",
             )
         }
+        Effect::LateralCompliance(j, n) => {
+            let (tilt, moved) = lateral_reach(scale, j.index(), n, v);
+            over("the tilt at the largest moment across the joint", deg(tilt), moved, lever_of(j), "°")
+        }
         Effect::LumpedCompliance(j, _) => {
             // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of
             // the weights bounds the deflection over every pose.
@@ -300,6 +330,7 @@ mod tests {
             revolute: vec![true; 6],
             times_min: Vec::new(),
             sensor_reach: Vec::new(),
+            max_lateral_nm: vec![0.0; 6],
         };
         let j6 = JointIndex::of(&robot, 5).unwrap();
         let p = Plausibility::default();
@@ -346,6 +377,7 @@ mod tests {
             revolute: vec![true; 6],
             times_min: Vec::new(),
             sensor_reach: Vec::new(),
+            max_lateral_nm: vec![0.0; 6],
         }
     }
 

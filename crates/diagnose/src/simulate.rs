@@ -81,7 +81,8 @@ impl HiddenEffect {
 
     /// The effect at a random size typical of a calibrated industrial arm, drawn from `rng`: a zero
     /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m (a coupling of two: 3e-4–1e-3
-    /// either way), a gear-ratio error of 2e-4–6e-4,
+    /// either way), a lateral compliance within ±8e-6 °/N·m (a slide's growth within ±8e-9 °/N·m per mm),
+    /// a gear-ratio error of 2e-4–6e-4,
     /// cyclic amplitudes within ±0.03°, an exponential drift's τ of 30–90 min, translations within
     /// ±0.4 mm and rotations within ±0.02° otherwise.
     pub fn typical(effect: Effect, rng: &mut impl Rng) -> Self {
@@ -95,6 +96,9 @@ impl HiddenEffect {
                 (Effect::ComplianceCoupling(_), _) => {
                     rng.random_range(3e-4..1e-3) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }
+                (Effect::LateralCompliance(..), 0..=1) => rng.random_range(-8e-6..8e-6),
+                (Effect::LateralCompliance(..), 2 | 3) => rng.random_range(-8e-9..8e-9),
+                (Effect::LateralCompliance(..), _) => rng.random_range(-1e-4..1e-4),
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
                 (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
@@ -108,7 +112,8 @@ impl HiddenEffect {
 }
 
 impl std::fmt::Display for HiddenEffect {
-    /// `joint_offset[2]: 0.050000° (mm, degrees, minutes)`: the label and the values in report units.
+    /// `joint_offset[2]: 0.050000° (mm, degrees, minutes)`: the label and the values in report units (per
+    /// N·m for a compliance; below 1e-3 with an exponent).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let shown: Vec<String> = self
             .values
@@ -116,7 +121,10 @@ impl std::fmt::Display for HiddenEffect {
             .enumerate()
             .map(|(k, &v)| {
                 let shown = self.effect.to_report_units(k, v);
-                if self.effect.is_angle(k) { format!("{shown:.6}°") } else { format!("{shown:.6}") }
+                // A compliance's per-N·m values are far below a millionth: shown with their exponent.
+                let number =
+                    if shown != 0.0 && shown.abs() < 1e-3 { format!("{shown:.4e}") } else { format!("{shown:.6}") };
+                if self.effect.is_angle(k) { format!("{number}°") } else { number }
             })
             .collect();
         write!(f, "{}: {} (mm, degrees, minutes)", self.effect.label(), shown.join(", "))

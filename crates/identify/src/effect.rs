@@ -183,6 +183,14 @@ pub enum Effect {
     /// carries). The count is the basis' length ([`thermokin_chain::gravity_load_basis_len`]), fixed by
     /// the robot: make one with [`Effect::named`] (`"joint_compliance"` on a robot without masses).
     LumpedCompliance(JointIndex, u8),
+    /// Lateral gravity compliance of joint `j`: its row tilts, about the two directions across its axis
+    /// ([`thermokin_chain::lateral_directions`], in its parent's frame), by the gravity moments across it
+    /// of the links it carries ([`thermokin_chain::lateral_gravity_moments_into`]) times a compliance —
+    /// a bearing's or a mount's tilt under the arm's moment (2, radians per N·m); a slide's, a column's,
+    /// also bends as a beam of its extension's length and its foot shifts (6: `[c₁, c₂, c′₁, c′₂, s₁, s₂]`,
+    /// [`thermokin_deform::lateral_row_error`]). The count is 2 for a revolute joint and 6 for a prismatic
+    /// one: make one with [`Effect::named`] (`"lateral_compliance"`; it needs the file's masses).
+    LateralCompliance(JointIndex, u8),
     /// The coupling of the gravity compliances of joint `j` and the next, `j + 1` — a drive the two
     /// share (a differential, a cable pair): `Δq_j += c · τ_{j+1}` and `Δq_{j+1} += c · τ_j`, the
     /// symmetric off-diagonal term of the two joints' compliance matrix (Maxwell–Betti reciprocity) (1).
@@ -204,13 +212,14 @@ pub enum Effect {
 }
 
 /// The effect names of reports and flags, in catalogue order.
-pub const EFFECT_NAMES: [&str; 10] = [
+pub const EFFECT_NAMES: [&str; 11] = [
     "base_frame",
     "tool_frame",
     "joint_offset",
     "link_deviation",
     "joint_compliance",
     "compliance_coupling",
+    "lateral_compliance",
     "joint_scale",
     "periodic",
     "thermal_drift",
@@ -237,6 +246,10 @@ impl Effect {
                 Effect::lumped_compliance(robot, on(joint)?)
             }
             "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
+            "lateral_compliance" if robot.masses().iter().all(Option::is_none) => {
+                Err(IdentifyError::MassesNeeded { effect: name.to_string() })
+            }
+            "lateral_compliance" => Ok(Effect::lateral_compliance(robot, on(joint)?)),
             "compliance_coupling" => {
                 let j = on(joint)?;
                 // Joint j and the next: the next must exist.
@@ -261,6 +274,13 @@ impl Effect {
         }
     }
 
+    /// Lateral gravity compliance of joint `j` ([`Effect::LateralCompliance`]): two parameters for a
+    /// revolute joint, six for a slide (it bends with its extension, and its foot shifts).
+    pub fn lateral_compliance(robot: &Robot, j: JointIndex) -> Self {
+        let slide = robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Prismatic;
+        Effect::LateralCompliance(j, if slide { 6 } else { 2 })
+    }
+
     /// The effect a flag or a script names: `KIND[:JOINT]`, the joint numbered from 1 (`joint_offset:2`,
     /// `base_frame`).
     pub fn parse(robot: &Robot, spec: &str) -> Result<Self, IdentifyError> {
@@ -281,6 +301,7 @@ impl Effect {
             | Effect::LinkDeviation(j)
             | Effect::JointCompliance(j)
             | Effect::LumpedCompliance(j, _)
+            | Effect::LateralCompliance(j, _)
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
@@ -324,7 +345,7 @@ impl Effect {
             | Effect::ComplianceCoupling(_)
             | Effect::JointScale(_) => 1,
             Effect::Periodic(_) => 4,
-            Effect::LumpedCompliance(_, n) => *n as usize,
+            Effect::LumpedCompliance(_, n) | Effect::LateralCompliance(_, n) => *n as usize,
         }
     }
 
@@ -345,6 +366,7 @@ impl Effect {
             Effect::LinkDeviation(_) => "link_deviation",
             Effect::JointCompliance(_) | Effect::LumpedCompliance(..) => "joint_compliance",
             Effect::ComplianceCoupling(_) => "compliance_coupling",
+            Effect::LateralCompliance(..) => "lateral_compliance",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
             Effect::ThermalDrift(..) => "thermal_drift",
@@ -381,6 +403,17 @@ impl Effect {
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::LumpedCompliance(_, n) => (1..=*n as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
             Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
+            Effect::LateralCompliance(_, n) => [
+                "tilt1_deg_per_Nm",
+                "tilt2_deg_per_Nm",
+                "bend1_deg_per_Nm_mm",
+                "bend2_deg_per_Nm_mm",
+                "shift1_mm_per_Nm",
+                "shift2_mm_per_Nm",
+            ][..*n as usize]
+                .iter()
+                .map(|t| format!("{prefix}.{t}"))
+                .collect(),
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
             Effect::Periodic(_) => {
                 ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
@@ -416,6 +449,7 @@ impl Effect {
             self,
             Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
+                | Effect::LateralCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -449,6 +483,8 @@ impl Effect {
                 | Effect::ToolRotation,
                 _,
             ) => true,
+            // A slide's shift is millimetres per N·m.
+            (Effect::LateralCompliance(..), k) => k < 4,
             (Effect::JointScale(_), _) => false,
             (Effect::ToolPoint, _) => false,
             (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,

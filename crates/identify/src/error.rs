@@ -52,6 +52,12 @@ pub enum IdentifyError {
         /// 1-based joint number.
         joint: usize,
     },
+    /// An effect computed from the robot file's masses, on a robot whose file carries none.
+    #[error("{effect} needs the link masses, and the robot file carries none")]
+    MassesNeeded {
+        /// The effect's name.
+        effect: String,
+    },
     /// A name that is not in the catalogue.
     #[error("unknown effect `{name}` (known: {known})")]
     UnknownEffect {

@@ -190,6 +190,11 @@ impl Model {
                     own.iter_mut().zip(&theta[o..o + n as usize]).for_each(|(l, t)| *l += t);
                 }
                 Effect::ComplianceCoupling(j) => joints[j.index()].coupling_rad_per_nm += theta[o],
+                Effect::LateralCompliance(j, n) => {
+                    for (c, t) in joints[j.index()].lateral.iter_mut().zip(&theta[o..o + n as usize]) {
+                        *c += t;
+                    }
+                }
                 Effect::JointScale(j) => joints[j.index()].scale += theta[o],
                 Effect::Periodic(j) => {
                     for (c, t) in joints[j.index()].cyclic_rad.iter_mut().zip(&theta[o..o + 4]) {
@@ -274,6 +279,7 @@ impl Model {
                 Effect::LinkDeviation(j) => joint_err[j.index()] = joint_err[j.index()].add(&six(o)),
                 Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
+                | Effect::LateralCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -325,9 +331,10 @@ impl Model {
             match *e {
                 Effect::Registration | Effect::BaseFrame => rows.base = true,
                 Effect::ToolPoint | Effect::ToolRotation | Effect::ToolFrame => rows.tool = true,
-                Effect::LinkDeviation(j) | Effect::ThermalDrift(j, _) | Effect::SensorDrift(j, _) => {
-                    rows.joints[j.index()] = true
-                }
+                Effect::LinkDeviation(j)
+                | Effect::ThermalDrift(j, _)
+                | Effect::SensorDrift(j, _)
+                | Effect::LateralCompliance(j, _) => rows.joints[j.index()] = true,
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)
                 | Effect::LumpedCompliance(j, _)

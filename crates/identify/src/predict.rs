@@ -34,6 +34,17 @@ pub struct ChainCache {
     /// at the effect's parameter offsets (zero elsewhere), and a buffer for one joint's basis.
     loads: Vec<f64>,
     basis: Vec<f64>,
+    /// For a model with a lateral compliance: each joint's gravity moments across its axis at the current
+    /// measurement ([`thermokin_chain::lateral_gravity_moments_into`]), N·m.
+    lateral: Option<Vec<[f64; 2]>>,
+}
+
+/// `row`'s deviation added to joint `j`'s in `rows` (a row several effects move at one measurement).
+fn add_to_row(rows: &mut Vec<(usize, ErrorParams)>, j: usize, row: ErrorParams) {
+    match rows.iter_mut().find(|(r, _)| *r == j) {
+        Some((_, d)) => *d = d.add(&row),
+        None => rows.push((j, row)),
+    }
 }
 
 /// A drift's factor at one measurement: `s = f(t) / f(180)` and `∂s/∂τ`, for the effect at `effect` in
@@ -111,10 +122,14 @@ impl Model {
                     .any(|e| {
                         matches!(
                             e,
-                            Effect::JointCompliance(_) | Effect::LumpedCompliance(..) | Effect::ComplianceCoupling(_)
+                            Effect::JointCompliance(_)
+                                | Effect::LumpedCompliance(..)
+                                | Effect::LateralCompliance(..)
+                                | Effect::ComplianceCoupling(_)
                         )
                     })
                     .then(|| (chain.clone(), self.gravity_down(&chain, robot)));
+                let bends = self.effects().iter().any(|e| matches!(e, Effect::LateralCompliance(..)));
                 cache.insert(ChainCache {
                     chain,
                     joint_err,
@@ -128,6 +143,7 @@ impl Model {
                     torques: Vec::with_capacity(dof),
                     loads: vec![0.0; self.len()],
                     basis: Vec::new(),
+                    lateral: bends.then(|| Vec::with_capacity(dof)),
                 })
             }
         })
@@ -156,6 +172,16 @@ impl Model {
                 down,
                 &mut cached.torques,
             )?;
+            if let Some(lateral) = cached.lateral.as_mut() {
+                thermokin_chain::lateral_gravity_moments_into(
+                    chain,
+                    robot.masses(),
+                    &m.q,
+                    inputs.sin_cos,
+                    down,
+                    lateral,
+                )?;
+            }
         }
         let mut drift_rows = std::mem::take(&mut cached.drift_rows);
         cached.drift_scale.clear();
@@ -195,19 +221,23 @@ impl Model {
                     let j = j.index();
                     let tau = if shape == DriftShape::Exponential { theta[o + 6] } else { 0.0 };
                     let (s, ds_dtau) = Self::drift_factor(shape, m, inputs.temp_rise[j], tau);
-                    match drift_rows.iter_mut().find(|(row, _)| *row == j) {
-                        Some((_, d)) => *d = d.add(&six_at(theta, o).scaled(s)),
-                        None => drift_rows.push((j, six_at(theta, o).scaled(s))),
-                    }
+                    add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau });
                 }
                 Effect::SensorDrift(j, sensor) => {
                     let (j, s) = (j.index(), inputs.sensors.get(sensor.index()).copied().unwrap_or(0.0));
-                    match drift_rows.iter_mut().find(|(row, _)| *row == j) {
-                        Some((_, d)) => *d = d.add(&six_at(theta, o).scaled(s)),
-                        None => drift_rows.push((j, six_at(theta, o).scaled(s))),
-                    }
+                    add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
+                }
+                Effect::LateralCompliance(j, n) => {
+                    let j = j.index();
+                    let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
+                    let chain = robot.chain();
+                    let directions = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+                    let axis = chain.joints()[j].axis.into_inner();
+                    let c = &theta[o..o + n as usize];
+                    let row = thermokin_deform::lateral_row_error(c, &directions, &axis, moments, m.q[j]);
+                    add_to_row(&mut drift_rows, j, row);
                 }
                 _ => {}
             }
@@ -384,6 +414,28 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
+                Effect::LateralCompliance(j, n) => {
+                    // The row's angles move along eₖ and its translation along eₖ × a
+                    // ([`thermokin_deform::lateral_row_error`]): ∂p/∂cₖ = ∂p/∂angles · eₖ Mₖ,
+                    // ∂p/∂c′ₖ = d ∂p/∂cₖ − ∂p/∂translation · (eₖ × a) Mₖ d²/2, ∂p/∂sₖ = ∂p/∂translation · (eₖ × a) Mₖ.
+                    let (j, d) = (j.index(), m.q[j.index()]);
+                    let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
+                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+                    let axis = chain.joints()[j].axis.into_inner();
+                    let row = layout.joint(j);
+                    for (k, dir) in dirs.iter().enumerate() {
+                        let across = dir.cross(&axis);
+                        for r in 0..6 {
+                            let turn = (0..3).map(|c| pj[(r, row + 3 + c)] * dir[c]).sum::<f64>() * moments[k];
+                            let shift = (0..3).map(|c| pj[(r, row + c)] * across[c]).sum::<f64>() * moments[k];
+                            jac[(r, o + k)] = turn;
+                            if n == 6 {
+                                jac[(r, o + 2 + k)] = turn * d - shift * 0.5 * d * d;
+                                jac[(r, o + 4 + k)] = shift;
+                            }
+                        }
+                    }
+                }
                 Effect::SensorDrift(j, _) => {
                     let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };
                     let f = drift.next().filter(|d| d.effect == k).copied().unwrap_or(none);

@@ -141,6 +141,9 @@ struct JointSpec {
     /// Gravity compliance known without masses, degrees (degrees per mm for a slide the joint carries):
     /// the weights of `thermokin_chain::gravity_load_basis_into`'s functions.
     gravity_load_deg: Option<Vec<f64>>,
+    /// Lateral compliance: degrees per N·m about the joint's two lateral directions, then a slide's
+    /// degrees per N·m per mm of extension and mm per N·m of shift: `[c1, c2]` or `[c1, c2, c1', c2', s1, s2]`.
+    lateral_compliance_deg_per_nm: Option<Vec<f64>>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
     /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
@@ -185,7 +188,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -415,6 +418,21 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         if let Some(v) = &spec.gravity_load_deg {
             finite(path, line, &field("gravity_load_deg"), v)?;
             loads[i] = v.iter().map(|&d| units::radians(d)).collect();
+        }
+        if let Some(v) = &spec.lateral_compliance_deg_per_nm {
+            let name = field("lateral_compliance_deg_per_nm");
+            finite(path, line, &name, v)?;
+            if v.len() != 2 && v.len() != 6 {
+                let message = format!(
+                    "{} values: give [c1, c2] (deg/(N·m)) or, for a slide, [c1, c2, c1', c2', s1, s2]",
+                    v.len()
+                );
+                return Err(IoError::input(path, line, name, message));
+            }
+            // Angles in degrees; a slide's shifts (the last two) are millimetres.
+            for (k, (c, &d)) in c.lateral.iter_mut().zip(v).enumerate() {
+                *c = if k < 4 { units::radians(d) } else { d };
+            }
         }
     }
     let mut model = RobotModel::new(robot)
@@ -815,6 +833,19 @@ fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorre
             "compliance_coupling_deg_per_nm = {:e}  # with joint {}\n",
             units::degrees(c.coupling_rad_per_nm),
             i + 2
+        ));
+    }
+    if c.lateral != [0.0; 6] {
+        let n = if j.kind == JointKind::Prismatic { 6 } else { 2 };
+        let out: Vec<String> = c.lateral[..n]
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| format!("{:e}", if k < 4 { units::degrees(v) } else { v }))
+            .collect();
+        let slide = if n == 6 { " (then per N·m per mm of extension; the foot's shift, mm per N·m)" } else { "" };
+        s.push_str(&format!(
+            "# lateral compliance: tilt about the two directions across the axis, deg per N·m{slide}\nlateral_compliance_deg_per_nm = [{}]\n",
+            out.join(", ")
         ));
     }
     if let Some(r) = robot.ratings().get(i) {
