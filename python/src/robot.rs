@@ -253,7 +253,8 @@ impl PyRobot {
     /// one), rows 3–5 the angular velocity in **radians per radian** (0 for a prismatic joint) — per
     /// radian, as Pinocchio's; multiply by π/180 for per degree. `q` in degrees (mm for prismatic joints).
     /// For a calibrated robot, the derivative is with respect to the joint values the chain takes in
-    /// the state (`time_min`, `temps`).
+    /// the state (`time_min`, `temps`); for one whose rows tilt with the configuration (a lateral
+    /// compliance), on the chain in force at `q`, its tilt held.
     #[pyo3(signature = (q, *, time_min=None, temps=None))]
     fn jacobian<'py>(
         &self,
@@ -266,13 +267,18 @@ impl PyRobot {
         self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.model.chain_at(&state).map_err(input)?;
         let (rows, batch) = self.joint_rows(q, "q")?;
-        let n = chain.dof();
+        let (n, model) = (chain.dof(), &self.model);
         let data = py.detach(|| -> Result<Vec<f64>, String> {
             let per: Vec<Vec<f64>> = rows
                 .par_iter()
                 .enumerate()
                 .map(|(i, q)| {
-                    let j = chain.jacobian(q).map_err(|e| format!("q row {i}: {e}"))?;
+                    let bent = if model.bends() {
+                        Some(model.chain_at_joints(&state, q).map_err(|e| format!("q row {i}: {e}"))?)
+                    } else {
+                        None
+                    };
+                    let j = bent.as_ref().unwrap_or(&chain).jacobian(q).map_err(|e| format!("q row {i}: {e}"))?;
                     Ok((0..6).flat_map(|r| (0..n).map(move |c| (r, c))).map(|(r, c)| j[(r, c)]).collect())
                 })
                 .collect::<Result<_, String>>()?;

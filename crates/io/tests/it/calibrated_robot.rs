@@ -14,6 +14,8 @@ fn calibrated() -> RobotModel {
     joints[2].cyclic_rad = [0.02f64.to_radians(), 0.0, -0.004f64.to_radians(), 0.001f64.to_radians()];
     joints[1].compliance_rad_per_nm = 0.0021f64.to_radians();
     joints[1].coupling_rad_per_nm = -0.0008f64.to_radians();
+    // The shoulder's bearing tilting under the arm's moment.
+    joints[1].lateral = [3e-4f64.to_radians(), -2e-4f64.to_radians(), 0.0, 0.0, 0.0, 0.0];
     let drift = vec![
         DriftRow {
             row: Row::Joint(1),
@@ -76,6 +78,30 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
     let e = parse_robot_toml("cal.toml".as_ref(), &text).unwrap_err().to_string();
     assert!(e.contains("gear-ratio") && e.contains("thermal drift") && e.contains("compliance coupling"), "{e}");
     assert!(e.contains("joint 3 (") && e.contains("gravity compliance without masses"), "{e}");
+    assert!(e.contains("joint 2 (") && e.contains("lateral compliance"), "{e}");
+    // The tilt moves the tool: the file without it is another robot.
+    let q = [0.3, -0.4, 0.2, 0.1, 0.5, -0.2];
+    let flat = text.lines().filter(|l| !l.starts_with("lateral_compliance_deg_per_nm")).collect::<Vec<_>>().join("\n");
+    let flat = parse_robot_model_toml("cal.toml".as_ref(), &flat).unwrap();
+    let (a, b) = (model.tool_pose(&q, &state), flat.tool_pose(&q, &state));
+    let gap = (a.unwrap().translation.vector - b.unwrap().translation.vector).norm();
+    assert!(gap > 0.01, "{gap}");
+    // A lateral compliance of three numbers, or a revolute joint's with a slide's terms, is refused at its line.
+    for (bad, says) in [("[1e-4, 2e-4, 3e-4]", "3 values"), ("[1e-4, 2e-4, 1e-7, 0, 0, 0]", "a slide's")] {
+        let wrong = text
+            .lines()
+            .map(|l| {
+                if l.starts_with("lateral_compliance_deg_per_nm") {
+                    format!("lateral_compliance_deg_per_nm = {bad}")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n");
+        let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
+        assert!(e.contains("cal.toml") && e.contains("joint[2]") && e.contains(says), "{e}");
+    }
     // A weight count that is not the joint's is refused, naming the joint and its line.
     let wrong = text.replacen("gravity_load_deg = [", "gravity_load_deg = [0.1, ", 1);
     let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
