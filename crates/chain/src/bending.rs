@@ -10,10 +10,9 @@
 //! Each component is `−∂V/∂φ` of gravity's potential `V` under a turn `φ` of the carried links about
 //! `eₖ` through `oⱼ`: a test checks it against finite differences of `V`.
 
-use nalgebra::{Matrix3, Unit, Vector3};
+use nalgebra::{Unit, Vector3};
 
 use crate::gravity_loads::perpendiculars;
-use crate::robot::STANDARD_GRAVITY;
 use crate::{Chain, ChainError, LinkMass};
 
 /// The two unit directions, perpendicular to joint `joint`'s axis and to each other, that its lateral
@@ -50,39 +49,13 @@ pub fn lateral_gravity_moments_into(
     down: &Unit<Vector3<f64>>,
     out: &mut Vec<[f64; 2]>,
 ) -> Result<(), ChainError> {
-    const ON_STACK: usize = 16;
-    /// Per joint: its parent's rotation, its origin, the moment `c × m g` and the mass of its link.
-    type Loaded = (Matrix3<f64>, Vector3<f64>, Vector3<f64>, f64);
-    let n = chain.dof();
-    let weight = down.into_inner() * STANDARD_GRAVITY;
-    let none: Loaded = (Matrix3::identity(), Vector3::zeros(), Vector3::zeros(), 0.0);
-    let mut small = [none; ON_STACK];
-    let mut large = Vec::new();
-    let per_joint: &mut [Loaded] = if n <= ON_STACK {
-        &mut small[..n]
-    } else {
-        large.resize(n, none);
-        &mut large[..]
-    };
-    chain.visit_joint_frames(q, given, |i, parent, rot, origin| {
-        let (moment, mass) = match masses.get(i).copied().flatten() {
-            Some(m) => ((rot * m.com_mm + origin).cross(&(weight * m.mass_kg)), m.mass_kg),
-            None => (Vector3::zeros(), 0.0),
-        };
-        per_joint[i] = (*parent, *origin, moment, mass);
-    })?;
     out.clear();
-    out.resize(n, [0.0; 2]);
-    let (mut moment, mut mass) = (Vector3::zeros(), 0.0);
-    for j in (0..n).rev() {
-        let (parent, origin, m, w) = per_joint[j];
-        moment += m;
-        mass += w;
-        let local = parent.transpose() * (moment - origin.cross(&(weight * mass)));
+    out.resize(chain.dof(), [0.0; 2]);
+    crate::robot::visit_carried_loads(chain, masses, q, given, down, |j, frames, moment, _| {
+        let local = frames.parent.transpose() * moment;
         let [e1, e2] = perpendiculars(&chain.joints()[j].axis);
         out[j] = [crate::units::newton_metres(e1.dot(&local)), crate::units::newton_metres(e2.dot(&local))];
-    }
-    Ok(())
+    })
 }
 
 #[cfg(test)]
@@ -91,6 +64,7 @@ mod tests {
     use nalgebra::{Rotation3, Unit, Vector3};
 
     use super::*;
+    use crate::robot::STANDARD_GRAVITY;
     use crate::{FixedRow, Joint, LinkMass};
 
     /// A column (prismatic, tilted a little off vertical) carrying three revolute links with masses off

@@ -321,17 +321,7 @@ mod tests {
     #[test]
     fn a_joint_correction_steeper_than_a_robot_file_allows_is_refused_however_little_it_moves() {
         let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
-        let scale = RobotScale {
-            extent_mm: 1000.0,
-            lever_mm: vec![1000.0; 6],
-            axis_lever_mm: vec![1000.0, 1000.0, 800.0, 500.0, 300.0, 1.0],
-            max_torque_nm: vec![0.0; 6],
-            reach: vec![std::f64::consts::PI; 6],
-            revolute: vec![true; 6],
-            times_min: Vec::new(),
-            sensor_reach: Vec::new(),
-            max_lateral_nm: vec![0.0; 6],
-        };
+        let scale = RobotScale { axis_lever_mm: vec![1000.0, 1000.0, 800.0, 500.0, 300.0, 1.0], ..metre_arm() };
         let j6 = JointIndex::of(&robot, 5).unwrap();
         let p = Plausibility::default();
         // A scale of 0.3 (30 % of the joint's motion) moves the point by ~1 mm over ±180°: within 2 % of
