@@ -10,7 +10,7 @@
 //! Each component is `−∂V/∂φ` of gravity's potential `V` under a turn `φ` of the carried links about
 //! `eₖ` through `oⱼ`: a test checks it against finite differences of `V`.
 
-use nalgebra::{Unit, Vector3};
+use nalgebra::{Matrix3, Unit, Vector3};
 
 use crate::gravity_loads::perpendiculars;
 use crate::{Chain, ChainError, LinkMass};
@@ -51,8 +51,9 @@ pub fn lateral_gravity_moments_into(
 ) -> Result<(), ChainError> {
     out.clear();
     out.resize(chain.dof(), [0.0; 2]);
-    crate::robot::visit_carried_loads(chain, masses, q, given, down, |j, frames, moment, _| {
-        let local = frames.parent.transpose() * moment;
+    let parent_of = |_: usize, parent: &Matrix3<f64>, _: &Matrix3<f64>| *parent;
+    crate::robot::visit_carried_loads(chain, masses, q, given, down, parent_of, |j, parent, moment, _| {
+        let local = parent.transpose() * moment;
         let [e1, e2] = perpendiculars(&chain.joints()[j].axis);
         out[j] = [crate::units::newton_metres(e1.dot(&local)), crate::units::newton_metres(e2.dot(&local))];
     })

@@ -206,8 +206,9 @@ pub fn gravity_torques_into(
 ) -> Result<(), ChainError> {
     out.clear();
     out.resize(chain.dof(), 0.0);
-    visit_carried_loads(chain, masses, q, q_sin_cos, down, |j, frames, moment, weight| {
-        let axis = frames.rotation * chain.joints()[j].axis.into_inner();
+    // Kept per joint: its axis in the base frame.
+    let axis_of = |j: usize, _parent: &Matrix3<f64>, rot: &Matrix3<f64>| rot * chain.joints()[j].axis.into_inner();
+    visit_carried_loads(chain, masses, q, q_sin_cos, down, axis_of, |j, axis, moment, weight| {
         out[j] = match chain.joints()[j].kind {
             JointKind::Revolute => crate::units::newton_metres(axis.dot(moment)),
             // A slide: the weight it carries along its axis (N), the derivative of gravity's work by its travel.
@@ -216,47 +217,33 @@ pub fn gravity_torques_into(
     })
 }
 
-/// A joint's frame after its motion, and the frame its row's errors are in (its parent's).
-pub(crate) struct JointFrames {
-    /// The previous joint's rotation after its motion (the base's for the first joint).
-    pub(crate) parent: Matrix3<f64>,
-    /// The joint's rotation after its motion.
-    pub(crate) rotation: Matrix3<f64>,
-}
-
-/// From the tip inwards, `visit(j, frames, moment, weight)` for every joint: its frames, the moment of
-/// gravity about its origin of the links it carries (its own and beyond), `Mⱼ − oⱼ × g Wⱼ` in the base
-/// frame, N·mm, and their weight `g Wⱼ`, N — the suffix sums `Mⱼ = Σ_{l ≥ j} cₗ × mₗ g`,
-/// `Wⱼ = Σ_{l ≥ j} mₗ` in one pass, with no allocation up to 16 joints: what the torques about the axes
-/// ([`gravity_torques_into`]) and the moments across them
-/// ([`crate::lateral_gravity_moments_into`]) are read from.
-pub(crate) fn visit_carried_loads(
+/// From the tip inwards, `visit(j, kept, moment, weight)` for every joint: what `keep` took of its frames
+/// (`keep(j, parent, rotation)`: its parent's rotation — the frame its row's errors are in — and its own
+/// after its motion), the moment of gravity about its origin of the links it carries (its own and beyond),
+/// `Mⱼ − oⱼ × g Wⱼ` in the base frame, N·mm, and their weight `g Wⱼ`, N — the suffix sums
+/// `Mⱼ = Σ_{l ≥ j} cₗ × mₗ g`, `Wⱼ = Σ_{l ≥ j} mₗ` in one pass, with no allocation up to 16 joints (each
+/// caller keeps only what it reads: this is the identification's hot path). What the torques about the
+/// axes ([`gravity_torques_into`]) and the moments across them ([`crate::lateral_gravity_moments_into`])
+/// are read from.
+pub(crate) fn visit_carried_loads<K: Copy + Default>(
     chain: &Chain,
     masses: &[Option<LinkMass>],
     q: &[f64],
     q_sin_cos: Option<&[(f64, f64)]>,
     down: &Unit<Vector3<f64>>,
-    mut visit: impl FnMut(usize, &JointFrames, &Vector3<f64>, &Vector3<f64>),
+    keep: impl Fn(usize, &Matrix3<f64>, &Matrix3<f64>) -> K,
+    mut visit: impl FnMut(usize, &K, &Vector3<f64>, &Vector3<f64>),
 ) -> Result<(), ChainError> {
     const ON_STACK: usize = 16;
-    /// Per joint: its frames, its origin in the base frame, the moment `c × m g` and the mass of its link.
-    type Loaded = (JointFrames, Vector3<f64>, Vector3<f64>, f64);
     let n = chain.dof();
     let weight = down.into_inner() * STANDARD_GRAVITY;
-    let none = || {
-        (
-            JointFrames { parent: Matrix3::identity(), rotation: Matrix3::identity() },
-            Vector3::zeros(),
-            Vector3::zeros(),
-            0.0,
-        )
-    };
-    let mut small: [Loaded; ON_STACK] = std::array::from_fn(|_| none());
+    let none = (K::default(), Vector3::zeros(), Vector3::zeros(), 0.0);
+    let mut small = [none; ON_STACK];
     let mut large = Vec::new();
-    let per_joint: &mut [Loaded] = if n <= ON_STACK {
+    let per_joint: &mut [(K, Vector3<f64>, Vector3<f64>, f64)] = if n <= ON_STACK {
         &mut small[..n]
     } else {
-        large.resize_with(n, none);
+        large.resize(n, none);
         &mut large[..]
     };
     chain.visit_joint_frames(q, q_sin_cos, |i, parent, rot, origin| {
@@ -264,15 +251,15 @@ pub(crate) fn visit_carried_loads(
             Some(m) => ((rot * m.com_mm + origin).cross(&(weight * m.mass_kg)), m.mass_kg),
             None => (Vector3::zeros(), 0.0),
         };
-        per_joint[i] = (JointFrames { parent: *parent, rotation: *rot }, *origin, moment, mass);
+        per_joint[i] = (keep(i, parent, rot), *origin, moment, mass);
     })?;
     let (mut moment, mut mass) = (Vector3::zeros(), 0.0);
     for j in (0..n).rev() {
-        let (frames, origin, m, w) = &per_joint[j];
+        let (kept, origin, m, w) = &per_joint[j];
         moment += m;
         mass += w;
         let carried = weight * mass;
-        visit(j, frames, &(moment - origin.cross(&carried)), &carried);
+        visit(j, kept, &(moment - origin.cross(&carried)), &carried);
     }
     Ok(())
 }
