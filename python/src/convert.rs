@@ -50,5 +50,5 @@ pub fn state(time_min: Option<f64>, temps: Option<HashMap<String, f64>>) -> PyRe
         temperatures_c.push((thermokin_io::sensor_name(&name), value));
     }
     temperatures_c.sort_by(|a, b| a.0.cmp(&b.0));
-    Ok(OperatingState { time_min, temperatures_c, payload: None })
+    Ok(OperatingState { time_min, temperatures_c, ..OperatingState::default() })
 }

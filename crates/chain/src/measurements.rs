@@ -39,7 +39,70 @@ pub struct Dataset {
     /// Per measurement, its reading of each sensor column (in [`Dataset::sensor_names`]' order); empty
     /// when the set has no sensor columns.
     pub sensor_values: Vec<Vec<f64>>,
+    /// Per measurement, per joint: the direction the joint last moved in before the pose was taken
+    /// (what a gearbox's backlash follows), from the measuring order ([`Dataset::with_approach`]); empty
+    /// when the set has no order.
+    pub approach: Vec<Vec<Approach>>,
 }
+
+/// The direction a joint last moved in before a pose: the flank of its gears that carries it (what a
+/// backlash follows, [`Dataset::approach`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Default)]
+pub enum Approach {
+    /// Not known: the first pose of a session, or a joint that has not moved yet.
+    #[default]
+    Unknown,
+    /// The joint's value rose to this pose.
+    Rising,
+    /// The joint's value fell to this pose.
+    Falling,
+}
+
+impl Approach {
+    /// `+1`, `−1`, or `0` when unknown: the sign a backlash's half-width is applied with.
+    pub fn sign(self) -> f64 {
+        match self {
+            Approach::Unknown => 0.0,
+            Approach::Rising => 1.0,
+            Approach::Falling => -1.0,
+        }
+    }
+
+    /// The direction of a move from `from` to `to`; a move smaller than `still` (radians, mm) keeps
+    /// `self` — the joint did not leave the flank it rests on.
+    pub fn after_move(self, from: f64, to: f64, still: f64) -> Approach {
+        if to - from > still {
+            Approach::Rising
+        } else if from - to > still {
+            Approach::Falling
+        } else {
+            self
+        }
+    }
+
+    /// `+`, `-` or `?`.
+    pub fn symbol(self) -> char {
+        match self {
+            Approach::Unknown => '?',
+            Approach::Rising => '+',
+            Approach::Falling => '-',
+        }
+    }
+
+    /// The direction a flag or a file writes as `+`/`-`/`?` (or `1`/`-1`/`0`).
+    pub fn parse(s: &str) -> Option<Approach> {
+        match s.trim() {
+            "+" | "+1" | "1" => Some(Approach::Rising),
+            "-" | "-1" => Some(Approach::Falling),
+            "?" | "0" => Some(Approach::Unknown),
+            _ => None,
+        }
+    }
+}
+
+/// A joint move smaller than this (radians, mm) is not a move: what a controller repeats as the same
+/// commanded value after rounding.
+pub const STILL_MOVE: f64 = 1e-9;
 
 impl Dataset {
     /// The measurements at `rows` (in that order), with the same temperature columns.
@@ -55,6 +118,11 @@ impl Dataset {
             sensor_names: self.sensor_names.clone(),
             sensor_values: if self.sensor_values.len() == self.measurements.len() {
                 rows.iter().filter_map(|&i| self.sensor_values.get(i).cloned()).collect()
+            } else {
+                Vec::new()
+            },
+            approach: if self.approach.len() == self.measurements.len() {
+                rows.iter().filter_map(|&i| self.approach.get(i).cloned()).collect()
             } else {
                 Vec::new()
             },
@@ -89,5 +157,105 @@ impl Dataset {
             .iter()
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), m| (l.min(m.time_min), h.max(m.time_min)));
         if lo.is_finite() { hi - lo } else { 0.0 }
+    }
+
+    /// The order the poses were measured in, when the set carries one: by time when it spans time (ties
+    /// in file order), else by file line; `None` for a set with neither (built in code).
+    pub fn measuring_order(&self) -> Option<Vec<usize>> {
+        let mut idx: Vec<usize> = (0..self.len()).collect();
+        if self.time_span() > 0.0 {
+            let t = |i: usize| self.measurements[i].time_min;
+            let line = |i: usize| self.line_of(i).unwrap_or(i);
+            idx.sort_by(|&a, &b| t(a).total_cmp(&t(b)).then(line(a).cmp(&line(b))));
+            return Some(idx);
+        }
+        let lines: Vec<usize> = (0..self.len()).map(|i| self.line_of(i)).collect::<Option<_>>()?;
+        idx.sort_by_key(|&i| lines[i]);
+        Some(idx)
+    }
+
+    /// The set with [`Dataset::approach`] filled from its measuring order ([`Dataset::measuring_order`]):
+    /// each joint's direction is that of its last move, from the pose before, that is larger than
+    /// [`STILL_MOVE`] — a joint that stays put rests on the flank it came to. The first pose's joints are
+    /// [`Approach::Unknown`]. A set without an order, or with its approach already given, is returned as
+    /// is.
+    pub fn with_approach(mut self) -> Self {
+        if self.approach.len() == self.len() && !self.is_empty() {
+            return self;
+        }
+        self.approach.clear();
+        let Some(order) = self.measuring_order() else { return self };
+        let dof = self.measurements.first().map_or(0, |m| m.q.len());
+        let mut approach = vec![vec![Approach::Unknown; dof]; self.len()];
+        let mut last = vec![Approach::Unknown; dof];
+        for pair in order.windows(2) {
+            let (from, to) = (&self.measurements[pair[0]].q, &self.measurements[pair[1]].q);
+            for (j, a) in last.iter_mut().enumerate() {
+                if let (Some(&f), Some(&t)) = (from.get(j), to.get(j)) {
+                    *a = a.after_move(f, t, STILL_MOVE);
+                }
+            }
+            approach[pair[1]].clone_from(&last);
+        }
+        self.approach = approach;
+        self
+    }
+
+    /// Pose `i`'s approach direction of joint `j` ([`Approach::Unknown`] without an order).
+    pub fn approach_of(&self, i: usize, j: usize) -> Approach {
+        self.approach.get(i).and_then(|a| a.get(j)).copied().unwrap_or_default()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pose(time_min: f64, q: [f64; 2]) -> Measurement {
+        Measurement {
+            time_min,
+            q: q.to_vec(),
+            position_mm: Vector3::zeros(),
+            orientation: None,
+            position_std_mm: None,
+            temps: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn approach_follows_the_last_move_in_measuring_order() {
+        // Written out of time order: the times decide; joint 2 stays put from the second pose on.
+        let data = Dataset {
+            measurements: vec![
+                pose(2.0, [0.3, 1.0]),
+                pose(0.0, [0.1, 0.0]),
+                pose(1.0, [0.5, 1.0]),
+                pose(3.0, [0.3, 1.0]),
+            ],
+            ..Dataset::default()
+        }
+        .with_approach();
+        use Approach::*;
+        assert_eq!(data.approach[1], vec![Unknown, Unknown]);
+        assert_eq!(data.approach[2], vec![Rising, Rising]);
+        assert_eq!(data.approach[0], vec![Falling, Rising]);
+        // Same joint values as the pose before: each joint stays on its flank.
+        assert_eq!(data.approach[3], vec![Falling, Rising]);
+        // A subset keeps each pose's direction (the robot moved through the poses left out).
+        assert_eq!(data.subset(&[3, 1]).approach, vec![vec![Falling, Rising], vec![Unknown, Unknown]]);
+    }
+
+    #[test]
+    fn a_set_without_an_order_has_no_approach() {
+        let data = Dataset { measurements: vec![pose(0.0, [0.1, 0.0]), pose(0.0, [0.2, 0.0])], ..Dataset::default() };
+        assert!(data.with_approach().approach.is_empty());
+        // File lines are an order.
+        let lined = Dataset {
+            measurements: vec![pose(0.0, [0.1, 0.0]), pose(0.0, [0.2, 0.0])],
+            source_lines: vec![3, 2],
+            ..Dataset::default()
+        }
+        .with_approach();
+        assert_eq!(lined.approach[0], vec![Approach::Falling, Approach::Unknown]);
     }
 }

@@ -280,6 +280,9 @@ pub struct OperatingState {
     /// The payload on the flange (kg; centre in mm, in the flange's same-orientation frame), replacing the
     /// one the robot file carries.
     pub payload: Option<LinkMass>,
+    /// The direction each joint last moved in before this pose (one per joint, what a backlash follows);
+    /// empty when not given.
+    pub approach: Vec<crate::Approach>,
 }
 
 impl OperatingState {
@@ -295,7 +298,7 @@ impl OperatingState {
 
     /// `true` when nothing is given.
     pub fn is_empty(&self) -> bool {
-        self.time_min.is_none() && self.temperatures_c.is_empty() && self.payload.is_none()
+        self.time_min.is_none() && self.temperatures_c.is_empty() && self.payload.is_none() && self.approach.is_empty()
     }
 }
 

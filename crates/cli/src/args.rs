@@ -178,6 +178,12 @@ pub struct RobotArgs {
     /// `temp_*` columns override them per target.
     #[arg(long, value_name = "NAME=C,...")]
     pub temperature: Option<String>,
+    /// The direction each joint last moved in before the pose, for a robot file with a backlash
+    /// (`backlash` in a joint's table): one of `+` (rising), `-` (falling), `?` (not known: the middle of
+    /// the play) per joint, e.g. `+,-,+,?,?,?`. fk of a joints file and compensate take each row's from
+    /// the rows' order (this flag then gives the first row's); one row on its own needs it.
+    #[arg(long, value_name = "+|-|?,...", allow_hyphen_values = true)]
+    pub approach: Option<String>,
     /// A payload on the flange (the probe, a gripper, a load): `KG@X,Y,Z`, its centre in the flange's
     /// frame in mm, e.g. `2.5@0,0,80`. Gravity compliance of a calibrated robot bends under it (it replaces
     /// the payload the robot file was calibrated with); the diagnosis merges it with the last link's mass.

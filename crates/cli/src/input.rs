@@ -23,6 +23,9 @@ pub fn load(args: &RobotArgs) -> Result<LoadedRobot, Failure> {
         state.temperatures_c =
             thermokin_io::parse_temperatures(text).map_err(|m| Failure::input(anyhow!("--temperature: {m}")))?;
     }
+    if let Some(text) = &args.approach {
+        state.approach = parse_approach(text).map_err(Failure::input)?;
+    }
     if let Some(spec) = &args.payload {
         state.payload = Some(parse_payload(spec).map_err(Failure::input)?);
     }
@@ -37,6 +40,18 @@ pub fn load(args: &RobotArgs) -> Result<LoadedRobot, Failure> {
         state,
     };
     LoadedRobot::load(&request).map_err(|e| load_error(args, e))
+}
+
+/// Parses `--approach +,-,?` (one direction per joint).
+pub fn parse_approach(text: &str) -> anyhow::Result<Vec<thermokin_chain::Approach>> {
+    text.split(',')
+        .enumerate()
+        .map(|(k, v)| {
+            thermokin_chain::Approach::parse(v).ok_or_else(|| {
+                anyhow!("--approach: value {} is `{}`; give + (rising), - (falling) or ? per joint", k + 1, v.trim())
+            })
+        })
+        .collect()
 }
 
 /// Parses `--payload KG@X,Y,Z` (kg; mm in the flange's frame).

@@ -51,11 +51,53 @@ pub fn compensate_model(
     defaults: &OperatingState,
     settings: &RunSettings,
 ) -> Result<RunOutput, CompensateError> {
-    let states: Vec<OperatingState> = program.iter().map(|t| state_or(&t.state, defaults)).collect();
+    let mut states: Vec<OperatingState> = program.iter().map(|t| state_or(&t.state, defaults)).collect();
     let nominal = cold_program(model, program, settings)?;
     let seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
-    let rows = solve_in_states(model, program, &states, &seeds, &nominal, settings)?;
+    let planned: Vec<&[f64]> = nominal.iter().map(|s| s.q.as_slice()).collect();
+    with_approach_along(model, &mut states, &settings.start, &defaults.approach, &planned);
+    let mut rows = solve_in_states(model, program, &states, &seeds, &nominal, settings)?;
+    // The directions were taken from the cold program's moves; the commanded ones decide. Where they
+    // differ (a joint that barely moves between two targets), solved again in the directions commanded.
+    let commanded: Vec<&[f64]> = rows.iter().map(|r| r.joints.as_slice()).collect();
+    let mut again = states.clone();
+    with_approach_along(model, &mut again, &settings.start, &defaults.approach, &commanded);
+    if again != states {
+        rows = solve_in_states(model, program, &again, &seeds, &nominal, settings)?;
+    }
     Ok(RunOutput::new(model.robot().chain(), rows))
+}
+
+/// For a model with a backlash, each state's [`OperatingState::approach`] — where its target gives none —
+/// from the program's moves: `path` the joint values in the order they are reached, from `start` (whose
+/// own directions are `start_approach`, or unknown).
+fn with_approach_along(
+    model: &RobotModel,
+    states: &mut [OperatingState],
+    start: &[f64],
+    start_approach: &[thermokin_chain::Approach],
+    path: &[&[f64]],
+) {
+    if !model.has_backlash() {
+        return;
+    }
+    let mut last: Vec<thermokin_chain::Approach> = if start_approach.len() == start.len() {
+        start_approach.to_vec()
+    } else {
+        vec![thermokin_chain::Approach::Unknown; start.len()]
+    };
+    let mut from = start;
+    for (state, &to) in states.iter_mut().zip(path) {
+        for ((a, &f), &t) in last.iter_mut().zip(from).zip(to) {
+            *a = a.after_move(f, t, thermokin_chain::STILL_MOVE);
+        }
+        if state.approach.is_empty() || state.approach.len() != last.len() {
+            state.approach.clone_from(&last);
+        } else {
+            last.clone_from(&state.approach);
+        }
+        from = to;
+    }
 }
 
 /// A warm-up on a robot model: at each time of `cycle`, every target solved on the robot at that time
@@ -73,10 +115,13 @@ pub fn compensate_model_cycle(
     let mut seeds: Vec<Vec<f64>> = nominal.iter().map(|s| s.q.clone()).collect();
     let mut rows = Vec::with_capacity(times.len() * program.len());
     for (k, &t) in times.iter().enumerate() {
-        let states: Vec<OperatingState> = program
+        let mut states: Vec<OperatingState> = program
             .iter()
             .map(|target| OperatingState { time_min: Some(t), ..state_or(&target.state, defaults) })
             .collect();
+        // Each pass runs the program from its start: the directions of the cold program's moves.
+        let planned: Vec<&[f64]> = nominal.iter().map(|s| s.q.as_slice()).collect();
+        with_approach_along(model, &mut states, &settings.start, &defaults.approach, &planned);
         let step = solve_in_states(model, program, &states, &seeds, &nominal, settings)?;
         for (seed, r) in seeds.iter_mut().zip(&step) {
             if r.converged() {

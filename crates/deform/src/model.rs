@@ -49,6 +49,11 @@ pub struct JointCorrection {
     /// extension's length, `c′ₖ` (rad per N·m per mm), and shifts by `sₖ Mₖ` (mm per N·m) — `c′` and `s`
     /// zero for a revolute joint.
     pub lateral: [f64; 6],
+    /// Backlash `b`, radians (mm for a slide): the joint sits `b · s` from its commanded value, `s` = ±1
+    /// the direction it last moved in ([`thermokin_chain::Approach`]) — half the play between its gears'
+    /// flanks; negative when the joint trails its motion (a link behind a motor-side encoder). Needs the
+    /// direction in the operating state.
+    pub backlash: f64,
 }
 
 impl JointCorrection {
@@ -59,6 +64,7 @@ impl JointCorrection {
         compliance_rad_per_nm: 0.0,
         coupling_rad_per_nm: 0.0,
         lateral: [0.0; 6],
+        backlash: 0.0,
     };
 
     /// `true` when every coefficient is zero.
@@ -283,7 +289,7 @@ impl RobotModel {
         }
         for (j, (c, joint)) in joints.iter().zip(chain.joints()).enumerate() {
             let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
-            let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm]
+            let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm, c.backlash]
                 .into_iter()
                 .chain(c.cyclic_rad)
                 .chain(c.lateral);
@@ -451,6 +457,12 @@ impl RobotModel {
         self.joints.iter().any(JointCorrection::moves_joint) || self.gravity_loads.iter().any(|l| !l.is_empty())
     }
 
+    /// `true` when some joint has a backlash: its value then depends on the direction it last moved in
+    /// ([`OperatingState::approach`]).
+    pub fn has_backlash(&self) -> bool {
+        self.joints.iter().any(|c| c.backlash != 0.0)
+    }
+
     /// `true` when some joint's row tilts with the configuration (a lateral compliance): the chain in force
     /// then depends on the joint values ([`RobotModel::chain_at_joints`]).
     pub fn bends(&self) -> bool {
@@ -554,6 +566,9 @@ impl RobotModel {
             if c.lateral != [0.0; 6] {
                 out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
             }
+            if c.backlash != 0.0 {
+                out.push(format!("joint {} ({}): backlash (needs the direction it last moved in)", j + 1, names[j]));
+            }
         }
         for d in &self.drift {
             out.push(format!("{}: thermal drift, {}", row_name(d.row), d.law.describe()));
@@ -647,6 +662,24 @@ impl RobotModel {
         for (j, k) in self.joints.iter().enumerate().filter(|(_, k)| k.coupling_rad_per_nm != 0.0) {
             actual[j] += k.coupling_rad_per_nm * torques[j + 1];
             actual[j + 1] += k.coupling_rad_per_nm * torques[j];
+        }
+        if let Some(j) = self.joints.iter().position(|k| k.backlash != 0.0) {
+            if state.approach.len() != commanded.len() {
+                return Err(DeformError::MissingState {
+                    needed: format!(
+                        "the direction each of the {} joints last moved in (+, - or ?: the state's approach, --approach on the command line)",
+                        commanded.len()
+                    ),
+                    why: format!(
+                        "joint {}'s backlash puts it on one flank or the other by the direction it came from ({} given)",
+                        j + 1,
+                        state.approach.len()
+                    ),
+                });
+            }
+            for ((a, k), s) in actual.iter_mut().zip(&self.joints).zip(&state.approach) {
+                *a += k.backlash * s.sign();
+            }
         }
         let mut basis = Vec::new();
         for (j, weights) in self.gravity_loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {

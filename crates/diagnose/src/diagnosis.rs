@@ -97,14 +97,37 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
-/// The hold-out set after [`check_joint_counts`], its sensor columns as `data`'s ([`with_sensors_of`]).
+/// `data` with each pose's approach direction from its measuring order
+/// ([`thermokin_chain::Dataset::with_approach`]), where it has an order and no directions yet.
+fn ordered(data: &Dataset) -> std::borrow::Cow<'_, Dataset> {
+    if data.approach.len() == data.len() || data.measuring_order().is_none() {
+        std::borrow::Cow::Borrowed(data)
+    } else {
+        std::borrow::Cow::Owned(data.clone().with_approach())
+    }
+}
+
+/// The hold-out set after [`check_joint_counts`], its sensor columns as `data`'s ([`with_sensors_of`]),
+/// each pose's approach direction from its own order ([`ordered`]).
 fn checked_holdout<'h>(
     robot: &Robot,
     data: &Dataset,
     holdout: Option<&'h Dataset>,
 ) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
     check_joint_counts(robot, data, holdout)?;
-    Ok(holdout.map(|h| with_sensors_of(h, data)))
+    Ok(holdout.map(|h| match ordered(h) {
+        std::borrow::Cow::Borrowed(h) => with_sensors_of(h, data),
+        std::borrow::Cow::Owned(h) => std::borrow::Cow::Owned(with_sensors_of(&h, data).into_owned()),
+    }))
+}
+
+/// The stages a progress display counts: the selection on all data, each outer fold, the hold-out set.
+fn stages(data: &Dataset, holdout: bool, config: &Config) -> usize {
+    let outer = match config.validation {
+        Validation::Nested { outer } => nested_folds(data, config, outer).len(),
+        Validation::SelectionOnly => 0,
+    };
+    1 + outer + usize::from(holdout)
 }
 
 /// `holdout` with its sensor columns in `data`'s order, by name (an effect follows a column by its place
@@ -182,11 +205,8 @@ fn run(
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let robot = &*trusted(robot, config)?;
-    let outer = match config.validation {
-        Validation::Nested { outer } => nested_folds(data, config, outer).len(),
-        Validation::SelectionOnly => 0,
-    };
-    let total = 1 + outer + usize::from(holdout.is_some());
+    let data = &*ordered(data);
+    let total = stages(data, holdout.is_some(), config);
     let mut done = 0;
     let mut tell = |stage: String| {
         done += 1;
@@ -233,6 +253,7 @@ fn run(
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
     all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
+    all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "backlash").map(backlash_warning));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
@@ -316,6 +337,18 @@ fn pose_records(
             heldout,
         })
         .collect()
+}
+
+/// What an operator should check when a joint shows backlash: the play, and what the export needs.
+fn backlash_warning(e: &crate::report::EffectReport) -> String {
+    let half = e.parameters.iter().next().map_or(0.0, |(_, v)| v.value);
+    let unit = e.parameters.iter().next().map_or("", |(k, _)| if k.ends_with("_deg") { "°" } else { " mm" });
+    format!(
+        "joint {} sits {:.4}{unit} apart between poses reached rising and falling ({}: half of it either side): check its gearbox and brake for play; a program that approaches each target from one side avoids it, and fk, ik and compensate with the export need the direction each joint last moved in (--approach; compensate follows the program's order)",
+        e.joints.first().copied().unwrap_or(0),
+        2.0 * half.abs(),
+        e.label
+    )
 }
 
 /// What an operator should check when the measurement frame stepped: where, by how much, and what moves

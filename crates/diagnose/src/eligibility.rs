@@ -1,7 +1,7 @@
 //! Eligibility, before any selection: a candidate whose parameters these data cannot pin down is not
 //! selectable, and the report says what to measure instead.
 //!
-//! Four rules, each stated with its threshold:
+//! Five rules, each stated with its threshold:
 //! - **Coverage.** An effect that is a function of its joint's own angle (a gear-ratio scale, a cyclic
 //!   encoder error) needs the arc [`thermokin_identify::arc_needed`] gives — a quarter of the travel
 //!   ([`Eligibility::min_travel_fraction`]), half a revolution for a cyclic error; the rule, and why, is
@@ -16,6 +16,8 @@
 //!   series C, whose shoulder torque spans 18–22 % of its range, the shoulder compliance is eligible
 //!   (its estimate's correlation with joint 2's offset stays within ±0.99); on the paper's static set,
 //!   where joint 5's spans 20 %, it is not (−0.9954).
+//! - **Both sides.** A backlash needs the joint reached rising and falling in the measuring order, at
+//!   least [`MIN_POSES_EACH_SIDE`] poses each in the training part of every fold of the selection.
 //! - **Temperature.** A drift per kelvin needs the temperature to move: at least
 //!   [`Eligibility::min_temperature_span_k`] (2 K by default: over 2 K a 1 m steel link grows by 23 µm,
 //!   the order of a laser tracker's noise — below it a fitted coefficient is mostly noise and whatever
@@ -36,6 +38,11 @@ use crate::error::DiagnoseError;
 use crate::report::Refusal;
 use crate::scoring::Scorer;
 use crate::stats::span;
+
+/// The fewest poses a backlash needs reached from each side in every fit of the selection (each fold's
+/// training part): its column is `±1`, the play the difference of the two groups' means — ten poses a side
+/// put its half at a quarter of the noise (`σ/2 · √(2/10)`).
+pub const MIN_POSES_EACH_SIDE: usize = 10;
 
 /// Splits `candidates` into the selectable ones and the refused ones. `nuisance` are the always-estimated
 /// blocks.
@@ -78,6 +85,38 @@ pub(crate) fn arc(data: &Dataset, j: usize) -> (f64, f64) {
     span(data.measurements.iter().map(|m| m.q[j]))
 }
 
+/// A backlash's rule: the joint reached from both sides in every fit of the selection
+/// ([`MIN_POSES_EACH_SIDE`]).
+fn both_sides(scorer: &Scorer<'_>, e: Effect, j: JointIndex) -> Option<Refusal> {
+    let (up, down) = thermokin_identify::approach_counts(scorer.data, j.index());
+    // What every fit of the selection sees: the fewest from one side in a fold's training part.
+    let fewest = scorer
+        .folds
+        .iter()
+        .map(|(train, _)| {
+            let (u, d) = train.iter().fold((0, 0), |(u, d), &i| match scorer.data.approach_of(i, j.index()) {
+                thermokin_chain::Approach::Rising => (u + 1, d),
+                thermokin_chain::Approach::Falling => (u, d + 1),
+                thermokin_chain::Approach::Unknown => (u, d),
+            });
+            u.min(d)
+        })
+        .min()
+        .unwrap_or(0)
+        .min(up.min(down));
+    (fewest < MIN_POSES_EACH_SIDE).then(|| Refusal {
+        effect: e.label(),
+        reason: format!(
+            "in the measuring order joint {} reached {up} poses rising and {down} falling, and a fit of the selection's folds sees as few as {fewest} from one side; a backlash needs {MIN_POSES_EACH_SIDE} from each side in every fit",
+            j.number()
+        ),
+        remedy: format!(
+            "measure at least {MIN_POSES_EACH_SIDE} poses with joint {} arriving from each side (alternate the direction of approach)",
+            j.number()
+        ),
+    })
+}
+
 fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
     let robot = scorer.robot;
     match e {
@@ -105,6 +144,7 @@ fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refus
                 remedy: format!("measure joint {} over at least {:.0}{unit} of its travel", j.number(), shown(need)),
             })
         }
+        Effect::Backlash(j) => both_sides(scorer, e, j),
         Effect::JointCompliance(j) => {
             let j = j.index();
             let torques = &scorer.scale.max_torque_nm;

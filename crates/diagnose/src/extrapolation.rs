@@ -59,6 +59,7 @@ fn shaped(e: Effect) -> bool {
             | Effect::LumpedCompliance(..)
             | Effect::LateralCompliance(..)
             | Effect::ComplianceCoupling(_)
+            | Effect::Backlash(_)
     )
 }
 

@@ -151,6 +151,11 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
                 lumped.push(Effect::lateral_compliance(robot, j));
             }
         }
+        // A backlash: the poses reached from its less usual side are no gross errors.
+        let (up, down) = thermokin_identify::approach_counts(data, j.index());
+        if up.min(down) >= crate::eligibility::MIN_POSES_EACH_SIDE {
+            lumped.push(Effect::Backlash(j));
+        }
         match thermokin_identify::gravity_compliance(robot, data, j, &loaded) {
             Some(e @ Effect::LumpedCompliance(..)) => lumped.push(e),
             other => effects.extend(other),
@@ -173,9 +178,10 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
             lumped.extend(rows.map(|j| Effect::SensorDrift(j, sensor)));
         }
     }
-    // A compliance without masses (up to two weights per link carried) and the sensors' rows screen where
-    // the rows hold [`MIN_REDUNDANCY`] per parameter with them; on fewer they would only make the screen
-    // shrink the rows that explain a small set's millimetres, and hide the pose that is off.
+    // A compliance without masses (up to two weights per link carried), the backlashes and the sensors'
+    // rows screen where the rows hold [`MIN_REDUNDANCY`] per parameter with them; on fewer they would only
+    // make the screen shrink the rows that explain a small set's millimetres, and hide the pose that is
+    // off.
     let parameters: usize = effects.iter().chain(&lumped).map(Effect::len).sum();
     if data.len() * stride >= MIN_REDUNDANCY * parameters {
         effects.extend(lumped);

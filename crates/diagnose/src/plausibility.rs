@@ -267,44 +267,61 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let (lever, deflection) = (scale.axis_lever_mm[j.index()].max(1.0), v.iter().map(|x| x.abs()).sum::<f64>());
             over("the largest deflection under gravity", deg(deflection), deflection * lever, lever, "°")
         }
-        Effect::JointOffset(j) | Effect::JointScale(j) | Effect::Periodic(j) | Effect::JointCompliance(j) => {
-            let lever = scale.axis_lever_mm[j.index()].max(1.0);
-            let revolute = scale.revolute[j.index()];
-            // The largest joint motion the values cause over the data (radians, or mm for a prismatic
-            // joint), and the value reported.
-            let (what, value, unit, motion) = match effect {
-                Effect::JointOffset(_) if revolute => ("the offset", deg(v[0]), "°", v[0].abs()),
-                Effect::JointOffset(_) => ("the offset", v[0], " mm", v[0].abs()),
-                Effect::JointScale(_) => ("the scale error", v[0], "", (v[0] * scale.reach[j.index()]).abs()),
-                Effect::Periodic(_) => {
-                    let amplitude = v[0].hypot(v[1]) + v[2].hypot(v[3]);
-                    ("a cyclic amplitude", deg(amplitude), "°", amplitude)
-                }
-                _ => {
-                    let deflection = v[0] * scale.max_torque_nm[j.index()];
-                    if v[0] < 0.0 {
-                        return Some(Implausible::Rising { k_deg_per_nm: deg(v[0]), deflection_deg: deg(deflection) });
-                    }
-                    ("the deflection at the largest gravity torque", deg(deflection), "°", deflection)
-                }
-            };
-            // A gear-ratio or cyclic error changes the joint value by at most its slope per unit of motion
-            // (`|s|`, and `2 Σ|aₖ|` bounding the twice-per-revolution terms' derivative as the robot model
-            // does): beyond the robot model's bound it is not a correction of the joint but another joint,
-            // whatever little it moves a tool point that sits near the axis.
-            let slope = match effect {
-                Effect::JointScale(_) => v[0].abs(),
-                Effect::Periodic(_) => 2.0 * v[..4].iter().map(|a| a.abs()).sum::<f64>(),
-                _ => 0.0,
-            };
-            if slope > MAX_CORRECTION_SLOPE {
-                return Some(Implausible::Steep { slope });
-            }
-            let moved = if revolute { motion * lever } else { motion };
-            over(what, value, moved, lever, unit)
-        }
+        Effect::JointOffset(j)
+        | Effect::Backlash(j)
+        | Effect::JointScale(j)
+        | Effect::Periodic(j)
+        | Effect::JointCompliance(j) => joint_level(scale, v, effect, j, &over),
         _ => None,
     }
+}
+
+/// The effects that move the joint value itself (an offset, a backlash, a scale, a cyclic error, a
+/// compliance about the axis): the largest motion of the joint over the data at its lever.
+fn joint_level(
+    scale: &RobotScale,
+    v: &[f64],
+    effect: Effect,
+    j: thermokin_identify::JointIndex,
+    over: &Over<'_>,
+) -> Option<Implausible> {
+    let deg = units::degrees;
+    let lever = scale.axis_lever_mm[j.index()].max(1.0);
+    let revolute = scale.revolute[j.index()];
+    // The largest joint motion the values cause over the data (radians, or mm for a prismatic
+    // joint), and the value reported.
+    let (what, value, unit, motion) = match effect {
+        Effect::JointOffset(_) if revolute => ("the offset", deg(v[0]), "°", v[0].abs()),
+        Effect::JointOffset(_) => ("the offset", v[0], " mm", v[0].abs()),
+        Effect::Backlash(_) if revolute => ("the half play", deg(v[0]), "°", v[0].abs()),
+        Effect::Backlash(_) => ("the half play", v[0], " mm", v[0].abs()),
+        Effect::JointScale(_) => ("the scale error", v[0], "", (v[0] * scale.reach[j.index()]).abs()),
+        Effect::Periodic(_) => {
+            let amplitude = v[0].hypot(v[1]) + v[2].hypot(v[3]);
+            ("a cyclic amplitude", deg(amplitude), "°", amplitude)
+        }
+        _ => {
+            let deflection = v[0] * scale.max_torque_nm[j.index()];
+            if v[0] < 0.0 {
+                return Some(Implausible::Rising { k_deg_per_nm: deg(v[0]), deflection_deg: deg(deflection) });
+            }
+            ("the deflection at the largest gravity torque", deg(deflection), "°", deflection)
+        }
+    };
+    // A gear-ratio or cyclic error changes the joint value by at most its slope per unit of motion
+    // (`|s|`, and `2 Σ|aₖ|` bounding the twice-per-revolution terms' derivative as the robot model
+    // does): beyond the robot model's bound it is not a correction of the joint but another joint,
+    // whatever little it moves a tool point that sits near the axis.
+    let slope = match effect {
+        Effect::JointScale(_) => v[0].abs(),
+        Effect::Periodic(_) => 2.0 * v[..4].iter().map(|a| a.abs()).sum::<f64>(),
+        _ => 0.0,
+    };
+    if slope > MAX_CORRECTION_SLOPE {
+        return Some(Implausible::Steep { slope });
+    }
+    let moved = if revolute { motion * lever } else { motion };
+    over(what, value, moved, lever, unit)
 }
 
 #[cfg(test)]

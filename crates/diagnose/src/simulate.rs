@@ -100,6 +100,7 @@ impl HiddenEffect {
                 (Effect::LateralCompliance(..), 2 | 3) => rng.random_range(-8e-9..8e-9),
                 (Effect::LateralCompliance(..), _) => rng.random_range(-1e-4..1e-4),
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
+                (Effect::Backlash(_), _) => rng.random_range(0.01..0.03),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),
                 (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => rng.random_range(30.0..90.0),
                 (_, 0..=2) => rng.random_range(-0.4..0.4),
@@ -234,9 +235,14 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
         }
         theta[o..o + h.values.len()].copy_from_slice(&h.values);
     }
+    // The poses are measured in the order they are written (line 1 the header): each joint's approach
+    // direction, which a backlash follows, from that order.
+    data.source_lines = (0..data.len()).map(|k| k + 2).collect();
+    let mut data = data.with_approach();
+    let approach = std::mem::take(&mut data.approach);
     let terms = PoseTerms::of(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {
-        let inputs = PoseInputs::plain(&terms.rise[i]);
+        let inputs = PoseInputs { approach: &approach[i], ..PoseInputs::plain(&terms.rise[i]) };
         let (p, rot) = model.predict(robot, &theta, m, &inputs, None, &mut None)?;
         let noise = Vector3::new(normal(&mut rng), normal(&mut rng), normal(&mut rng)) * config.noise_mm;
         m.position_mm = (config.registration * nalgebra::Point3::from(p)).coords + noise;
@@ -248,5 +254,6 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
             m.orientation = Some(measured);
         }
     }
+    data.approach = approach;
     Ok(data)
 }

@@ -44,6 +44,16 @@ fn lateral_loads(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
     (0..2).any(|k| hi[k] - lo[k] > 1.0)
 }
 
+/// How many of the data's poses joint `j` reached rising and falling ([`thermokin_chain::Approach`], from
+/// the measuring order; both zero when the set has none): a backlash is seen only between the two.
+pub fn approach_counts(data: &Dataset, j: usize) -> (usize, usize) {
+    data.approach.iter().filter_map(|a| a.get(j)).fold((0, 0), |(up, down), a| match a {
+        thermokin_chain::Approach::Rising => (up + 1, down),
+        thermokin_chain::Approach::Falling => (up, down + 1),
+        thermokin_chain::Approach::Unknown => (up, down),
+    })
+}
+
 /// The gravity compliance of joint `j` a model of these data can carry: with the file's masses where
 /// the joint carries some ([`Effect::JointCompliance`]), with its loads lumped where the file has no
 /// masses and gravity loads the joint in the data ([`Effect::LumpedCompliance`]); `None` otherwise.
@@ -127,7 +137,8 @@ impl Setup {
     /// The catalogue's candidates for `robot` and `data`, in catalogue order: the base and tool frames
     /// where they are not always estimated; per joint its offset and link deviation, a gravity compliance
     /// where the joint carries mass, a coupling of two neighbouring joints' compliances where gravity loads
-    /// both, a gear-ratio scale and a cyclic error of a revolute joint; a thermal
+    /// both, a gear-ratio scale and a cyclic error of a revolute joint, a backlash where the measuring
+    /// order approaches the joint from both sides; a thermal
     /// drift (linear and exponential) when the data span time, one per kelvin when they carry
     /// temperatures.
     pub fn candidates(&self, robot: &Robot, data: &Dataset) -> Result<Vec<Effect>, IdentifyError> {
@@ -185,6 +196,13 @@ impl Setup {
             c.push(Effect::JointScale(j));
             if robot.chain().joints()[j.index()].kind == JointKind::Revolute {
                 c.push(Effect::Periodic(j));
+            }
+        }
+        // Backlash of a joint the measuring order shows reaching its poses from both sides.
+        for &j in &joints {
+            let (up, down) = approach_counts(data, j.index());
+            if up > 0 && down > 0 {
+                c.push(Effect::Backlash(j));
             }
         }
         if data.time_span() > 0.0 {

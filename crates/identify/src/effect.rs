@@ -197,6 +197,10 @@ pub enum Effect {
     ComplianceCoupling(JointIndex),
     /// A gear-ratio (scale) error of a revolute joint: Δq = s · q (1, dimensionless).
     JointScale(JointIndex),
+    /// Backlash of a joint's gears: `Δq = b · s`, `s` = ±1 the direction the joint last moved in before
+    /// the pose ([`thermokin_chain::Approach`], from the measuring order), 0 where unknown — `b` half the
+    /// play between the two flanks (1).
+    Backlash(JointIndex),
     /// A cyclic encoder error of a revolute joint, once and twice per revolution:
     /// Δq = a₁ sin q + b₁ cos q + a₂ sin 2q + b₂ cos 2q (4).
     Periodic(JointIndex),
@@ -212,7 +216,7 @@ pub enum Effect {
 }
 
 /// The effect names of reports and flags, in catalogue order.
-pub const EFFECT_NAMES: [&str; 11] = [
+pub const EFFECT_NAMES: [&str; 12] = [
     "base_frame",
     "tool_frame",
     "joint_offset",
@@ -222,6 +226,7 @@ pub const EFFECT_NAMES: [&str; 11] = [
     "lateral_compliance",
     "joint_scale",
     "periodic",
+    "backlash",
     "thermal_drift",
     "thermal_drift_exp",
 ];
@@ -258,6 +263,7 @@ impl Effect {
             }
             "joint_scale" => Ok(Effect::JointScale(on(joint)?)),
             "periodic" => Ok(Effect::Periodic(on(joint)?)),
+            "backlash" => Ok(Effect::Backlash(on(joint)?)),
             "thermal_drift" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Linear)),
             "thermal_drift_exp" => Ok(Effect::ThermalDrift(on(joint)?, DriftShape::Exponential)),
             _ => Err(IdentifyError::UnknownEffect { name: name.to_string(), known: EFFECT_NAMES.join(", ") }),
@@ -305,6 +311,7 @@ impl Effect {
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
+            | Effect::Backlash(j)
             | Effect::ThermalDrift(j, _)
             | Effect::SensorDrift(j, _) => Some(j),
             Effect::Registration
@@ -343,7 +350,8 @@ impl Effect {
             Effect::JointOffset(_)
             | Effect::JointCompliance(_)
             | Effect::ComplianceCoupling(_)
-            | Effect::JointScale(_) => 1,
+            | Effect::JointScale(_)
+            | Effect::Backlash(_) => 1,
             Effect::Periodic(_) => 4,
             Effect::LumpedCompliance(_, n) | Effect::LateralCompliance(_, n) => *n as usize,
         }
@@ -369,6 +377,7 @@ impl Effect {
             Effect::LateralCompliance(..) => "lateral_compliance",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
+            Effect::Backlash(_) => "backlash",
             Effect::ThermalDrift(..) => "thermal_drift",
             Effect::FrameStep(_) => "frame_step",
             Effect::SensorDrift(..) => "sensor_drift",
@@ -415,6 +424,7 @@ impl Effect {
                 .map(|t| format!("{prefix}.{t}"))
                 .collect(),
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
+            Effect::Backlash(_) => vec![format!("{prefix}.half_play_deg")],
             Effect::Periodic(_) => {
                 ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
             }
@@ -427,12 +437,14 @@ impl Effect {
         }
     }
 
-    /// The functions of the commanded joint value whose weighted sum is the joint error Δq, for the
+    /// The functions of the commanded joint value `q` and of the direction it was reached in (`approach`,
+    /// ±1 or 0: [`thermokin_chain::Approach::sign`]) whose weighted sum is the joint error Δq, for the
     /// effects that act on the joint variable itself: `q` for a scale error, `sin q, cos q, sin 2q,
-    /// cos 2q` for a cyclic one. Empty for the others.
-    pub fn joint_basis(&self, q: f64) -> JointBasis {
+    /// cos 2q` for a cyclic one, the direction for a backlash. Empty for the others.
+    pub fn joint_basis(&self, q: f64, approach: f64) -> JointBasis {
         match self {
             Effect::JointScale(_) => JointBasis { values: [q, 0.0, 0.0, 0.0], len: 1 },
+            Effect::Backlash(_) => JointBasis { values: [approach, 0.0, 0.0, 0.0], len: 1 },
             Effect::Periodic(_) => {
                 let (s1, c1) = q.sin_cos();
                 // sin 2q = 2 sin q cos q, cos 2q = cos²q − sin²q: one sincos per joint.
@@ -453,10 +465,16 @@ impl Effect {
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
+                | Effect::Backlash(_)
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
                 | Effect::FrameStep(_)
         )
+    }
+
+    /// Effects that only a measuring order reveals ([`thermokin_chain::Dataset::approach`]).
+    pub fn needs_order(&self) -> bool {
+        matches!(self, Effect::Backlash(_) | Effect::FrameStep(_))
     }
 
     /// Time-dependent effects are judged with forward-chained cross-validation too.
@@ -480,6 +498,7 @@ impl Effect {
                 | Effect::LumpedCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::Periodic(_)
+                | Effect::Backlash(_)
                 | Effect::ToolRotation,
                 _,
             ) => true,

@@ -196,6 +196,7 @@ impl Model {
                     }
                 }
                 Effect::JointScale(j) => joints[j.index()].scale += theta[o],
+                Effect::Backlash(j) => joints[j.index()].backlash += theta[o],
                 Effect::Periodic(j) => {
                     for (c, t) in joints[j.index()].cyclic_rad.iter_mut().zip(&theta[o..o + 4]) {
                         *c += t;
@@ -283,6 +284,7 @@ impl Model {
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
+                | Effect::Backlash(_)
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
                 | Effect::FrameStep(_) => {}
@@ -339,7 +341,8 @@ impl Model {
                 | Effect::JointCompliance(j)
                 | Effect::LumpedCompliance(j, _)
                 | Effect::JointScale(j)
-                | Effect::Periodic(j) => rows.zeros[j.index()] = true,
+                | Effect::Periodic(j)
+                | Effect::Backlash(j) => rows.zeros[j.index()] = true,
                 Effect::ComplianceCoupling(j) => {
                     rows.zeros[j.index()] = true;
                     rows.zeros[j.index() + 1] = true;

@@ -2,7 +2,7 @@
 //! per-measurement hot path (from [`thermokin_chain::Chain::parameter_jacobian`]'s rows).
 
 use nalgebra::{Matrix3, Matrix6xX, Unit, Vector3};
-use thermokin_chain::{Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
+use thermokin_chain::{Approach, Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
 
 use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at};
 use crate::error::IdentifyError;
@@ -73,12 +73,15 @@ pub struct PoseInputs<'a> {
     pub latest_frame: bool,
     /// Its reading of each sensor column ([`thermokin_chain::Dataset::sensor_values`]; empty: none).
     pub sensors: &'a [f64],
+    /// The direction each joint last moved in before it ([`thermokin_chain::Dataset::approach`]; empty:
+    /// unknown, no backlash applied).
+    pub approach: &'a [Approach],
 }
 
 impl PoseInputs<'_> {
     /// Inputs with no temperature rise, no precomputed sines, no line: a pose on its own.
     pub fn plain(temp_rise: &[f64]) -> PoseInputs<'_> {
-        PoseInputs { temp_rise, sin_cos: None, line: None, latest_frame: false, sensors: &[] }
+        PoseInputs { temp_rise, sin_cos: None, line: None, latest_frame: false, sensors: &[], approach: &[] }
     }
 }
 
@@ -213,9 +216,10 @@ impl Model {
                     q[j] += theta[o] * cached.torques[j + 1];
                     q[j + 1] += theta[o] * cached.torques[j];
                 }
-                Effect::JointScale(j) | Effect::Periodic(j) => {
-                    let j = j.index();
-                    q[j] += e.joint_basis(m.q[j]).as_slice().iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
+                Effect::JointScale(j) | Effect::Periodic(j) | Effect::Backlash(j) => {
+                    let (j, s) = (j.index(), inputs.approach.get(j.index()).map_or(0.0, |a| a.sign()));
+                    q[j] +=
+                        e.joint_basis(m.q[j], s).as_slice().iter().zip(&theta[o..]).map(|(b, t)| b * t).sum::<f64>();
                 }
                 Effect::ThermalDrift(j, shape) => {
                     let j = j.index();
@@ -303,7 +307,7 @@ impl Model {
         };
         cached.q = q;
         let pose = pose?;
-        self.fill_jacobian(robot.chain(), theta, m, cached, jac);
+        self.fill_jacobian(robot.chain(), theta, m, inputs.approach, cached, jac);
         Ok(self.frame_steps(theta, m, inputs, pose, Some(jac)))
     }
 
@@ -367,6 +371,7 @@ impl Model {
         chain: &Chain,
         theta: &[f64],
         m: &Measurement,
+        approach: &[Approach],
         cached: &ChainCache,
         jac: &mut Matrix6xX<f64>,
     ) {
@@ -405,10 +410,10 @@ impl Model {
                         jac[(r, o)] = pj[(r, a)] * cached.torques[j + 1] + pj[(r, b)] * cached.torques[j];
                     }
                 }
-                Effect::JointScale(j) | Effect::Periodic(j) => {
-                    // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q).
-                    let j = j.index();
-                    for (k, b) in e.joint_basis(m.q[j]).as_slice().iter().enumerate() {
+                Effect::JointScale(j) | Effect::Periodic(j) | Effect::Backlash(j) => {
+                    // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q, s).
+                    let (j, s) = (j.index(), approach.get(j.index()).map_or(0.0, |a| a.sign()));
+                    for (k, b) in e.joint_basis(m.q[j], s).as_slice().iter().enumerate() {
                         copy(o + k, layout.zero(j), *b);
                     }
                 }

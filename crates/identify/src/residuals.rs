@@ -62,6 +62,7 @@ fn evaluate(
             line: terms.lines[i],
             latest_frame: terms.latest_frame,
             sensors: data.sensor_values.get(i).map_or(&[], Vec::as_slice),
+            approach: data.approach.get(i).map_or(&[], Vec::as_slice),
         };
         let (p, rot) = model.predict(robot, theta, m, &inputs, jac.is_some().then_some(&mut block), &mut cache)?;
         let d = m.position_mm - p;

@@ -379,7 +379,7 @@ pub fn read_joint_rows(path: &Path, kinds: &[JointKind], units: JointUnits) -> R
             let values =
                 expect_fields(path, r, header.cells.len()).and_then(|()| joints.read(r)).map(|(t, q, temps)| {
                     let temperatures_c = names.iter().cloned().zip(temps).collect();
-                    (q, OperatingState { time_min: has_time.then_some(t), temperatures_c, payload: None })
+                    (q, OperatingState { time_min: has_time.then_some(t), temperatures_c, ..OperatingState::default() })
                 });
             JointRow { line: r.line, values }
         })
@@ -411,7 +411,9 @@ fn assemble<'r>(
     if measurements.is_empty() {
         return Err(empty);
     }
-    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines, ..Dataset::default() })
+    // The poses' order is the order they were measured in: each joint's approach direction from it.
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines, ..Dataset::default() }
+        .with_approach())
 }
 
 /// Where a file's joint-side columns are: `q1..qn`, `time_min`, `temp_<name>`.

@@ -172,11 +172,32 @@ impl PoseRow {
     ) -> Result<Vec<PoseRow>, crate::IoError> {
         let kinds: Vec<_> = model.robot().chain().joints().iter().map(|j| j.kind).collect();
         let rows = crate::read_joint_rows(path, &kinds, crate::JointUnits::Degrees)?;
+        // A backlash follows each joint's last move: the rows are the robot's moves in order, the first
+        // row's direction the flags' (none given: that row asks for it).
+        let mut last: Option<(Vec<f64>, Vec<thermokin_chain::Approach>)> = None;
         Ok(rows
             .into_iter()
             .map(|row| {
                 let pose = row.values.map_err(|e| e.to_string()).and_then(|(q, state)| {
-                    let state = if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
+                    let mut state =
+                        if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
+                    if model.has_backlash() {
+                        if let Some((from, approach)) = &last {
+                            state.approach = approach
+                                .iter()
+                                .zip(from.iter().zip(&q))
+                                .map(|(a, (&f, &t))| a.after_move(f, t, thermokin_chain::STILL_MOVE))
+                                .collect();
+                        } else {
+                            state.approach.clone_from(&flags.approach);
+                        }
+                        let known = if state.approach.len() == q.len() {
+                            state.approach.clone()
+                        } else {
+                            vec![thermokin_chain::Approach::Unknown; q.len()]
+                        };
+                        last = Some((q.clone(), known));
+                    }
                     model.tool_pose(&q, &state).map_err(|e| e.to_string())
                 });
                 match pose {

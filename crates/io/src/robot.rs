@@ -144,6 +144,9 @@ struct JointSpec {
     /// Lateral compliance: degrees per N·m about the joint's two lateral directions, then a slide's
     /// degrees per N·m per mm of extension and mm per N·m of shift: `[c1, c2]` or `[c1, c2, c1', c2', s1, s2]`.
     lateral_compliance_deg_per_nm: Option<Vec<f64>>,
+    /// Backlash: half the play between the gears' flanks, degrees (mm for a slide) — the joint sits this
+    /// far on the side it last moved towards.
+    backlash: Option<f64>,
     mass_kg: Option<f64>,
     com_mm: Option<[f64; 3]>,
     /// Rated speed: degrees per second (revolute) or mm/s (prismatic).
@@ -188,7 +191,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm, backlash",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -418,6 +421,11 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         if let Some(v) = &spec.gravity_load_deg {
             finite(path, line, &field("gravity_load_deg"), v)?;
             loads[i] = v.iter().map(|&d| units::radians(d)).collect();
+        }
+        if let Some(v) = spec.backlash {
+            finite(path, line, &field("backlash"), &[v])?;
+            let slide = robot.chain().joints()[i].kind == JointKind::Prismatic;
+            c.backlash = if slide { v } else { units::radians(v) };
         }
         if let Some(v) = &spec.lateral_compliance_deg_per_nm {
             let name = field("lateral_compliance_deg_per_nm");
@@ -846,6 +854,12 @@ fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorre
         s.push_str(&format!(
             "# lateral compliance: tilt about the two directions across the axis, deg per N·m{slide}\nlateral_compliance_deg_per_nm = [{}]\n",
             out.join(", ")
+        ));
+    }
+    if c.backlash != 0.0 {
+        s.push_str(&format!(
+            "# backlash: half the play; the joint sits this far towards the side it last moved to\nbacklash = {:e}\n",
+            to_file(c.backlash)
         ));
     }
     if let Some(r) = robot.ratings().get(i) {

@@ -100,7 +100,10 @@ fn screenshot(browser: &Path, page: &Path, width: u32, name: &str) -> (f64, f64)
         if (r + g + b) < 3 * 235 {
             ink += 1;
         }
-        if b > 150 && r < 90 && g < 130 {
+        // The palette's blue (#1f5fbf), opaque or as the scatter's half-transparent dots on white
+        // (≈ 132, 167, 210): a blue hue, well apart from the greys (r ≈ g ≈ b) and the verdict's pale
+        // background.
+        if b > 150 && b > r + 60 && b > g + 30 {
             blue += 1;
         }
     }

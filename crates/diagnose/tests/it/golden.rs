@@ -35,7 +35,8 @@ pub fn drift_check(case: &str, robot: &Robot, report: &Report) {
 
 /// The robot `diagnose --export` writes (on `robot`), read back from its text, reproduces the report's
 /// residual of every measurement of `data` (the fit on all of it) to 1e-9 mm — whatever was chosen,
-/// compliance included: the export is the model the report scores. Position-only data. After a step of the
+/// compliance included: the export is the model the report scores — a backlash with each pose's direction
+/// ([`thermokin_chain::Dataset::approach`]). Position-only data. After a step of the
 /// measurement frame the export is in the frame the measurements ended in: the poses after every step.
 pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &thermokin_chain::Dataset) {
     let export = report.export_model(robot, None, "check").unwrap();
@@ -61,8 +62,11 @@ pub fn export_reproduces_the_residuals(robot: &Robot, report: &Report, data: &th
         .into_iter()
         .zip(fitted)
         .filter(|((i, m), _)| latest(*i, m))
-        .map(|((_, m), r)| {
-            let state = thermokin_chain::OperatingState::at_time(m.time_min);
+        .map(|((i, m), r)| {
+            // Each pose in its state: its time, and the direction each joint reached it in (a backlash).
+            let approach = data.approach.get(i).cloned().unwrap_or_default();
+            let state =
+                thermokin_chain::OperatingState { approach, ..thermokin_chain::OperatingState::at_time(m.time_min) };
             let p = read.tool_pose(&m.q, &state).unwrap().translation.vector;
             ((p - m.position_mm).norm() - r).abs()
         })

@@ -104,7 +104,7 @@ fn check(truth: Truth, expect: &str) {
     let state = |m: &Measurement| OperatingState {
         time_min: Some(m.time_min),
         temperatures_c: vec![("temp_j2".into(), m.temps[0]), ("temp_j3".into(), m.temps[1])],
-        payload: None,
+        ..OperatingState::default()
     };
     let sum: f64 = fresh
         .measurements

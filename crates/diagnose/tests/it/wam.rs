@@ -141,6 +141,13 @@ fn the_first_thirty_pose_draw_transfers() {
         report.honest_end,
         report.warnings.first()
     );
+    for f in &nested.folds {
+        eprintln!(
+            "fold {} ({} poses): {:.4} -> {:.4} {:?}",
+            f.fold, f.poses, f.nominal.heldout_rms_mm, f.selected.heldout_rms_mm, f.effects
+        );
+    }
+    eprintln!("chosen {:?}", report.effects.iter().map(|e| e.label.clone()).collect::<Vec<_>>());
     assert!(nested.mean_difference_mm < -2.0 * nested.mean_difference_se_mm, "not better beyond its uncertainty");
     assert!(report.honest_end.is_none(), "{:?}", report.honest_end);
     assert!(!report.warnings.iter().any(|w| w.contains("cannot show")), "{:?}", report.warnings);

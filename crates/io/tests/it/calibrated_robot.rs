@@ -16,6 +16,8 @@ fn calibrated() -> RobotModel {
     joints[1].coupling_rad_per_nm = -0.0008f64.to_radians();
     // The shoulder's bearing tilting under the arm's moment.
     joints[1].lateral = [3e-4f64.to_radians(), -2e-4f64.to_radians(), 0.0, 0.0, 0.0, 0.0];
+    // Play in joint 4's gears.
+    joints[3].backlash = 0.012f64.to_radians();
     let drift = vec![
         DriftRow {
             row: Row::Joint(1),
@@ -57,19 +59,32 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
     let text = robot_model_to_toml(&model);
     let back = parse_robot_model_toml("cal.toml".as_ref(), &text).unwrap();
     assert_eq!(back.drift().len(), 3);
-    let state = OperatingState {
+    use thermokin_chain::Approach::{Falling, Rising, Unknown};
+    let mut state = OperatingState {
         time_min: Some(75.0),
         temperatures_c: vec![("temp_j2".into(), 30.0), ("temp_j3".into(), 26.0)],
-        payload: None,
+        ..OperatingState::default()
     };
+    // Without the directions the joints came from, a backlash cannot be evaluated: the error says so.
+    let q0 = [0.1, 0.2, -0.3, 0.4, 0.5, 0.6];
+    let e = back.tool_pose(&q0, &state).unwrap_err().to_string();
+    assert!(e.contains("direction") && e.contains("joint 4's backlash"), "{e}");
     for k in 0..30 {
         let t = k as f64 * 0.37;
         let q = [t.sin(), 0.4 * t.cos(), -0.3 + 0.2 * t.sin(), t, 0.5 * t.cos(), -t];
+        state.approach = vec![Unknown, Rising, Falling, [Rising, Falling, Unknown][k % 3], Rising, Falling];
         let a = model.tool_pose(&q, &state).unwrap();
         let b = back.tool_pose(&q, &state).unwrap();
         // Written to 1e-12 mm and degrees (coefficients in full): the same pose to 1e-9.
         assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
         assert!(a.rotation.angle_to(&b.rotation) < 1e-12);
+    }
+    // Joint 4's backlash, read back, moves it by its half play toward the side it came from.
+    let with = |a| OperatingState { approach: vec![Unknown, Unknown, Unknown, a, Unknown, Unknown], ..state.clone() };
+    let half = 0.012f64.to_radians();
+    for (a, sign) in [(Rising, 1.0), (Falling, -1.0)] {
+        let moved = back.joint_values(&q0, &with(a)).unwrap()[3] - back.joint_values(&q0, &with(Unknown)).unwrap()[3];
+        assert!((moved - sign * half).abs() < 1e-15, "{moved:e}");
     }
     // The coupling is written with the joint it couples to, and read back.
     assert!(text.contains("compliance_coupling_deg_per_nm = -8e-4  # with joint 3"), "{text}");
@@ -112,7 +127,8 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
 fn a_drifting_robot_without_its_state_says_what_to_give() {
     let model = calibrated();
     let q = [0.0; 6];
-    let no_time = OperatingState { temperatures_c: vec![("temp_j2".into(), 30.0)], ..Default::default() };
+    let approach = vec![thermokin_chain::Approach::Rising; 6];
+    let no_time = OperatingState { temperatures_c: vec![("temp_j2".into(), 30.0)], approach, ..Default::default() };
     let e = model.tool_pose(&q, &no_time).unwrap_err().to_string();
     assert!(e.contains("operating time") && e.contains("joint 2"), "{e}");
     let one_sensor = OperatingState { time_min: Some(10.0), ..no_time };
