@@ -34,9 +34,14 @@ pub fn profile_of(spec: &str, dof: usize) -> PyResult<TimeProfile> {
     thermokin_io::read_profile_spec(&spec, dof).map_err(io)
 }
 
-/// The operating state of `time_min` (minutes of the warm-up) and `temps` (°C by sensor name; the
-/// `temp_` prefix added when left out).
-pub fn state(time_min: Option<f64>, temps: Option<HashMap<String, f64>>) -> PyResult<OperatingState> {
+/// The operating state of `time_min` (minutes of the warm-up), `temps` (°C by sensor name; the
+/// `temp_` prefix added when left out) and `approach` (per joint the direction it last moved in: 1 rising,
+/// -1 falling, 0 not known — what a backlash follows).
+pub fn state(
+    time_min: Option<f64>,
+    temps: Option<HashMap<String, f64>>,
+    approach: Option<Vec<i64>>,
+) -> PyResult<OperatingState> {
     if let Some(t) = time_min
         && !t.is_finite()
     {
@@ -50,5 +55,16 @@ pub fn state(time_min: Option<f64>, temps: Option<HashMap<String, f64>>) -> PyRe
         temperatures_c.push((thermokin_io::sensor_name(&name), value));
     }
     temperatures_c.sort_by(|a, b| a.0.cmp(&b.0));
-    Ok(OperatingState { time_min, temperatures_c, ..OperatingState::default() })
+    let approach = approach
+        .unwrap_or_default()
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| match v {
+            1 => Ok(thermokin_chain::Approach::Rising),
+            -1 => Ok(thermokin_chain::Approach::Falling),
+            0 => Ok(thermokin_chain::Approach::Unknown),
+            _ => Err(input(format!("approach[{k}]: {v}; give 1 (rising), -1 (falling) or 0 (not known) per joint"))),
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok(OperatingState { time_min, temperatures_c, approach, ..OperatingState::default() })
 }

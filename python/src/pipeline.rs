@@ -633,7 +633,7 @@ pub fn compensate(
         }
         None => vec![0.0; dof],
     };
-    let state = state(time_min, temps)?;
+    let state = state(time_min, temps, None)?;
     let semantics = semantics_of(semantics, dof)?;
     let settings =
         RunSettings { semantics: semantics.clone(), accumulation, ik: thermokin_ik::Params::default(), start };

@@ -199,17 +199,19 @@ impl PyRobot {
 
     /// Forward kinematics: `q` in degrees (mm for prismatic joints), `(n,)` or `(N, n)`; returns the tool
     /// pose in the base frame as a 4×4 homogeneous matrix in mm, `(4, 4)` or `(N, 4, 4)`. `time_min` and
-    /// `temps` (°C by sensor) give the operating state of a calibrated robot's drift. A batch runs on
-    /// every core without the GIL.
-    #[pyo3(signature = (q, *, time_min=None, temps=None))]
+    /// `temps` (°C by sensor) give the operating state of a calibrated robot's drift, `approach` (per joint
+    /// 1, -1 or 0: the direction it last moved in) a backlash's side. A batch runs on every core without
+    /// the GIL.
+    #[pyo3(signature = (q, *, time_min=None, temps=None, approach=None))]
     fn fk<'py>(
         &self,
         py: Python<'py>,
         q: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
+        approach: Option<Vec<i64>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let state = state(time_min, temps)?;
+        let state = state(time_min, temps, approach)?;
         self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();
@@ -255,15 +257,16 @@ impl PyRobot {
     /// For a calibrated robot, the derivative is with respect to the joint values the chain takes in
     /// the state (`time_min`, `temps`); for one whose rows tilt with the configuration (a lateral
     /// compliance), on the chain in force at `q`, its tilt held.
-    #[pyo3(signature = (q, *, time_min=None, temps=None))]
+    #[pyo3(signature = (q, *, time_min=None, temps=None, approach=None))]
     fn jacobian<'py>(
         &self,
         py: Python<'py>,
         q: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
+        approach: Option<Vec<i64>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let state = state(time_min, temps)?;
+        let state = state(time_min, temps, approach)?;
         self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.model.chain_at(&state).map_err(input)?;
         let (rows, batch) = self.joint_rows(q, "q")?;
@@ -295,7 +298,8 @@ impl PyRobot {
     /// the tolerances — and the re-measured errors.
     /// A batch runs on every core without the GIL, each target from its seed; the result does not
     /// depend on the number of threads.
-    #[pyo3(signature = (pose, seed=None, *, position_only=false, time_min=None, temps=None, restarts=None))]
+    #[pyo3(signature = (pose, seed=None, *, position_only=false, time_min=None, temps=None, approach=None, restarts=None))]
+    #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per state and option.
     fn ik<'py>(
         &self,
         py: Python<'py>,
@@ -304,9 +308,10 @@ impl PyRobot {
         position_only: bool,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
+        approach: Option<Vec<i64>>,
         restarts: Option<usize>,
     ) -> PyResult<IkResult> {
-        let state = state(time_min, temps)?;
+        let state = state(time_min, temps, approach)?;
         self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();

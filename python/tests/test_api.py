@@ -350,3 +350,23 @@ def test_plan_is_a_subset_in_degrees(irb140):
 def test_plan_bad_input(irb140, kwargs, message):
     with pytest.raises(InputError, match=message):
         thermokin.plan(irb140, configurations(irb140, 300, 3), **kwargs)
+
+
+def test_a_backlash_follows_the_direction_given(root, tmp_path):
+    # The IRB 140 with half a play of 0.02° in joint 3's gears: its side is the direction given.
+    text = (root / "configs" / "irb140.toml").read_text()
+    joints = text.split("[[joint]]")
+    joints[3] = joints[3].rstrip("\n") + "\nbacklash = 0.02\n\n"
+    path = tmp_path / "backlash.toml"
+    path.write_text("[[joint]]".join(joints))
+    robot = thermokin.Robot.from_file(path)
+    plain = thermokin.Robot.from_file(root / "configs" / "irb140.toml")
+    with pytest.raises(ThermokinError, match="direction"):
+        robot.fk(Q)
+    for side in (1, -1, 0):
+        moved = list(Q)
+        moved[2] += 0.02 * side
+        T = robot.fk(Q, approach=[0, 0, side, 0, 0, 0])
+        np.testing.assert_allclose(T, plain.fk(moved), rtol=0, atol=1e-9)
+    with pytest.raises(ThermokinError, match=r"approach\[1\]"):
+        robot.fk(Q, approach=[0, 2, 0, 0, 0, 0])

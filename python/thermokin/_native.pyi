@@ -52,9 +52,21 @@ class Robot:
     def is_plain(self) -> bool: ...
     @property
     def beyond_urdf(self) -> list[str]: ...
-    def fk(self, q: _Array, *, time_min: float | None = None, temps: dict[str, float] | None = None) -> _F64: ...
+    def fk(
+        self,
+        q: _Array,
+        *,
+        time_min: float | None = None,
+        temps: dict[str, float] | None = None,
+        approach: list[int] | None = None,
+    ) -> _F64: ...
     def jacobian(
-        self, q: _Array, *, time_min: float | None = None, temps: dict[str, float] | None = None
+        self,
+        q: _Array,
+        *,
+        time_min: float | None = None,
+        temps: dict[str, float] | None = None,
+        approach: list[int] | None = None,
     ) -> _F64: ...
     def ik(
         self,
@@ -64,6 +76,7 @@ class Robot:
         position_only: bool = False,
         time_min: float | None = None,
         temps: dict[str, float] | None = None,
+        approach: list[int] | None = None,
         restarts: int | None = None,
     ) -> IKResult: ...
     def deformed(

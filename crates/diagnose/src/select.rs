@@ -39,7 +39,7 @@ use crate::report::TableRow;
 use crate::scoring::Scorer;
 use crate::selection::Selection;
 use crate::shrinkage::shrink;
-use crate::steps::frame_step;
+use crate::steps::frame_steps;
 
 /// What the selection chose, and the catalogue it chose from.
 pub(crate) struct Selected {
@@ -61,7 +61,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
     let (catalogue, eligible, mut selection) = clock.time(Phase::Eligibility, || {
         let mut catalogue = setup.candidates(scorer.robot, data)?;
         // What only the order of measuring shows: a step of the measurement frame.
-        catalogue.extend(frame_step(scorer, &always)?);
+        catalogue.extend(frame_steps(scorer, &always)?);
         let (eligible, refused) = check(scorer, &always, &catalogue, &config.eligibility)?;
         let (nominal, nominal_errors) = scorer.heldout_errors(&always, &scorer.folds)?;
         let (_, nominal_fit) = scorer.full_fit(&always)?;

@@ -17,8 +17,14 @@
 //! robust scale per axis of the residuals left once the step is fitted, `κ` how much more their means
 //! over runs of consecutive poses vary than independent residuals' would (real residuals wander with the
 //! configurations measured one after another: on the real UR10 series C, a step of 0.2 mm at line 711
-//! passed the plain test and gained 0.001 mm held out). Whether it is a cause is then the selection's
-//! question, held out.
+//! passed the plain test and gained 0.001 mm held out).
+//!
+//! **Several steps** (a tracker knocked twice, a stand that settles and is then bumped): binary
+//! segmentation. Once a step is kept, each stretch of the order between the steps found is scanned the
+//! same way, with a frame of its own; the likeliest split of any stretch is kept when its gain beats the
+//! same test, `σ̂` and `κ` taken once every stretch — that split's two included — has its own frame fitted,
+//! the Bonferroni count that stretch's splits. The scan stops at the first split that does not. Each step
+//! found is a candidate; whether it is a cause is then the selection's question, held out.
 
 use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
 use thermokin_chain::Dataset;
@@ -60,15 +66,16 @@ fn order(data: &Dataset) -> Option<(Vec<usize>, Vec<Option<StepAt>>)> {
     Some((idx, at))
 }
 
-/// The most likely step of the measurement frame in the scorer's data, when noise alone would not give
-/// its gain: the candidate [`Effect::FrameStep`] (none without an order, or with too few poses).
-pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Option<Effect>, DiagnoseError> {
+/// The steps of the measurement frame in the scorer's data that noise alone would not give, found one
+/// after another (binary segmentation): the candidates [`Effect::FrameStep`], in the order of measuring
+/// (none without an order, or with too few poses).
+pub(crate) fn frame_steps(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Vec<Effect>, DiagnoseError> {
     let data = scorer.data;
     let n = data.len();
     if n < 2 * MIN_SIDE {
-        return Ok(None);
+        return Ok(Vec::new());
     }
-    let Some((order, at)) = order(data) else { return Ok(None) };
+    let Some((order, at)) = order(data) else { return Ok(Vec::new()) };
     let robot = scorer.robot;
     let mut flexible = always.to_vec();
     let loaded = thermokin_identify::max_gravity_torques(robot);
@@ -87,27 +94,73 @@ pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Optio
     let (model, fit) = scorer.fit_shrunk(&flexible, &fitted, 0.0)?;
     let r = residuals(robot, &model, &fit.theta, data, &rows, &scorer.terms)?;
     let stride = scorer.terms.stride();
-    // Per pose in the order of measuring: JᵀJ and Jᵀr of the step's six columns (positions only).
-    let terms: Vec<(Matrix6<f64>, Vector6<f64>)> = order
+    // Per pose in the order of measuring: its residual, JᵀJ and Jᵀr of the step's six columns
+    // (positions only).
+    let poses: Vec<Pose> = order
         .iter()
         .map(|&i| {
-            let ri = Vector3::new(r[stride * i], r[stride * i + 1], r[stride * i + 2]);
-            let p = data.measurements[i].position_mm - ri;
+            let residual = Vector3::new(r[stride * i], r[stride * i + 1], r[stride * i + 2]);
+            let point = data.measurements[i].position_mm - residual;
             let mut j = SMatrix::<f64, 3, 6>::zeros();
             j.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
-            j.fixed_view_mut::<3, 3>(0, 3).copy_from(&-p.cross_matrix());
-            (j.transpose() * j, j.transpose() * ri)
+            j.fixed_view_mut::<3, 3>(0, 3).copy_from(&-point.cross_matrix());
+            Pose { residual, point, jtj: j.transpose() * j, jtr: j.transpose() * residual }
         })
         .collect();
-    let (a_all, b_all) = terms.iter().fold((Matrix6::zeros(), Vector6::zeros()), |(a, b), (ja, jb)| (a + ja, b + jb));
-    let Some(a_inv) = a_all.try_inverse() else { return Ok(None) };
+    // The likeliest split of any stretch between the steps found so far, tested against the noise left
+    // once the frame is fitted on every stretch, that split included; kept, and the scan goes on.
+    let mut cuts: Vec<usize> = Vec::new();
+    loop {
+        let stretches = stretches(&cuts, n);
+        let best = stretches
+            .iter()
+            .filter_map(|&(lo, hi)| best_split(&poses[lo..hi], &at[lo..hi]).map(|(g, k, splits)| (g, lo + k, splits)))
+            .max_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((gain, k, splits)) = best else { break };
+        let mut with = cuts.clone();
+        with.push(k);
+        with.sort_unstable();
+        let Some(left) = left_after(&poses, &with) else { break };
+        let sigma2 = robust_variance(left.iter().flat_map(|v| v.iter().copied()));
+        let threshold =
+            sigma2 * run_inflation(&left) * chi_square_upper_quantile(6, FALSE_ALARM / splits.max(1) as f64);
+        if gain <= threshold {
+            break;
+        }
+        cuts = with;
+    }
+    Ok(cuts.into_iter().filter_map(|k| at[k].map(Effect::FrameStep)).collect())
+}
+
+/// One pose of the scan, in the order of measuring: its residual under the flexible static model, its
+/// predicted point, and the normal-equation terms of a shift of the frame (`J = [I | −[p]×]`).
+struct Pose {
+    residual: Vector3<f64>,
+    point: Vector3<f64>,
+    jtj: Matrix6<f64>,
+    jtr: Vector6<f64>,
+}
+
+/// The stretches `[lo, hi)` of `n` poses between the `cuts` (sorted).
+fn stretches(cuts: &[usize], n: usize) -> Vec<(usize, usize)> {
+    let bounds: Vec<usize> = std::iter::once(0).chain(cuts.iter().copied()).chain(std::iter::once(n)).collect();
+    bounds.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// The split of one stretch with the largest gain of a step (a second frame for its later part beside
+/// the frame all of it shares): `(gain, place in the stretch, splits scanned)`; `None` where no split
+/// leaves [`MIN_SIDE`] poses on each side.
+fn best_split(poses: &[Pose], at: &[Option<StepAt>]) -> Option<(f64, usize, usize)> {
+    let n = poses.len();
+    let (a_all, b_all) = poses.iter().fold((Matrix6::zeros(), Vector6::zeros()), |(a, b), p| (a + p.jtj, b + p.jtr));
+    let a_inv = a_all.try_inverse()?;
     let (mut a_k, mut b_k) = (Matrix6::zeros(), Vector6::zeros());
     let mut best: Option<(f64, usize)> = None;
     let mut splits = 0usize;
-    // From the last pose back: after k poses the running sums hold poses k.. of the order.
+    // From the last pose back: after k poses the running sums hold poses k.. of the stretch.
     for k in (1..n).rev() {
-        a_k += terms[k].0;
-        b_k += terms[k].1;
+        a_k += poses[k].jtj;
+        b_k += poses[k].jtr;
         if k < MIN_SIDE || n - k < MIN_SIDE || at[k].is_none() {
             continue;
         }
@@ -119,31 +172,22 @@ pub(crate) fn frame_step(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Optio
             best = Some((gain, k));
         }
     }
-    let Some((gain, k)) = best else { return Ok(None) };
-    // The residuals once the step and the registration it shifts are fitted: what noise is left, and how
-    // much of it runs together in the order of measuring.
-    let (mut a_k, mut b_k) = (Matrix6::zeros(), Vector6::zeros());
-    for t in &terms[k..] {
-        a_k += t.0;
-        b_k += t.1;
+    best.map(|(g, k)| (g, k, splits))
+}
+
+/// The residuals once each stretch between `cuts` has its own frame fitted (a registration and the steps
+/// that shift it: the same least squares), in the order of measuring; `None` where a stretch's frame is
+/// not determined.
+fn left_after(poses: &[Pose], cuts: &[usize]) -> Option<Vec<Vector3<f64>>> {
+    let mut left = Vec::with_capacity(poses.len());
+    for (lo, hi) in stretches(cuts, poses.len()) {
+        let part = &poses[lo..hi];
+        let (a, b) = part.iter().fold((Matrix6::zeros(), Vector6::zeros()), |(a, b), p| (a + p.jtj, b + p.jtr));
+        let shift = a.try_inverse()? * b;
+        let (t, w) = (shift.fixed_rows::<3>(0).into_owned(), shift.fixed_rows::<3>(3).into_owned());
+        left.extend(part.iter().map(|p| p.residual - (t - p.point.cross(&w))));
     }
-    let c = b_k - a_k * a_inv * b_all;
-    let Some(step) = (a_k - a_k * a_inv * a_k).try_inverse().map(|si| si * c) else { return Ok(None) };
-    let shift = a_inv * (b_all - a_k * step);
-    let left: Vec<Vector3<f64>> = order
-        .iter()
-        .enumerate()
-        .map(|(place, &i)| {
-            let ri = Vector3::new(r[stride * i], r[stride * i + 1], r[stride * i + 2]);
-            let p = data.measurements[i].position_mm - ri;
-            let moved =
-                |d: &Vector6<f64>| d.fixed_rows::<3>(0).into_owned() - p.cross(&d.fixed_rows::<3>(3).into_owned());
-            ri - moved(&shift) - if place >= k { moved(&step) } else { Vector3::zeros() }
-        })
-        .collect();
-    let sigma2 = robust_variance(left.iter().flat_map(|v| v.iter().copied()));
-    let threshold = sigma2 * run_inflation(&left) * chi_square_upper_quantile(6, FALSE_ALARM / splits.max(1) as f64);
-    Ok(at[k].filter(|_| gain > threshold).map(Effect::FrameStep))
+    Some(left)
 }
 
 /// How much more the residuals' means over runs of consecutive poses vary than independent residuals'

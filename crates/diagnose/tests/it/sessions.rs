@@ -157,3 +157,60 @@ fn backlash_is_named_from_the_direction_each_pose_was_reached_in() {
         assert!(selected.heldout_rms_mm < 2.0 * crate::tracker::NOISE_MM * 3f64.sqrt(), "{protocol}: {selected:?}");
     }
 }
+
+/// The tracker knocked twice — after pose 100 of 300 (0.2 mm) and after pose 210 (0.15 mm and 0.008°,
+/// relative to where the first knock left it): both steps found within ±3 poses of where they happened,
+/// nothing else named, nothing flagged, and fresh poses measured with the tracker where the second knock
+/// left it at the noise as exported.
+#[test]
+fn a_tracker_knocked_twice_is_two_steps_of_the_frame() {
+    let (robot, mut data) = session(300, 180.0, 7403, <[f64]>::to_vec);
+    let first = Isometry3::from_parts(Translation3::new(0.0, 0.2, -0.05), UnitQuaternion::identity());
+    let second = Isometry3::from_parts(
+        Translation3::new(-0.1, 0.0, 0.11),
+        UnitQuaternion::from_scaled_axis(Vector3::new(0.008, -0.004, 0.0).normalize() * 0.008f64.to_radians()),
+    );
+    for (i, m) in data.measurements.iter_mut().enumerate() {
+        let frame = match i {
+            ..100 => Isometry3::identity(),
+            100..210 => first,
+            _ => second * first,
+        };
+        m.position_mm = (frame * nalgebra::Point3::from(m.position_mm)).coords;
+    }
+    let mut fresh = crate::tracker::measure(robot.chain(), 100, 7404, <[f64]>::to_vec);
+    for m in &mut fresh.measurements {
+        m.position_mm = (second * first * nalgebra::Point3::from(m.position_mm)).coords;
+    }
+    let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, Some(&fresh), &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    eprintln!("chose {chosen:?}; {} gross errors", report.outliers.len());
+    assert!(report.outliers.is_empty(), "{:?}", report.outliers);
+    assert_eq!(chosen.len(), 2, "{chosen:?}");
+    let times: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
+    let mut at: Vec<f64> = chosen
+        .iter()
+        .map(|c| {
+            c.strip_prefix("frame_step (")
+                .and_then(|s| s.strip_suffix(" min)"))
+                .unwrap_or_else(|| panic!("{chosen:?}"))
+                .parse()
+                .unwrap()
+        })
+        .collect();
+    at.sort_by(f64::total_cmp);
+    assert!(
+        times[97] < at[0] && at[0] <= times[103],
+        "the first step at {} min, pose 100 at {} min",
+        at[0],
+        times[100]
+    );
+    assert!(times[207] < at[1] && at[1] <= times[213], "the second at {} min, pose 210 at {} min", at[1], times[210]);
+    let holdout = report.holdout.as_ref().unwrap();
+    eprintln!(
+        "fresh poses as exported: nominal {:.4} → {:.4} mm",
+        holdout.same_frame.nominal.heldout_mean_mm, holdout.same_frame.selected.heldout_mean_mm
+    );
+    assert!(holdout.same_frame.selected.heldout_rms_mm < 2.0 * crate::tracker::NOISE_MM * 3f64.sqrt());
+}
