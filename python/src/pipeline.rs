@@ -390,9 +390,11 @@ impl PyReport {
 /// gross errors listed and left out, or `"keep"`), `shrinkage` (`"cross-validated"` or `"off"`),
 /// `extrapolation` (`"half-arcs"`: a chosen angle- or load-dependent effect must hold beyond the poses it
 /// was fitted on, or `"off"`), `masses` (`"from-file"`, or `"ignore"`: every gravity compliance's loads lumped
-/// and identified from the data). Runs without the GIL.
+/// and identified from the data), `order` (`"time"`, or `"file"`: the rows are in the order measured —
+/// what a backlash follows). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None))]
+#[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per setting.
 pub fn diagnose(
     py: Python<'_>,
     robot: &PyRobot,
@@ -412,6 +414,7 @@ pub fn diagnose(
     shrinkage: Option<&str>,
     extrapolation: Option<&str>,
     masses: Option<&str>,
+    order: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -444,6 +447,7 @@ pub fn diagnose(
         shrinkage: choice("shrinkage", shrinkage, defaults.shrinkage)?,
         extrapolation: choice("extrapolation", extrapolation, defaults.extrapolation)?,
         masses: choice("masses", masses, defaults.masses)?,
+        order: choice("order", order, defaults.order)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -234,6 +234,7 @@ def diagnose(
     shrinkage: str | None = None,
     extrapolation: str | None = None,
     masses: str | None = None,
+    order: str | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,

@@ -27,6 +27,10 @@ pub(crate) const SETS: &[(&str, &str)] = &[
         "diagnose --robot fixtures/real/jacobi-wam/wam.urdf --frame tracker --tool unknown --measurements fixtures/real/jacobi-wam/wam-grid.csv --holdout fixtures/real/jacobi-wam/wam-random.csv",
     ),
     (
+        "Barrett WAM, grid → random, files in measuring order",
+        "diagnose --robot fixtures/real/jacobi-wam/wam.urdf --frame tracker --tool unknown --measurements fixtures/real/jacobi-wam/wam-grid.csv --holdout fixtures/real/jacobi-wam/wam-random.csv --order file",
+    ),
+    (
         "Rokae B, positions",
         "diagnose --robot fixtures/real/rokae-robot-b/rokae.toml --frame tracker --tool unknown --measurements fixtures/real/rokae-robot-b/joints-deg.csv --poses fixtures/real/rokae-robot-b/tracker-poses.csv --orientation-lever 0",
     ),

@@ -100,6 +100,30 @@ impl Approach {
     }
 }
 
+/// Where the order the poses were measured in comes from, for what follows the direction of motion (a
+/// backlash: [`Dataset::with_approach`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MeasuringOrder {
+    /// The default: the poses' times order them; a set without a time span has no order.
+    #[default]
+    Time,
+    /// The file lists the poses as they were measured: their lines order them where no time span does.
+    File,
+}
+
+crate::choices!(
+    MeasuringOrder,
+    "measuring order",
+    [
+        ("time", "the time_min column orders the poses (a set without one has no order)", MeasuringOrder::Time),
+        (
+            "file",
+            "the file lists the poses as they were measured (a time column, where there is one, still decides)",
+            MeasuringOrder::File
+        ),
+    ]
+);
+
 /// A joint move smaller than this (radians, mm) is not a move: what a controller repeats as the same
 /// commanded value after rounding.
 pub const STILL_MOVE: f64 = 1e-9;
@@ -160,8 +184,8 @@ impl Dataset {
     }
 
     /// The order the poses were measured in, when the set carries one: by time when it spans time (ties
-    /// in file order), else by file line; `None` for a set with neither (built in code).
-    pub fn measuring_order(&self) -> Option<Vec<usize>> {
+    /// in file order), else by file line when `by` says the file lists them as measured; `None` otherwise.
+    pub fn measuring_order(&self, by: MeasuringOrder) -> Option<Vec<usize>> {
         let mut idx: Vec<usize> = (0..self.len()).collect();
         if self.time_span() > 0.0 {
             let t = |i: usize| self.measurements[i].time_min;
@@ -169,22 +193,26 @@ impl Dataset {
             idx.sort_by(|&a, &b| t(a).total_cmp(&t(b)).then(line(a).cmp(&line(b))));
             return Some(idx);
         }
+        if by != MeasuringOrder::File {
+            return None;
+        }
         let lines: Vec<usize> = (0..self.len()).map(|i| self.line_of(i)).collect::<Option<_>>()?;
         idx.sort_by_key(|&i| lines[i]);
         Some(idx)
     }
 
-    /// The set with [`Dataset::approach`] filled from its measuring order ([`Dataset::measuring_order`]):
+    /// The set with [`Dataset::approach`] filled from its measuring order ([`Dataset::measuring_order`] by
+    /// `by`):
     /// each joint's direction is that of its last move, from the pose before, that is larger than
     /// [`STILL_MOVE`] — a joint that stays put rests on the flank it came to. The first pose's joints are
     /// [`Approach::Unknown`]. A set without an order, or with its approach already given, is returned as
     /// is.
-    pub fn with_approach(mut self) -> Self {
+    pub fn with_approach(mut self, by: MeasuringOrder) -> Self {
         if self.approach.len() == self.len() && !self.is_empty() {
             return self;
         }
         self.approach.clear();
-        let Some(order) = self.measuring_order() else { return self };
+        let Some(order) = self.measuring_order(by) else { return self };
         let dof = self.measurements.first().map_or(0, |m| m.q.len());
         let mut approach = vec![vec![Approach::Unknown; dof]; self.len()];
         let mut last = vec![Approach::Unknown; dof];
@@ -234,7 +262,7 @@ mod tests {
             ],
             ..Dataset::default()
         }
-        .with_approach();
+        .with_approach(MeasuringOrder::Time);
         use Approach::*;
         assert_eq!(data.approach[1], vec![Unknown, Unknown]);
         assert_eq!(data.approach[2], vec![Rising, Rising]);
@@ -246,16 +274,17 @@ mod tests {
     }
 
     #[test]
-    fn a_set_without_an_order_has_no_approach() {
+    fn a_set_without_an_order_has_no_approach_and_lines_are_one_when_said() {
         let data = Dataset { measurements: vec![pose(0.0, [0.1, 0.0]), pose(0.0, [0.2, 0.0])], ..Dataset::default() };
-        assert!(data.with_approach().approach.is_empty());
-        // File lines are an order.
+        assert!(data.with_approach(MeasuringOrder::File).approach.is_empty());
+        // File lines are an order when the file is said to list the poses as measured.
         let lined = Dataset {
             measurements: vec![pose(0.0, [0.1, 0.0]), pose(0.0, [0.2, 0.0])],
             source_lines: vec![3, 2],
             ..Dataset::default()
-        }
-        .with_approach();
+        };
+        assert!(lined.clone().with_approach(MeasuringOrder::Time).approach.is_empty());
+        let lined = lined.with_approach(MeasuringOrder::File);
         assert_eq!(lined.approach[0], vec![Approach::Falling, Approach::Unknown]);
     }
 }

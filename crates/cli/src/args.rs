@@ -377,6 +377,11 @@ pub struct DiagnoseArgs {
     /// trust) each joint's loads lumped and identified from the data, as for a file that has none.
     #[arg(long, value_parser = choice(Masses::CHOICES), default_value_t = Config::default().masses)]
     pub masses: Masses,
+    /// Where the order the poses were measured in comes from, for a gearbox's backlash (an offset by the
+    /// direction each joint last moved in): the time_min column, or also the file's lines when the file
+    /// lists the poses as they were measured (`file`; a time column still decides where there is one).
+    #[arg(long, value_parser = choice(thermokin_chain::MeasuringOrder::CHOICES), default_value_t = Config::default().order)]
+    pub order: thermokin_chain::MeasuringOrder,
     /// A Gaussian prior toward the nominal robot on the chosen model, as strong as cross-validation
     /// asks and kept only where it passes the gate (few poses: the weakly seen directions pulled back),
     /// or the least-squares fit as it is.

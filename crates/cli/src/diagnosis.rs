@@ -108,6 +108,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         folds_by: a.folds_by,
         outliers: a.outliers,
         masses: a.masses,
+        order: a.order,
         shrinkage: a.shrinkage,
         extrapolation: a.extrapolation,
         noise_mm: a.noise,

@@ -60,6 +60,17 @@ pub struct Config {
     pub extrapolation: Extrapolation,
     /// Whether the robot file's link masses are trusted ([`Masses`]).
     pub masses: Masses,
+    /// Where the order the poses were measured in comes from, for a backlash (the direction each joint
+    /// last moved in): their times, or also the file's lines when it lists them as measured
+    /// ([`thermokin_chain::MeasuringOrder`]). A step of the measurement frame is scanned in the file's
+    /// lines either way: a knocked tracker moves a block of them.
+    #[serde(serialize_with = "by_name")]
+    pub order: thermokin_chain::MeasuringOrder,
+}
+
+/// A setting serialized by its name (a type of a crate without serde).
+fn by_name<T: std::fmt::Display, S: serde::Serializer>(value: &T, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(&value.to_string())
 }
 
 /// What the diagnosis makes of the robot file's link masses ([`crate::Config::masses`]).
@@ -312,6 +323,7 @@ impl Default for Config {
             shrinkage: Shrinkage::default(),
             extrapolation: Extrapolation::default(),
             masses: Masses::default(),
+            order: thermokin_chain::MeasuringOrder::default(),
         }
     }
 }

@@ -2,7 +2,7 @@
 //! on data it never saw (nested, an explicit hold-out set), the warnings and the verdict — assembled
 //! into one [`Report`].
 
-use thermokin_chain::{Dataset, Robot};
+use thermokin_chain::{Dataset, MeasuringOrder, Robot};
 
 use crate::config::{Config, Masses, Validation};
 use crate::error::DiagnoseError;
@@ -97,13 +97,13 @@ pub fn diagnose_profiled(
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 
-/// `data` with each pose's approach direction from its measuring order
-/// ([`thermokin_chain::Dataset::with_approach`]), where it has an order and no directions yet.
-fn ordered(data: &Dataset) -> std::borrow::Cow<'_, Dataset> {
-    if data.approach.len() == data.len() || data.measuring_order().is_none() {
+/// `data` with each pose's approach direction from its measuring order by `by`
+/// ([`thermokin_chain::Dataset::with_approach`]), where it has one and no directions yet.
+fn ordered(data: &Dataset, by: MeasuringOrder) -> std::borrow::Cow<'_, Dataset> {
+    if data.approach.len() == data.len() || data.measuring_order(by).is_none() {
         std::borrow::Cow::Borrowed(data)
     } else {
-        std::borrow::Cow::Owned(data.clone().with_approach())
+        std::borrow::Cow::Owned(data.clone().with_approach(by))
     }
 }
 
@@ -113,9 +113,10 @@ fn checked_holdout<'h>(
     robot: &Robot,
     data: &Dataset,
     holdout: Option<&'h Dataset>,
+    by: MeasuringOrder,
 ) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
     check_joint_counts(robot, data, holdout)?;
-    Ok(holdout.map(|h| match ordered(h) {
+    Ok(holdout.map(|h| match ordered(h, by) {
         std::borrow::Cow::Borrowed(h) => with_sensors_of(h, data),
         std::borrow::Cow::Owned(h) => std::borrow::Cow::Owned(with_sensors_of(&h, data).into_owned()),
     }))
@@ -205,14 +206,14 @@ fn run(
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let robot = &*trusted(robot, config)?;
-    let data = &*ordered(data);
+    let data = &*ordered(data, config.order);
     let total = stages(data, holdout.is_some(), config);
     let mut done = 0;
     let mut tell = |stage: String| {
         done += 1;
         progress(Progress { done, total, stage });
     };
-    let holdout = checked_holdout(robot, data, holdout)?;
+    let holdout = checked_holdout(robot, data, holdout, config.order)?;
     // Gross errors first: everything after works on the measurements the screen keeps.
     let screened = main.time(Phase::Screen, || screen(robot, data, config))?;
     let kept_data;

@@ -238,7 +238,7 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
     // The poses are measured in the order they are written (line 1 the header): each joint's approach
     // direction, which a backlash follows, from that order.
     data.source_lines = (0..data.len()).map(|k| k + 2).collect();
-    let mut data = data.with_approach();
+    let mut data = data.with_approach(thermokin_chain::MeasuringOrder::File);
     let approach = std::mem::take(&mut data.approach);
     let terms = PoseTerms::of(robot, &data, 0.0);
     for (i, m) in data.measurements.iter_mut().enumerate() {

@@ -411,9 +411,7 @@ fn assemble<'r>(
     if measurements.is_empty() {
         return Err(empty);
     }
-    // The poses' order is the order they were measured in: each joint's approach direction from it.
-    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines, ..Dataset::default() }
-        .with_approach())
+    Ok(Dataset { measurements, temperature_names: joints.temperature_names(), source_lines, ..Dataset::default() })
 }
 
 /// Where a file's joint-side columns are: `q1..qn`, `time_min`, `temp_<name>`.

@@ -50,7 +50,7 @@ fn pair(report: &serde_json::Value, path: &[&str]) -> String {
 #[test]
 fn the_real_data_table_is_what_the_commands_give() {
     let (rows, commands) = table();
-    assert_eq!(rows.len(), 5, "{rows:?}");
+    assert_eq!(rows.len(), 6, "{rows:?}");
     assert_eq!(commands.len(), rows.len());
     for (i, (row, command)) in rows.iter().zip(&commands).enumerate() {
         let json = tmp(&format!("real-{i}.json")).display().to_string();
