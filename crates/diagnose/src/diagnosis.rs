@@ -9,7 +9,7 @@ use crate::error::DiagnoseError;
 use crate::outliers::screen;
 use crate::profile::{Clock, Phase, Profile, profile};
 use crate::report::{HoldoutPair, HoldoutStats, Nested, PoseHeldOut, PoseRecord, Report};
-use crate::scoring::Scorer;
+use crate::scoring::{Scorer, significantly_better};
 use crate::select::select;
 use crate::tables::tables;
 use crate::validation::{nested, nested_folds, transfer_score};
@@ -161,7 +161,37 @@ fn judged_beside_the_folds(
 ) -> Result<Vec<String>, DiagnoseError> {
     let mut said: Vec<String> = fall_back(sel, nested, config).into_iter().collect();
     said.extend(crate::masses::disagreement(scorer, config, sel)?);
+    said.extend(unconfirmed_by_neighbourhoods(scorer, config, sel)?);
     Ok(said)
+}
+
+/// For poses in time order, whose folds are blocks of time: whether the chosen model's gain over the
+/// always-estimated blocks holds on folds of neighbouring configurations too (each fold a set of
+/// k-means blocks of joint space, [`crate::folds::neighbourhood_folds`]), by the selection's gate over
+/// those blocks. Time blocks break what time confounds (a drift, a tracker that moved); neighbourhoods
+/// break what the arm's configuration does — a gain that only one of them shows is a claim the data do
+/// not carry. The sentence the report gives when it does not hold.
+fn unconfirmed_by_neighbourhoods(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &crate::selection::Selection,
+) -> Result<Option<String>, DiagnoseError> {
+    let data = scorer.data;
+    let chosen = sel.chosen();
+    if data.time_span() <= 0.0 || chosen.is_empty() || !crate::folds::by_neighbourhood(data.len(), config.folds) {
+        return Ok(None);
+    }
+    let partition = crate::folds::neighbourhood_folds(data, config.folds, config.seed);
+    let always = &sel.effects[..sel.always];
+    let (before, before_errors) = scorer.heldout_errors(always, &partition.folds)?;
+    let (after, after_errors) = scorer.heldout_errors(&sel.effects, &partition.folds)?;
+    if significantly_better(&before_errors, &after_errors, config.gate_standard_errors, &partition.block) {
+        return Ok(None);
+    }
+    Ok(Some(format!(
+        "on folds of neighbouring arm configurations (instead of blocks of time) the chosen effects take the held-out RMS from {:.4} to {:.4} mm only, not beyond the gate: the gain the time blocks show may follow where the arm was rather than when — measure the same configurations at other times to tell",
+        before.heldout_rms_mm, after.heldout_rms_mm
+    )))
 }
 
 /// A selection the nested validation cannot tell from the completed geometry it turned down (the
