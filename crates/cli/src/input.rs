@@ -85,6 +85,12 @@ fn load_error(args: &RobotArgs, e: LoadError) -> Failure {
         StateError::ProfileWithoutTable => anyhow!("--profile needs --deformation"),
         StateError::ProfileNeedsTime => anyhow!("--profile needs --time (minutes)"),
         StateError::TimeNeedsProfile => anyhow!("--time needs --profile"),
+        StateError::ApproachWithoutBacklash => {
+            anyhow!("--approach: {robot} has no joint with a backlash (a `backlash` line in a joint's table)")
+        }
+        StateError::ApproachCount { given, joints } => {
+            anyhow!("--approach: {given} directions for {robot}'s {joints} joints; give one per joint (+, - or ?)")
+        }
         other => anyhow!("{other}"),
     })
 }

@@ -111,6 +111,15 @@ pub enum StateError {
     ProfileNeedsTime,
     /// A time and a table, but no profile to grow the table with (and the robot does not drift).
     TimeNeedsProfile,
+    /// Directions of approach given for a robot none of whose joints has a backlash.
+    ApproachWithoutBacklash,
+    /// Directions of approach given for another number of joints than the robot's.
+    ApproachCount {
+        /// Directions given.
+        given: usize,
+        /// The robot's joints.
+        joints: usize,
+    },
 }
 
 impl std::fmt::Display for StateError {
@@ -127,6 +136,12 @@ impl std::fmt::Display for StateError {
             StateError::ProfileNeedsTime => f.write_str("a time profile needs the time (minutes) to evaluate it at"),
             StateError::TimeNeedsProfile => {
                 f.write_str("a time was given with a table but no profile: say how the table grows with time")
+            }
+            StateError::ApproachWithoutBacklash => f.write_str(
+                "directions of approach were given, but no joint of this robot has a backlash (a `backlash` in its table)",
+            ),
+            StateError::ApproachCount { given, joints } => {
+                write!(f, "{given} directions of approach were given for a robot of {joints} joints: give one per joint")
             }
         }
     }

@@ -524,6 +524,13 @@ impl RobotModel {
         if let Some((unknown, _)) = state.temperatures_c.iter().find(|(n, _)| !sensors.contains(n)) {
             return refuse(StateError::UnknownSensor { name: unknown.clone(), known: sensors });
         }
+        let joints = self.robot.chain().dof();
+        match state.approach.len() {
+            0 => {}
+            _ if !self.has_backlash() => return refuse(StateError::ApproachWithoutBacklash),
+            given if given != joints => return refuse(StateError::ApproachCount { given, joints }),
+            _ => {}
+        }
         Ok(())
     }
 

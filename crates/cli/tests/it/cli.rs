@@ -1165,6 +1165,13 @@ fn a_robot_with_backlash_follows_the_order_of_its_moves() {
     let o = thermokin(&["fk", "--robot", &robot, "--joints", "10,20,30,40,50,60"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--approach") && stderr(&o).contains("joint 3's backlash"), "{}", stderr(&o));
+    // Directions for a robot without a backlash, or of the wrong count, are refused, naming the flag.
+    let o = thermokin(&["fk", "--robot", ROBOT, "--joints", "10,20,30,40,50,60", "--approach", "+,+,+,+,+,+"]);
+    assert!(
+        !o.status.success() && stderr(&o).contains("--approach") && stderr(&o).contains("no joint with a backlash")
+    );
+    let o = thermokin(&["fk", "--robot", &robot, "--joints", "10,20,30,40,50,60", "--approach", "+,-"]);
+    assert!(!o.status.success() && stderr(&o).contains("2 directions"), "{}", stderr(&o));
     let out = tmp("backlash-joints.csv").display().to_string();
     let seed = [0.0, 20.0, 20.0, 0.0, -45.0, 0.0];
     let targets = "fixtures/paper/table12-targets.csv";
