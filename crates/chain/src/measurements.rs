@@ -80,12 +80,11 @@ impl Approach {
         }
     }
 
-    /// `+`, `-` or `?`.
-    pub fn symbol(self) -> char {
-        match self {
-            Approach::Unknown => '?',
-            Approach::Rising => '+',
-            Approach::Falling => '-',
+    /// Each joint's direction after the move `from` → `to` ([`Approach::after_move`] with
+    /// [`STILL_MOVE`]): one step along a sequence of poses, in place.
+    pub fn advance(directions: &mut [Approach], from: &[f64], to: &[f64]) {
+        for ((a, &f), &t) in directions.iter_mut().zip(from).zip(to) {
+            *a = a.after_move(f, t, STILL_MOVE);
         }
     }
 
@@ -217,12 +216,7 @@ impl Dataset {
         let mut approach = vec![vec![Approach::Unknown; dof]; self.len()];
         let mut last = vec![Approach::Unknown; dof];
         for pair in order.windows(2) {
-            let (from, to) = (&self.measurements[pair[0]].q, &self.measurements[pair[1]].q);
-            for (j, a) in last.iter_mut().enumerate() {
-                if let (Some(&f), Some(&t)) = (from.get(j), to.get(j)) {
-                    *a = a.after_move(f, t, STILL_MOVE);
-                }
-            }
+            Approach::advance(&mut last, &self.measurements[pair[0]].q, &self.measurements[pair[1]].q);
             approach[pair[1]].clone_from(&last);
         }
         self.approach = approach;

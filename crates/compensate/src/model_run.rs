@@ -88,9 +88,7 @@ fn with_approach_along(
     };
     let mut from = start;
     for (state, &to) in states.iter_mut().zip(path) {
-        for ((a, &f), &t) in last.iter_mut().zip(from).zip(to) {
-            *a = a.after_move(f, t, thermokin_chain::STILL_MOVE);
-        }
+        thermokin_chain::Approach::advance(&mut last, from, to);
         if state.approach.is_empty() || state.approach.len() != last.len() {
             state.approach.clone_from(&last);
         } else {

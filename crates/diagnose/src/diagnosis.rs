@@ -99,11 +99,11 @@ pub fn diagnose_profiled(
 
 /// `data` with each pose's approach direction from its measuring order by `by`
 /// ([`thermokin_chain::Dataset::with_approach`]), where it has one and no directions yet.
-fn ordered(data: &Dataset, by: MeasuringOrder) -> std::borrow::Cow<'_, Dataset> {
+fn ordered(data: std::borrow::Cow<'_, Dataset>, by: MeasuringOrder) -> std::borrow::Cow<'_, Dataset> {
     if data.approach.len() == data.len() || data.measuring_order(by).is_none() {
-        std::borrow::Cow::Borrowed(data)
+        data
     } else {
-        std::borrow::Cow::Owned(data.clone().with_approach(by))
+        std::borrow::Cow::Owned(data.into_owned().with_approach(by))
     }
 }
 
@@ -116,10 +116,7 @@ fn checked_holdout<'h>(
     by: MeasuringOrder,
 ) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
     check_joint_counts(robot, data, holdout)?;
-    Ok(holdout.map(|h| match ordered(h, by) {
-        std::borrow::Cow::Borrowed(h) => with_sensors_of(h, data),
-        std::borrow::Cow::Owned(h) => std::borrow::Cow::Owned(with_sensors_of(&h, data).into_owned()),
-    }))
+    Ok(holdout.map(|h| ordered(with_sensors_of(h, data), by)))
 }
 
 /// The stages a progress display counts: the selection on all data, each outer fold, the hold-out set.
@@ -236,7 +233,7 @@ fn run(
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let robot = &*trusted(robot, config)?;
-    let data = &*ordered(data, config.order);
+    let data = &*ordered(std::borrow::Cow::Borrowed(data), config.order);
     let total = stages(data, holdout.is_some(), config);
     let mut done = 0;
     let mut tell = |stage: String| {

@@ -88,17 +88,14 @@ pub(crate) fn arc(data: &Dataset, j: usize) -> (f64, f64) {
 /// A backlash's rule: the joint reached from both sides in every fit of the selection
 /// ([`MIN_POSES_EACH_SIDE`]).
 fn both_sides(scorer: &Scorer<'_>, e: Effect, j: JointIndex) -> Option<Refusal> {
-    let (up, down) = thermokin_identify::approach_counts(scorer.data, j.index());
+    let counts = |rows: &[usize]| thermokin_identify::approach_counts(scorer.data, rows.iter().copied(), j.index());
+    let (up, down) = counts(&scorer.all());
     // What every fit of the selection sees: the fewest from one side in a fold's training part.
     let fewest = scorer
         .folds
         .iter()
         .map(|(train, _)| {
-            let (u, d) = train.iter().fold((0, 0), |(u, d), &i| match scorer.data.approach_of(i, j.index()) {
-                thermokin_chain::Approach::Rising => (u + 1, d),
-                thermokin_chain::Approach::Falling => (u, d + 1),
-                thermokin_chain::Approach::Unknown => (u, d),
-            });
+            let (u, d) = counts(train);
             u.min(d)
         })
         .min()

@@ -152,7 +152,7 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
             }
         }
         // A backlash: the poses reached from its less usual side are no gross errors.
-        let (up, down) = thermokin_identify::approach_counts(data, j.index());
+        let (up, down) = thermokin_identify::approach_counts(data, 0..data.len(), j.index());
         if up.min(down) >= crate::eligibility::MIN_POSES_EACH_SIDE {
             lumped.push(Effect::Backlash(j));
         }

@@ -44,10 +44,11 @@ fn lateral_loads(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
     (0..2).any(|k| hi[k] - lo[k] > 1.0)
 }
 
-/// How many of the data's poses joint `j` reached rising and falling ([`thermokin_chain::Approach`], from
-/// the measuring order; both zero when the set has none): a backlash is seen only between the two.
-pub fn approach_counts(data: &Dataset, j: usize) -> (usize, usize) {
-    data.approach.iter().filter_map(|a| a.get(j)).fold((0, 0), |(up, down), a| match a {
+/// How many of the data's poses at `rows` joint `j` reached rising and falling
+/// ([`thermokin_chain::Approach`], from the measuring order; both zero when the set has none): a backlash
+/// is seen only between the two.
+pub fn approach_counts(data: &Dataset, rows: impl IntoIterator<Item = usize>, j: usize) -> (usize, usize) {
+    rows.into_iter().fold((0, 0), |(up, down), i| match data.approach_of(i, j) {
         thermokin_chain::Approach::Rising => (up + 1, down),
         thermokin_chain::Approach::Falling => (up, down + 1),
         thermokin_chain::Approach::Unknown => (up, down),
@@ -200,7 +201,7 @@ impl Setup {
         }
         // Backlash of a joint the measuring order shows reaching its poses from both sides.
         for &j in &joints {
-            let (up, down) = approach_counts(data, j.index());
+            let (up, down) = approach_counts(data, 0..data.len(), j.index());
             if up > 0 && down > 0 {
                 c.push(Effect::Backlash(j));
             }

@@ -472,11 +472,6 @@ impl Effect {
         )
     }
 
-    /// Effects that only a measuring order reveals ([`thermokin_chain::Dataset::approach`]).
-    pub fn needs_order(&self) -> bool {
-        matches!(self, Effect::Backlash(_) | Effect::FrameStep(_))
-    }
-
     /// Time-dependent effects are judged with forward-chained cross-validation too.
     pub fn is_time_dependent(&self) -> bool {
         matches!(self, Effect::ThermalDrift(..))

@@ -183,11 +183,8 @@ impl PoseRow {
                         if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
                     if model.has_backlash() {
                         if let Some((from, approach)) = &last {
-                            state.approach = approach
-                                .iter()
-                                .zip(from.iter().zip(&q))
-                                .map(|(a, (&f, &t))| a.after_move(f, t, thermokin_chain::STILL_MOVE))
-                                .collect();
+                            state.approach.clone_from(approach);
+                            thermokin_chain::Approach::advance(&mut state.approach, from, &q);
                         } else {
                             state.approach.clone_from(&flags.approach);
                         }

@@ -22,6 +22,20 @@ pub fn tmp(name: &str) -> PathBuf {
     dir.join(name)
 }
 
+/// The largest distance, mm, between the positions of `fk --joints-file`'s CSV rows and `targets`, row by
+/// row.
+fn farthest_from_targets(fk_csv: &str, targets: &[thermokin_chain::Target]) -> f64 {
+    fk_csv
+        .lines()
+        .skip(1)
+        .zip(targets)
+        .map(|(l, t)| {
+            let p: Vec<f64> = l.split(',').skip(1).take(3).map(|c| c.parse().unwrap()).collect();
+            (nalgebra::Vector3::new(p[0], p[1], p[2]) - t.pose.translation.vector).norm()
+        })
+        .fold(0.0, f64::max)
+}
+
 const ROBOT: &str = "configs/irb140.toml";
 const TABLE: &str = "fixtures/paper/deformations-case-study.toml";
 
@@ -854,15 +868,7 @@ fn readme_figures_are_the_commands(dir: &Path, commands: &[Vec<String>], printed
     std::fs::write(dir.join("nominal-q.csv"), format!("q1,q2,q3,q4,q5,q6\n{}\n", q.join("\n"))).unwrap();
     let reached = run(&["fk", "--robot", "warm.toml", "--time", "60", "--joints-file", "nominal-q.csv"]);
     let targets = thermokin_io::read_targets(&workspace("fixtures/paper/table12-targets.csv")).unwrap();
-    let worst = reached
-        .lines()
-        .skip(1)
-        .zip(&targets)
-        .map(|(l, t)| {
-            let p: Vec<f64> = l.split(',').skip(1).take(3).map(|c| c.parse().unwrap()).collect();
-            (nalgebra::Vector3::new(p[0], p[1], p[2]) - t.pose.translation.vector).norm()
-        })
-        .fold(0.0, f64::max);
+    let worst = farthest_from_targets(&reached, &targets);
     assert!((worst - 0.55).abs() < 0.005, "{worst}");
     // "the angles differ from Table 16 by 3.2° RMS (up to 8.6° on one joint)" without --semantics.
     run(&[
@@ -1223,15 +1229,7 @@ fn a_robot_with_backlash_follows_the_order_of_its_moves() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let program = thermokin_io::read_targets(&workspace(targets)).unwrap();
-    let worst = stdout(&o)
-        .lines()
-        .skip(1)
-        .zip(&program)
-        .map(|(l, t)| {
-            let p: Vec<f64> = l.split(',').skip(1).take(3).map(|c| c.parse().unwrap()).collect();
-            (nalgebra::Vector3::new(p[0], p[1], p[2]) - t.pose.translation.vector).norm()
-        })
-        .fold(0.0, f64::max);
+    let worst = farthest_from_targets(&stdout(&o), &program);
     // The joints file holds 12 decimals of a degree (1e-12° moves a point 1 m away by 2e-11 mm).
     assert!(worst < 1e-6, "{worst:e} mm");
     assert_eq!(stdout(&o).lines().count(), program.len() + 1);

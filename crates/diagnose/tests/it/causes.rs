@@ -103,6 +103,12 @@ fn the_data_say_when_they_disagree_with_the_files_masses() {
 }
 
 /// The IRB 140 on a vertical lift (a prismatic first joint of 800 mm stroke, with the arm's masses).
+/// A sensor column's reading at pose `i` of session `seed`: spread over −1 … 1 by the golden ratio, so
+/// that the reading varies independently of the poses drawn.
+fn reading(seed: u64, i: usize) -> f64 {
+    (i as f64 * 0.618_034 + seed as f64 * 0.1).fract() * 2.0 - 1.0
+}
+
 fn lifted_irb140() -> Robot {
     let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
     let at = text.find("[[joint]]").unwrap();
@@ -192,7 +198,6 @@ fn a_sensor_column_drives_a_rows_error_and_is_named_with_it() {
             0.0,
         ])
     };
-    let reading = |seed: u64, i: usize| (i as f64 * 0.618_034 + seed as f64 * 0.1).fract() * 2.0 - 1.0;
     let session = |n: usize, seed: u64| {
         let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
         for (i, m) in data.measurements.iter_mut().enumerate() {
@@ -323,7 +328,6 @@ fn column_named_at_the_noise(robot: &Robot, data: &Dataset, fresh: &Dataset, nam
 #[test]
 fn a_column_that_bends_and_tilts_with_its_accelerometer_is_told_apart() {
     let robot = lifted_irb140();
-    let reading = |seed: u64, i: usize| (i as f64 * 0.618_034 + seed as f64 * 0.1).fract() * 2.0 - 1.0;
     let session = |n: usize, seed: u64| {
         let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
         for (i, m) in data.measurements.iter_mut().enumerate() {
