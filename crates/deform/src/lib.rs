@@ -10,7 +10,9 @@ mod model;
 mod profile;
 
 pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
-pub use model::{DriftLaw, DriftRow, JointCorrection, MAX_CORRECTION_SLOPE, RobotModel, lateral_row_error};
+pub use model::{
+    DriftLaw, DriftRow, JointCorrection, MAX_CORRECTION_SLOPE, RobotModel, lateral_row_error, straightness_row_error,
+};
 pub use profile::{AfterStabilization, ProfileSpec, RowFactors, TemperatureLog, TimeProfile};
 
 use thermokin_chain::{Chain, ChainError, ErrorParams};

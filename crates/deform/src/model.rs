@@ -49,6 +49,10 @@ pub struct JointCorrection {
     /// extension's length, `c′ₖ` (rad per N·m per mm), and shifts by `sₖ Mₖ` (mm per N·m) — `c′` and `s`
     /// zero for a revolute joint.
     pub lateral: [f64; 6],
+    /// Straightness of a slide's guide `[κ₁, κ₂, ρ, σ₁, σ₂]` ([`straightness_row_error`]): its row tilts by
+    /// `κₖ d` about the two directions across its axis and rolls by `ρ d` about it (rad per mm of extension
+    /// `d`), and its carriage bows across by `σₖ d²` (per mm) — zero for a revolute joint.
+    pub straightness: [f64; 5],
     /// Backlash `b`, radians (mm for a slide): the joint sits `b · s` from its commanded value, `s` = ±1
     /// the direction it last moved in ([`thermokin_chain::Approach`]) — half the play between its gears'
     /// flanks; negative when the joint trails its motion (a link behind a motor-side encoder). Needs the
@@ -64,6 +68,7 @@ impl JointCorrection {
         compliance_rad_per_nm: 0.0,
         coupling_rad_per_nm: 0.0,
         lateral: [0.0; 6],
+        straightness: [0.0; 5],
         backlash: 0.0,
     };
 
@@ -72,10 +77,16 @@ impl JointCorrection {
         *self == Self::NONE
     }
 
-    /// `true` when the correction moves the joint's value (anything but a lateral compliance, which tilts
-    /// its row).
+    /// `true` when the correction moves the joint's value (anything but a lateral compliance or a slide's
+    /// straightness, which tilt its row).
     pub fn moves_joint(&self) -> bool {
-        JointCorrection { lateral: [0.0; 6], ..*self } != Self::NONE
+        JointCorrection { lateral: [0.0; 6], straightness: [0.0; 5], ..*self } != Self::NONE
+    }
+
+    /// `true` when the joint's row changes with the configuration (a lateral compliance, a slide's
+    /// straightness).
+    pub fn bends(&self) -> bool {
+        self.lateral != [0.0; 6] || self.straightness != [0.0; 5]
     }
 
     /// `Δq` at commanded value `q` under gravity torque `torque_nm`.
@@ -116,6 +127,27 @@ pub fn lateral_row_error(
         rotation += directions[k] * ((at(k) + at(2 + k) * d) * moments[k]);
         translation += directions[k].cross(axis) * ((at(4 + k) - 0.5 * at(2 + k) * d * d) * moments[k]);
     }
+    ErrorParams::new(translation, rotation)
+}
+
+/// The error a slide's straightness adds to its row (eq. 19's angles and the row's translation, in its
+/// parent's frame) at extension `d` (mm), `directions` `eₖ` its two lateral directions
+/// ([`thermokin_chain::lateral_directions`]), `axis` its unit axis `a`, `c = [κ₁, κ₂, ρ, σ₁, σ₂]`:
+///
+/// `Δθ = d (κ₁ e₁ + κ₂ e₂ + ρ a)`, `Δp = d² (σ₁ (e₁ × a) + σ₂ (e₂ × a))`.
+///
+/// The first-order terms of a linear axis' error motions (ISO 230-1: its pitch, yaw and roll growing
+/// with the travel, its straightness bowing with its square) that the row's fixed geometry cannot take:
+/// an angle or a shift proportional to `d` is an axis pointing another way — a link deviation. A carriage
+/// on a guide bent to curvature `κ` turns by `κ d` and bows by `−κ d²/2` across: `σ = −κ/2`.
+pub fn straightness_row_error(
+    c: &[f64; 5],
+    directions: &[Vector3<f64>; 2],
+    axis: &Vector3<f64>,
+    d: f64,
+) -> ErrorParams {
+    let rotation = (directions[0] * c[0] + directions[1] * c[1] + axis * c[2]) * d;
+    let translation = (directions[0].cross(axis) * c[3] + directions[1].cross(axis) * c[4]) * (d * d);
     ErrorParams::new(translation, rotation)
 }
 
@@ -292,7 +324,8 @@ impl RobotModel {
             let all = [c.scale, c.compliance_rad_per_nm, c.coupling_rad_per_nm, c.backlash]
                 .into_iter()
                 .chain(c.cyclic_rad)
-                .chain(c.lateral);
+                .chain(c.lateral)
+                .chain(c.straightness);
             if all.clone().any(|v| !v.is_finite()) {
                 return bad("every coefficient must be finite".into());
             }
@@ -303,6 +336,9 @@ impl RobotModel {
             }
             if joint.kind == JointKind::Revolute && c.lateral[2..] != [0.0; 4] {
                 return bad("a lateral compliance's extension and shift terms are a slide's".into());
+            }
+            if joint.kind == JointKind::Revolute && c.straightness != [0.0; 5] {
+                return bad("straightness is a slide's guide".into());
             }
             if c.coupling_rad_per_nm != 0.0
                 && chain.joints().get(j + 1).is_none_or(|next| next.kind != JointKind::Revolute)
@@ -463,10 +499,10 @@ impl RobotModel {
         self.joints.iter().any(|c| c.backlash != 0.0)
     }
 
-    /// `true` when some joint's row tilts with the configuration (a lateral compliance): the chain in force
-    /// then depends on the joint values ([`RobotModel::chain_at_joints`]).
+    /// `true` when some joint's row tilts with the configuration (a lateral compliance, a slide's
+    /// straightness): the chain in force then depends on the joint values ([`RobotModel::chain_at_joints`]).
     pub fn bends(&self) -> bool {
-        self.joints.iter().any(|c| c.lateral != [0.0; 6])
+        self.joints.iter().any(JointCorrection::bends)
     }
 
     /// The drift rows.
@@ -573,6 +609,9 @@ impl RobotModel {
             if c.lateral != [0.0; 6] {
                 out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
             }
+            if c.straightness != [0.0; 5] {
+                out.push(format!("joint {} ({}): straightness of its guide", j + 1, names[j]));
+            }
             if c.backlash != 0.0 {
                 out.push(format!("joint {} ({}): backlash (needs the direction it last moved in)", j + 1, names[j]));
             }
@@ -614,19 +653,23 @@ impl RobotModel {
             return Ok(chain);
         }
         let mut moments = Vec::new();
-        let masses = self.masses_in(state);
-        thermokin_chain::lateral_gravity_moments_into(
-            self.robot.chain(),
-            &masses,
-            commanded,
-            None,
-            &self.down,
-            &mut moments,
-        )?;
-        for (j, c) in self.joints.iter().enumerate().filter(|(_, c)| c.lateral != [0.0; 6]) {
+        if self.joints.iter().any(|c| c.lateral != [0.0; 6]) {
+            let masses = self.masses_in(state);
+            thermokin_chain::lateral_gravity_moments_into(
+                self.robot.chain(),
+                &masses,
+                commanded,
+                None,
+                &self.down,
+                &mut moments,
+            )?;
+        }
+        for (j, c) in self.joints.iter().enumerate().filter(|(_, c)| c.bends()) {
             let Some(directions) = thermokin_chain::lateral_directions(self.robot.chain(), j) else { continue };
             let axis = self.robot.chain().joints()[j].axis.into_inner();
-            let bend = lateral_row_error(&c.lateral, &directions, &axis, moments[j], commanded[j]);
+            let moments = moments.get(j).copied().unwrap_or([0.0; 2]);
+            let bend = lateral_row_error(&c.lateral, &directions, &axis, moments, commanded[j])
+                .add(&straightness_row_error(&c.straightness, &directions, &axis, commanded[j]));
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
         }

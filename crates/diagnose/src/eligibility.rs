@@ -117,7 +117,9 @@ fn both_sides(scorer: &Scorer<'_>, e: Effect, j: JointIndex) -> Option<Refusal> 
 fn coverage(scorer: &Scorer<'_>, e: Effect, rules: &Eligibility) -> Option<Refusal> {
     let robot = scorer.robot;
     match e {
-        Effect::JointScale(j) | Effect::Periodic(j) if arc_needed(robot, e, rules).is_some() => {
+        Effect::JointScale(j) | Effect::Periodic(j) | Effect::Straightness(j)
+            if arc_needed(robot, e, rules).is_some() =>
+        {
             let (lo, hi) = arc(scorer.data, j.index());
             let t = travel(robot, j.index());
             let need = arc_needed(robot, e, rules).map_or(0.0, |(_, need)| need);

@@ -133,8 +133,8 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
 }
 
 /// The screening model's effects for this robot and these data: the always-estimated blocks, every
-/// joint row, every slide's scale and every loaded joint's compliance (and, for a warm-up, every row's
-/// drifts).
+/// joint row, every slide's scale and straightness and every loaded joint's compliance (and, for a
+/// warm-up, every row's drifts).
 fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usize) -> Vec<Effect> {
     let mut effects = config.setup().always_estimated(data);
     let spans_time = data.time_span() > 0.0;
@@ -142,10 +142,11 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
     let loaded = thermokin_identify::max_gravity_torques(robot);
     for j in (0..robot.chain().dof()).filter_map(|j| JointIndex::of(robot, j).ok()) {
         effects.push(Effect::LinkDeviation(j));
-        // A slide's scale: its row's constant deviation cannot take an error growing with the extension,
-        // whose top poses would stand out as gross errors.
+        // A slide's scale and its guide's straightness: its row's constant deviation cannot take an
+        // error growing with the extension, whose top poses would stand out as gross errors.
         if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Prismatic {
             effects.push(Effect::JointScale(j));
+            effects.push(Effect::Straightness(j));
             // A column bending under what it carries, more at its top extensions: its tilt, with masses.
             if robot.masses().iter().skip(j.index()).any(Option::is_some) {
                 lumped.push(Effect::lateral_compliance(robot, j));

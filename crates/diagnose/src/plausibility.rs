@@ -261,6 +261,14 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let (tilt, moved) = lateral_reach(scale, j.index(), n, v);
             over("the tilt at the largest moment across the joint", deg(tilt), moved, lever_of(j), "°")
         }
+        Effect::Straightness(j) => {
+            // At the full extension the data reach: the turn (tilts and roll) at the row's lever, the bow
+            // as it is.
+            let d = scale.reach[j.index()];
+            let turn = (v[0].hypot(v[1]) + v[2].abs()) * d;
+            let moved = turn * lever_of(j) + v[3].hypot(v[4]) * d * d;
+            over("the turn of the carriage at the full extension", deg(turn), moved, lever_of(j), "°")
+        }
         Effect::LumpedCompliance(j, _) => {
             // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of
             // the weights bounds the deflection over every pose.

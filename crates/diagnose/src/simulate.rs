@@ -82,7 +82,7 @@ impl HiddenEffect {
     /// The effect at a random size typical of a calibrated industrial arm, drawn from `rng`: a zero
     /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m (a coupling of two: 3e-4–1e-3
     /// either way), a lateral compliance within ±8e-6 °/N·m (a slide's growth within ±8e-9 °/N·m per mm),
-    /// a gear-ratio error of 2e-4–6e-4,
+    /// a slide's straightness within ±2e-5 °/mm (bows within ±2e-7 per mm), a gear-ratio error of 2e-4–6e-4,
     /// cyclic amplitudes within ±0.03°, an exponential drift's τ of 30–90 min, translations within
     /// ±0.4 mm and rotations within ±0.02° otherwise.
     pub fn typical(effect: Effect, rng: &mut impl Rng) -> Self {
@@ -99,6 +99,8 @@ impl HiddenEffect {
                 (Effect::LateralCompliance(..), 0..=1) => rng.random_range(-8e-6..8e-6),
                 (Effect::LateralCompliance(..), 2 | 3) => rng.random_range(-8e-9..8e-9),
                 (Effect::LateralCompliance(..), _) => rng.random_range(-1e-4..1e-4),
+                (Effect::Straightness(_), 0..=2) => rng.random_range(-2e-5..2e-5),
+                (Effect::Straightness(_), _) => rng.random_range(-2e-7..2e-7),
                 (Effect::JointScale(_), _) => rng.random_range(2e-4..6e-4),
                 (Effect::Backlash(_), _) => rng.random_range(0.01..0.03),
                 (Effect::Periodic(_), _) => rng.random_range(-0.03..0.03),

@@ -138,7 +138,8 @@ impl Setup {
     /// The catalogue's candidates for `robot` and `data`, in catalogue order: the base and tool frames
     /// where they are not always estimated; per joint its offset and link deviation, a gravity compliance
     /// where the joint carries mass, a coupling of two neighbouring joints' compliances where gravity loads
-    /// both, a gear-ratio scale and a cyclic error of a revolute joint, a backlash where the measuring
+    /// both, a gear-ratio scale and a cyclic error of a revolute joint, a slide's scale and straightness, a
+    /// backlash where the measuring
     /// order approaches the joint from both sides; a thermal
     /// drift (linear and exponential) when the data span time, one per kelvin when they carry
     /// temperatures.
@@ -193,10 +194,13 @@ impl Setup {
         }
         // Scale and cyclic errors of revolute joints (a gear ratio, an encoder's eccentricity); the scale
         // of a slide (a lead screw's or a rack's error, growing with the extension).
+        // A slide's guide: its carriage tilting and bowing as it travels (straightness).
         for &j in &joints {
             c.push(Effect::JointScale(j));
             if robot.chain().joints()[j.index()].kind == JointKind::Revolute {
                 c.push(Effect::Periodic(j));
+            } else {
+                c.push(Effect::Straightness(j));
             }
         }
         // Backlash of a joint the measuring order shows reaching its poses from both sides.

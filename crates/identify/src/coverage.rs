@@ -61,9 +61,9 @@ pub fn arc_needed(robot: &Robot, e: Effect, rules: &Eligibility) -> Option<(usiz
             let j = j.index();
             Some((j, needed_arc(travel(robot, j), matches!(e, Effect::Periodic(_)), rules)))
         }
-        // A slide's scale (a lead-screw or rack error) needs the same fraction of its stroke (mm), where
-        // the file gives the stroke.
-        Effect::JointScale(j) => {
+        // A slide's scale (a lead-screw or rack error) and its guide's straightness need the same
+        // fraction of its stroke (mm), where the file gives the stroke.
+        Effect::JointScale(j) | Effect::Straightness(j) => {
             let limits = robot.chain().joints()[j.index()].limits?;
             Some((j.index(), needed_arc(limits.upper - limits.lower, false, rules)))
         }

@@ -191,6 +191,11 @@ pub enum Effect {
     /// [`thermokin_deform::lateral_row_error`]). The count is 2 for a revolute joint and 6 for a prismatic
     /// one: make one with [`Effect::named`] (`"lateral_compliance"`; it needs the file's masses).
     LateralCompliance(JointIndex, u8),
+    /// Straightness of a slide's guide ([`thermokin_deform::straightness_row_error`]): its row tilts about
+    /// the two directions across its axis and rolls about it in proportion to the extension `d`, and the
+    /// carriage bows across in proportion to `d²` — `[κ₁, κ₂, ρ, σ₁, σ₂]`, radians per mm and per mm (5;
+    /// prismatic joints only: [`Effect::named`]).
+    Straightness(JointIndex),
     /// The coupling of the gravity compliances of joint `j` and the next, `j + 1` — a drive the two
     /// share (a differential, a cable pair): `Δq_j += c · τ_{j+1}` and `Δq_{j+1} += c · τ_j`, the
     /// symmetric off-diagonal term of the two joints' compliance matrix (Maxwell–Betti reciprocity) (1).
@@ -216,7 +221,7 @@ pub enum Effect {
 }
 
 /// The effect names of reports and flags, in catalogue order.
-pub const EFFECT_NAMES: [&str; 12] = [
+pub const EFFECT_NAMES: [&str; 13] = [
     "base_frame",
     "tool_frame",
     "joint_offset",
@@ -224,6 +229,7 @@ pub const EFFECT_NAMES: [&str; 12] = [
     "joint_compliance",
     "compliance_coupling",
     "lateral_compliance",
+    "straightness",
     "joint_scale",
     "periodic",
     "backlash",
@@ -255,6 +261,13 @@ impl Effect {
                 Err(IdentifyError::MassesNeeded { effect: name.to_string() })
             }
             "lateral_compliance" => Ok(Effect::lateral_compliance(robot, on(joint)?)),
+            "straightness" => {
+                let j = on(joint)?;
+                if robot.chain().joints()[j.index()].kind != thermokin_chain::JointKind::Prismatic {
+                    return Err(IdentifyError::NotPrismatic { effect: name.to_string(), joint: j.number() });
+                }
+                Ok(Effect::Straightness(j))
+            }
             "compliance_coupling" => {
                 let j = on(joint)?;
                 // Joint j and the next: the next must exist.
@@ -308,6 +321,7 @@ impl Effect {
             | Effect::JointCompliance(j)
             | Effect::LumpedCompliance(j, _)
             | Effect::LateralCompliance(j, _)
+            | Effect::Straightness(j)
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
@@ -353,6 +367,7 @@ impl Effect {
             | Effect::JointScale(_)
             | Effect::Backlash(_) => 1,
             Effect::Periodic(_) => 4,
+            Effect::Straightness(_) => 5,
             Effect::LumpedCompliance(_, n) | Effect::LateralCompliance(_, n) => *n as usize,
         }
     }
@@ -375,6 +390,7 @@ impl Effect {
             Effect::JointCompliance(_) | Effect::LumpedCompliance(..) => "joint_compliance",
             Effect::ComplianceCoupling(_) => "compliance_coupling",
             Effect::LateralCompliance(..) => "lateral_compliance",
+            Effect::Straightness(_) => "straightness",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
             Effect::Backlash(_) => "backlash",
@@ -423,6 +439,12 @@ impl Effect {
                 .iter()
                 .map(|t| format!("{prefix}.{t}"))
                 .collect(),
+            Effect::Straightness(_) => {
+                ["tilt1_deg_per_mm", "tilt2_deg_per_mm", "roll_deg_per_mm", "bow1_per_mm", "bow2_per_mm"]
+                    .iter()
+                    .map(|t| format!("{prefix}.{t}"))
+                    .collect()
+            }
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
             Effect::Backlash(_) => vec![format!("{prefix}.half_play_deg")],
             Effect::Periodic(_) => {
@@ -462,6 +484,7 @@ impl Effect {
             Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
                 | Effect::LateralCompliance(..)
+                | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -499,6 +522,8 @@ impl Effect {
             ) => true,
             // A slide's shift is millimetres per N·m.
             (Effect::LateralCompliance(..), k) => k < 4,
+            // A bow is a length per squared length.
+            (Effect::Straightness(_), k) => k < 3,
             (Effect::JointScale(_), _) => false,
             (Effect::ToolPoint, _) => false,
             (Effect::ThermalDrift(_, DriftShape::Exponential), 6) => false,

@@ -52,6 +52,14 @@ pub enum IdentifyError {
         /// 1-based joint number.
         joint: usize,
     },
+    /// An effect of a slide's guide given a revolute joint.
+    #[error("{effect} acts on a prismatic joint (a slide's guide); joint {joint} is revolute")]
+    NotPrismatic {
+        /// The effect's name.
+        effect: String,
+        /// 1-based joint number.
+        joint: usize,
+    },
     /// An effect computed from the robot file's masses, on a robot whose file carries none.
     #[error("{effect} needs the link masses, and the robot file carries none")]
     MassesNeeded {

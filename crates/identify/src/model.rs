@@ -195,6 +195,11 @@ impl Model {
                         *c += t;
                     }
                 }
+                Effect::Straightness(j) => {
+                    for (c, t) in joints[j.index()].straightness.iter_mut().zip(&theta[o..o + 5]) {
+                        *c += t;
+                    }
+                }
                 Effect::JointScale(j) => joints[j.index()].scale += theta[o],
                 Effect::Backlash(j) => joints[j.index()].backlash += theta[o],
                 Effect::Periodic(j) => {
@@ -281,6 +286,7 @@ impl Model {
                 Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
                 | Effect::LateralCompliance(..)
+                | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
@@ -336,7 +342,8 @@ impl Model {
                 Effect::LinkDeviation(j)
                 | Effect::ThermalDrift(j, _)
                 | Effect::SensorDrift(j, _)
-                | Effect::LateralCompliance(j, _) => rows.joints[j.index()] = true,
+                | Effect::LateralCompliance(j, _)
+                | Effect::Straightness(j) => rows.joints[j.index()] = true,
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)
                 | Effect::LumpedCompliance(j, _)

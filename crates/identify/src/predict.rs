@@ -233,15 +233,10 @@ impl Model {
                     add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
                 }
-                Effect::LateralCompliance(j, n) => {
-                    let j = j.index();
-                    let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
-                    let chain = robot.chain();
-                    let directions = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
-                    let axis = chain.joints()[j].axis.into_inner();
-                    let c = &theta[o..o + n as usize];
-                    let row = thermokin_deform::lateral_row_error(c, &directions, &axis, moments, m.q[j]);
-                    add_to_row(&mut drift_rows, j, row);
+                Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
+                    let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j.index()]);
+                    let row = bent_row(*e, robot.chain(), &theta[o..o + e.len()], moments, m.q[j.index()]);
+                    add_to_row(&mut drift_rows, j.index(), row);
                 }
                 _ => {}
             }
@@ -419,27 +414,8 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
-                Effect::LateralCompliance(j, n) => {
-                    // The row's angles move along eₖ and its translation along eₖ × a
-                    // ([`thermokin_deform::lateral_row_error`]): ∂p/∂cₖ = ∂p/∂angles · eₖ Mₖ,
-                    // ∂p/∂c′ₖ = d ∂p/∂cₖ − ∂p/∂translation · (eₖ × a) Mₖ d²/2, ∂p/∂sₖ = ∂p/∂translation · (eₖ × a) Mₖ.
-                    let (j, d) = (j.index(), m.q[j.index()]);
-                    let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
-                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
-                    let axis = chain.joints()[j].axis.into_inner();
-                    let row = layout.joint(j);
-                    for (k, dir) in dirs.iter().enumerate() {
-                        let across = dir.cross(&axis);
-                        for r in 0..6 {
-                            let turn = (0..3).map(|c| pj[(r, row + 3 + c)] * dir[c]).sum::<f64>() * moments[k];
-                            let shift = (0..3).map(|c| pj[(r, row + c)] * across[c]).sum::<f64>() * moments[k];
-                            jac[(r, o + k)] = turn;
-                            if n == 6 {
-                                jac[(r, o + 2 + k)] = turn * d - shift * 0.5 * d * d;
-                                jac[(r, o + 4 + k)] = shift;
-                            }
-                        }
-                    }
+                Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
+                    bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
                 }
                 Effect::SensorDrift(j, _) => {
                     let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };
@@ -463,5 +439,74 @@ impl Model {
                 }
             }
         }
+    }
+}
+
+/// The Jacobian columns of an effect that bends joint `j`'s row with the configuration, at offset `o`:
+/// a lateral compliance — the row's angles move along `eₖ` and its translation along `eₖ × a`
+/// ([`thermokin_deform::lateral_row_error`]): `∂p/∂cₖ = ∂p/∂angles · eₖ Mₖ`,
+/// `∂p/∂c′ₖ = d ∂p/∂cₖ − ∂p/∂translation · (eₖ × a) Mₖ d²/2`, `∂p/∂sₖ = ∂p/∂translation · (eₖ × a) Mₖ` —
+/// or a slide's straightness — the angles along `d·e₁, d·e₂, d·a`, the translation along `d²(eₖ × a)`
+/// ([`thermokin_deform::straightness_row_error`]). `d` is the joint's value (a slide's extension).
+#[allow(clippy::too_many_arguments)] // The Jacobian's inputs, as fill_jacobian holds them.
+fn bend_columns(
+    e: Effect,
+    chain: &Chain,
+    pj: &Matrix6xX<f64>,
+    layout: &ParameterLayout,
+    d: f64,
+    cached: &ChainCache,
+    o: usize,
+    jac: &mut Matrix6xX<f64>,
+) {
+    let Some(j) = e.joint().map(|j| j.index()) else { return };
+    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+    let axis = chain.joints()[j].axis.into_inner();
+    let row = layout.joint(j);
+    let along = |r: usize, at: usize, v: &Vector3<f64>| (0..3).map(|c| pj[(r, row + at + c)] * v[c]).sum::<f64>();
+    match e {
+        Effect::LateralCompliance(_, n) => {
+            let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
+            for (k, dir) in dirs.iter().enumerate() {
+                let across = dir.cross(&axis);
+                for r in 0..6 {
+                    let turn = along(r, 3, dir) * moments[k];
+                    let shift = along(r, 0, &across) * moments[k];
+                    jac[(r, o + k)] = turn;
+                    if n == 6 {
+                        jac[(r, o + 2 + k)] = turn * d - shift * 0.5 * d * d;
+                        jac[(r, o + 4 + k)] = shift;
+                    }
+                }
+            }
+        }
+        Effect::Straightness(_) => {
+            let (b1, b2) = (dirs[0].cross(&axis), dirs[1].cross(&axis));
+            for r in 0..6 {
+                jac[(r, o)] = along(r, 3, &dirs[0]) * d;
+                jac[(r, o + 1)] = along(r, 3, &dirs[1]) * d;
+                jac[(r, o + 2)] = along(r, 3, &axis) * d;
+                jac[(r, o + 3)] = along(r, 0, &b1) * d * d;
+                jac[(r, o + 4)] = along(r, 0, &b2) * d * d;
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The error an effect that bends joint `j`'s row adds to it at joint value `d` (a slide's extension),
+/// `c` its parameters, `moments` the gravity moments across the joint (a lateral compliance's:
+/// [`thermokin_deform::lateral_row_error`]; a straightness': [`thermokin_deform::straightness_row_error`]).
+fn bent_row(e: Effect, chain: &Chain, c: &[f64], moments: [f64; 2], d: f64) -> ErrorParams {
+    let Some(j) = e.joint().map(|j| j.index()) else { return ErrorParams::ZERO };
+    let directions = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+    let axis = chain.joints()[j].axis.into_inner();
+    match e {
+        Effect::LateralCompliance(..) => thermokin_deform::lateral_row_error(c, &directions, &axis, moments, d),
+        Effect::Straightness(_) => {
+            let c = [c[0], c[1], c[2], c[3], c[4]];
+            thermokin_deform::straightness_row_error(&c, &directions, &axis, d)
+        }
+        _ => ErrorParams::ZERO,
     }
 }

@@ -281,6 +281,42 @@ mod tests {
         assert!(moved > 0.1, "{moved}");
     }
 
+    /// A slide's straightness (an IRB 140 on a vertical lift): the analytic Jacobian against central
+    /// differences, and the exported robot's forward model against the fit's prediction.
+    #[test]
+    fn a_slides_straightness_matches_the_differences_and_its_export() {
+        let arm = irb140_table9();
+        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
+            .with_limits(0.0, 800.0);
+        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
+        let chain = thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap();
+        let robot = Robot::new("lifted IRB 140", chain);
+        let mut data = eight_poses(11);
+        for (k, m) in data.measurements.iter_mut().enumerate() {
+            m.q.insert(0, 90.0 * k as f64 + 20.0);
+        }
+        let effects = vec![Effect::named(&robot, "straightness", Some(0)).unwrap()];
+        assert_eq!(effects, vec![Effect::Straightness(JointIndex::of(&robot, 0).unwrap())]);
+        assert!(Effect::named(&robot, "straightness", Some(2)).is_err(), "a revolute joint has no guide");
+        let model = Model::new(&robot, effects).unwrap();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        // Turns of ~1e-4 rad over the stroke, a bow of ~0.1 mm.
+        let theta = vec![2e-7, -1.5e-7, 1e-7, 3e-7, -2e-7];
+        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
+        let exported = model.robot_model(&robot, &theta, &data).unwrap();
+        assert!(exported.bends());
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        let (plain, mut moved) = (robot.chain(), 0.0f64);
+        for (i, m) in data.measurements.iter().enumerate() {
+            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
+            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
+            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
+        }
+        assert!(moved > 0.1, "{moved}");
+    }
+
     /// A step of the measurement frame at minute 50 of a session, beside a link deviation and the
     /// registration: the analytic Jacobian of every column — the step's own and those it turns — against
     /// central differences, position and orientation rows alike, on poses before and after the step.

@@ -144,6 +144,9 @@ struct JointSpec {
     /// Lateral compliance: degrees per N·m about the joint's two lateral directions, then a slide's
     /// degrees per N·m per mm of extension and mm per N·m of shift: `[c1, c2]` or `[c1, c2, c1', c2', s1, s2]`.
     lateral_compliance_deg_per_nm: Option<Vec<f64>>,
+    /// A slide's straightness: `[tilt1, tilt2, roll]` degrees per mm of extension, then `[bow1, bow2]`
+    /// mm per mm² (`thermokin_deform::straightness_row_error`).
+    straightness: Option<[f64; 5]>,
     /// Backlash: half the play between the gears' flanks, degrees (mm for a slide) — the joint sits this
     /// far on the side it last moved towards.
     backlash: Option<f64>,
@@ -191,7 +194,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm, backlash",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm, straightness, backlash",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -426,6 +429,13 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
             finite(path, line, &field("backlash"), &[v])?;
             let slide = robot.chain().joints()[i].kind == JointKind::Prismatic;
             c.backlash = if slide { v } else { units::radians(v) };
+        }
+        if let Some(v) = spec.straightness {
+            finite(path, line, &field("straightness"), &v)?;
+            // Turns in degrees per mm; bows in mm per mm².
+            for (k, (c, &d)) in c.straightness.iter_mut().zip(&v).enumerate() {
+                *c = if k < 3 { units::radians(d) } else { d };
+            }
         }
         if let Some(v) = &spec.lateral_compliance_deg_per_nm {
             let name = field("lateral_compliance_deg_per_nm");
@@ -853,6 +863,18 @@ fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorre
         let slide = if n == 6 { " (then per N·m per mm of extension; the foot's shift, mm per N·m)" } else { "" };
         s.push_str(&format!(
             "# lateral compliance: tilt about the two directions across the axis, deg per N·m{slide}\nlateral_compliance_deg_per_nm = [{}]\n",
+            out.join(", ")
+        ));
+    }
+    if c.straightness != [0.0; 5] {
+        let out: Vec<String> = c
+            .straightness
+            .iter()
+            .enumerate()
+            .map(|(k, &v)| format!("{:e}", if k < 3 { units::degrees(v) } else { v }))
+            .collect();
+        s.push_str(&format!(
+            "# straightness of the guide: tilts about the two directions across the axis and roll about it, deg per mm of extension; bows across, mm per mm²\nstraightness = [{}]\n",
             out.join(", ")
         ));
     }

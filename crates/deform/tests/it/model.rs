@@ -197,3 +197,34 @@ fn coppeliasim_euler_angles_rebuild_the_rotation_outside_the_gimbal_band_only() 
     let r = rot(alpha, std::f64::consts::FRAC_PI_2 - 0.2f64.to_radians(), 0.2);
     assert!(angle_between(&r, &xyz_rotation(&coppeliasim_euler_angles(&r))) < 1e-9);
 }
+
+/// A slide on a guide bent to curvature κ about its first lateral direction (`straightness` with
+/// `σ₁ = −κ/2`): through the robot model, its carriage lies on the circle of radius 1/κ tangent to the
+/// axis at the foot and is turned by κd — the arc's geometry, to the model's second order (κ²d³).
+#[test]
+fn a_bent_guides_carriage_follows_the_arc() {
+    use thermokin_chain::{JointKind, OperatingState, Robot};
+    use thermokin_deform::{JointCorrection, RobotModel};
+    let joints = vec![Joint::prismatic("column", Vector3::new(0.0, 0.0, 250.0), Vector3::z_axis())];
+    let chain = Chain::new(FixedRow::identity(), joints, FixedRow::identity()).unwrap();
+    assert_eq!(chain.joints()[0].kind, JointKind::Prismatic);
+    let [e1, _] = thermokin_chain::lateral_directions(&chain, 0).unwrap();
+    let a = Vector3::z();
+    let kappa = 2e-7; // rad per mm: 0.2 mrad per metre of travel
+    let correction = JointCorrection { straightness: [kappa, 0.0, 0.0, -kappa / 2.0, 0.0], ..JointCorrection::NONE };
+    let model = RobotModel::new(Robot::new("column", chain)).with_joint_corrections(vec![correction]).unwrap();
+    for d in [0.0, 300.0, 800.0, 1500.0] {
+        let pose = model.tool_pose(&[d], &OperatingState::default()).unwrap();
+        let phi = kappa * d;
+        // The arc turns a toward a × e₁ ... by the right-hand rule about e₁: R(φe₁)a = a cosφ + (e₁ × a) sinφ.
+        let across = e1.cross(&a);
+        let expected = Vector3::new(0.0, 0.0, 250.0) + a * (phi.sin() / kappa) + across * ((1.0 - phi.cos()) / kappa);
+        let expected = if d == 0.0 { Vector3::new(0.0, 0.0, 250.0) } else { expected };
+        let gap = (pose.translation.vector - expected).norm();
+        assert!(gap < 2.0 * kappa * kappa * d.powi(3) + 1e-12, "d {d}: {gap}");
+        let turned = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(e1), phi);
+        // The matrices' difference (an angle's extraction by acos loses half the digits near zero).
+        let angle = (pose.rotation.to_rotation_matrix().matrix() - turned.matrix()).norm();
+        assert!(angle < 1e-12 + kappa * kappa * d * d, "d {d}: {angle}");
+    }
+}

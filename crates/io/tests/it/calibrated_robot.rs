@@ -174,3 +174,34 @@ fn targets_carry_their_time_and_temperatures() {
     let e = parse_targets("t.csv".as_ref(), "label,X,Y,Z,time_min\nP1,1,2,3,-4\n").unwrap_err().to_string();
     assert!(e.contains("t.csv:2") && e.contains("time_min"), "{e}");
 }
+
+/// A slide's straightness (an IRB 140 on a lift) written and read back to the same forward model; on a
+/// revolute joint it is refused at the joint's line.
+#[test]
+fn a_slides_straightness_reads_back_and_a_revolute_joint_refuses_one() {
+    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
+    let at = text.find("[[joint]]").unwrap();
+    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\nstraightness = [1.5e-5, -1e-5, 4e-6, 2e-7, -1e-7]\n\n";
+    let lifted = format!("{}{lift}{}", &text[..at], &text[at..]);
+    let model = parse_robot_model_toml("lift.toml".as_ref(), &lifted).unwrap();
+    let c = model.joint_corrections()[0].straightness;
+    assert!((c[0] - 1.5e-5f64.to_radians()).abs() < 1e-20 && c[3] == 2e-7, "{c:?}");
+    assert!(model.bends());
+    let back = parse_robot_model_toml("lift.toml".as_ref(), &robot_model_to_toml(&model)).unwrap();
+    let plain = parse_robot_model_toml("lift.toml".as_ref(), &lifted.replace("straightness = ", "# ")).unwrap();
+    let state = OperatingState::default();
+    let mut moved = 0.0f64;
+    for k in 0..20 {
+        let t = k as f64 * 0.41;
+        let q = [40.0 * k as f64, t.sin(), 0.4 * t.cos(), -0.3 + 0.2 * t.sin(), t, 0.5 * t.cos(), -t];
+        let (a, b) = (model.tool_pose(&q, &state).unwrap(), back.tool_pose(&q, &state).unwrap());
+        assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+        let p = plain.tool_pose(&q, &state).unwrap();
+        moved = moved.max((a.translation.vector - p.translation.vector).norm());
+    }
+    // 1.5e-5 °/mm over 760 mm of travel turns the arm by 0.011°: a tenth of a millimetre at its reach.
+    assert!(moved > 0.1, "{moved}");
+    let on_revolute = text.replacen("[[joint]]\n", "[[joint]]\nstraightness = [1e-5, 0, 0, 0, 0]\n", 1);
+    let e = parse_robot_model_toml("arm.toml".as_ref(), &on_revolute).unwrap_err().to_string();
+    assert!(e.contains("arm.toml") && e.contains("joint[1]") && e.contains("slide's guide"), "{e}");
+}
