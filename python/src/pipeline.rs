@@ -391,9 +391,10 @@ impl PyReport {
 /// `extrapolation` (`"half-arcs"`: a chosen angle- or load-dependent effect must hold beyond the poses it
 /// was fitted on, or `"off"`), `masses` (`"from-file"`, or `"ignore"`: every gravity compliance's loads lumped
 /// and identified from the data), `order` (`"time"`, or `"file"`: the rows are in the order measured —
-/// what a backlash follows). Runs without the GIL.
+/// what a backlash follows), `lateral` (`"slides"`, or `"joints"`: every joint's bearing may tilt under the
+/// gravity moment across its axis, its loads lumped without masses). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per setting.
 pub fn diagnose(
     py: Python<'_>,
@@ -415,6 +416,7 @@ pub fn diagnose(
     extrapolation: Option<&str>,
     masses: Option<&str>,
     order: Option<&str>,
+    lateral: Option<&str>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -448,6 +450,7 @@ pub fn diagnose(
         extrapolation: choice("extrapolation", extrapolation, defaults.extrapolation)?,
         masses: choice("masses", masses, defaults.masses)?,
         order: choice("order", order, defaults.order)?,
+        lateral: choice("lateral", lateral, defaults.lateral)?,
         ..defaults
     };
     config.validate().map_err(setting_error)?;

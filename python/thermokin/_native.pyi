@@ -235,6 +235,7 @@ def diagnose(
     extrapolation: str | None = None,
     masses: str | None = None,
     order: str | None = None,
+    lateral: str | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,

@@ -113,6 +113,81 @@ pub fn gravity_load_basis_into(
     })
 }
 
+/// The number of functions [`lateral_load_basis_into`] gives for joint `joint` (0-based): per lateral
+/// direction, three for the joint's own link and, from the next joint outwards, two per revolute and one
+/// per prismatic joint; zero for a prismatic `joint` or one past the chain.
+pub fn lateral_load_basis_len(chain: &Chain, joint: usize) -> usize {
+    match gravity_load_basis_len(chain, joint) {
+        0 => 0,
+        n => 2 * (n + 1),
+    }
+}
+
+/// The functions of the joint values `q` whose weighted sums are revolute joint `joint`'s gravity moments
+/// across its axis ([`crate::lateral_gravity_moments_into`], along its two [`crate::lateral_directions`]
+/// `uₖ`) under any masses on the links it carries, into `out` (length [`lateral_load_basis_len`]; the
+/// first half along `u₁`, the second along `u₂`).
+///
+/// The moment along a direction `u` is `u · Σ (cₗ − oⱼ) × mₗ g = Σ mₗ (cₗ − oⱼ) · w` with `w = d × u`:
+/// the torque's derivation ([`gravity_load_basis_into`], the module's) with `w` for `d × aⱼ`. The terms
+/// fold inwards alike, with one difference: the joint's own link keeps all three components of its first
+/// moment, since `w` is not perpendicular to the joint's axis (its component along the axis does not
+/// turn with the joint, but still varies with the joints before). So each direction gives
+/// `eⱼ,₁ · (Rⱼᵀ w)`, `eⱼ,₂ · (Rⱼᵀ w)`, `aⱼ · (Rⱼᵀ w)`, then per joint `l` beyond a revolute one's two
+/// `eₗ,ₖ · (Rₗᵀ w)` and a prismatic one's `qₗ (Rₗ aₗ) · w`. A test checks that the lateral moments of a
+/// robot with masses lie in their span.
+pub fn lateral_load_basis_into(
+    chain: &Chain,
+    q: &[f64],
+    given: Option<&[(f64, f64)]>,
+    down: &Unit<Vector3<f64>>,
+    joint: usize,
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
+    out.clear();
+    let n = lateral_load_basis_len(chain, joint);
+    if n == 0 {
+        return Ok(());
+    }
+    out.resize(n, 0.0);
+    let half = n / 2;
+    let joints = chain.joints();
+    let directions = perpendiculars(&joints[joint].axis);
+    let mut w = [Vector3::zeros(); 2];
+    let mut at = 0;
+    chain.visit_joint_frames(q, given, |i, parent: &Matrix3<f64>, rot: &Matrix3<f64>, _origin| {
+        if i < joint {
+            return;
+        }
+        let axis = &joints[i].axis;
+        if i == joint {
+            for k in 0..2 {
+                w[k] = down.cross(&(parent * directions[k]));
+            }
+        }
+        for k in 0..2 {
+            let slot = &mut out[k * half..(k + 1) * half];
+            match joints[i].kind {
+                JointKind::Revolute => {
+                    let rw = rot.transpose() * w[k];
+                    let [e1, e2] = perpendiculars(axis);
+                    slot[at] = e1.dot(&rw);
+                    slot[at + 1] = e2.dot(&rw);
+                    if i == joint {
+                        slot[at + 2] = axis.dot(&rw);
+                    }
+                }
+                JointKind::Prismatic => slot[at] = q[i] * (rot * axis.into_inner()).dot(&w[k]),
+            }
+        }
+        at += match joints[i].kind {
+            JointKind::Revolute if i == joint => 3,
+            JointKind::Revolute => 2,
+            JointKind::Prismatic => 1,
+        };
+    })
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
 mod tests {
@@ -215,5 +290,37 @@ mod tests {
         // A prismatic joint has no basis; one past the chain neither.
         assert_eq!(gravity_load_basis_len(&chain, 0), 0);
         assert_eq!(gravity_load_basis_len(&chain, 7), 0);
+    }
+
+    #[test]
+    fn the_lateral_moments_of_any_masses_lie_in_the_span() {
+        let (chain, masses) = lifted_arm();
+        // Gravity a little off the base's −Z (a registered base): no function may rely on its direction.
+        let down = Unit::new_normalize(Vector3::new(0.03, -0.02, -1.0));
+        let qs = poses(300);
+        for joint in 1..7 {
+            let n = lateral_load_basis_len(&chain, joint);
+            assert_eq!(n, 2 * (gravity_load_basis_len(&chain, joint) + 1));
+            let mut basis = Vec::new();
+            let mut moments = Vec::new();
+            for k in 0..2 {
+                let (mut rows, mut along) = (Vec::new(), Vec::new());
+                for q in &qs {
+                    lateral_load_basis_into(&chain, q, None, &down, joint, &mut basis).unwrap();
+                    assert_eq!(basis.len(), n);
+                    rows.extend_from_slice(&basis[k * n / 2..(k + 1) * n / 2]);
+                    // The moments by another route: crate::lateral_gravity_moments_into sums the masses'
+                    // moments from the tip.
+                    crate::lateral_gravity_moments_into(&chain, &masses, q, None, &down, &mut moments).unwrap();
+                    along.push(moments[joint][k]);
+                }
+                let a = DMatrix::from_row_slice(qs.len(), n / 2, &rows);
+                let b = DVector::from_vec(along);
+                let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
+                let misfit = (&a * &x - &b).norm() / b.norm().max(1e-300);
+                assert!(misfit < 1e-9, "joint {} direction {k}: {misfit}", joint + 1);
+            }
+        }
+        assert_eq!(lateral_load_basis_len(&chain, 0), 0);
     }
 }

@@ -90,7 +90,7 @@ pub enum Command {
     Plan(PlanArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
     #[command(
-        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential), compliance_coupling (joints J and J+1 each sag by c times the other's\ngravity torque), lateral_compliance (the joint's row tilts under the gravity moment across its axis, a slide's also bends with\nits extension: needs the file's masses), straightness (a slide's guide: the carriage tilts and rolls with the extension, deg/mm,\nand bows with its square, per mm); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
+        after_help = "Examples:\n  thermokin simulate --robot configs/irb140.toml --effect joint_offset:2 --noise 0.005 --poses 240 --minutes 240 -o M.csv\n  thermokin simulate --robot configs/irb140.toml --effect link_deviation:3=0.3,-0.2,0.25,0.02,0,0.015 --effect base_frame -o M.csv\n\nEffect: KIND[:JOINT][=VALUES] with KIND one of base_frame, tool_frame, joint_offset, link_deviation,\njoint_compliance, joint_scale (gear ratio, Δq = s·q), periodic (Δq = a1 sin q + b1 cos q + a2 sin 2q + b2 cos 2q),\nthermal_drift (linear), thermal_drift_exp (exponential), compliance_coupling (joints J and J+1 each sag by c times the other's\ngravity torque), lateral_compliance (the joint's row tilts under the gravity moment across its axis, a slide's also bends with\nits extension; without masses a revolute joint's loads are lumped), straightness (a slide's guide: the carriage tilts and rolls with the extension, deg/mm,\nand bows with its square, per mm); values in mm, degrees, minutes and degrees per N·m (default: a seeded random effect of typical size)."
     )]
     Simulate(SimulateArgs),
     /// Reproduce the paper's case studies (Tables 13–18) from the bundled fixtures, and compare with the
@@ -377,6 +377,11 @@ pub struct DiagnoseArgs {
     /// trust) each joint's loads lumped and identified from the data, as for a file that has none.
     #[arg(long, value_parser = choice(Masses::CHOICES), default_value_t = Config::default().masses)]
     pub masses: Masses,
+    /// Which joints may tilt under the gravity moment across their axis (a lateral compliance): a
+    /// column's (with the file's masses), or every joint's bearing too — a humanoid's torso carrying its
+    /// arm, elastic joints — on the file's masses or, without them, its loads lumped from the data.
+    #[arg(long, value_parser = choice(thermokin_identify::Lateral::CHOICES), default_value_t = Config::default().lateral)]
+    pub lateral: thermokin_identify::Lateral,
     /// Where the order the poses were measured in comes from, for a gearbox's backlash (an offset by the
     /// direction each joint last moved in): the time_min column, or also the file's lines when the file
     /// lists the poses as they were measured (`file`; a time column still decides where there is one).

@@ -108,6 +108,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         folds_by: a.folds_by,
         outliers: a.outliers,
         masses: a.masses,
+        lateral: a.lateral,
         order: a.order,
         shrinkage: a.shrinkage,
         extrapolation: a.extrapolation,

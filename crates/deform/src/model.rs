@@ -130,6 +130,14 @@ pub fn lateral_row_error(
     ErrorParams::new(translation, rotation)
 }
 
+/// The tilts `[φ₁, φ₂]` of a lateral compliance known without masses: the weights times the functions of
+/// [`thermokin_chain::lateral_load_basis_into`], the first half of each about the first direction.
+pub fn lumped_tilts(basis: &[f64], weights: &[f64]) -> [f64; 2] {
+    let half = basis.len() / 2;
+    let dot = |k: usize| basis[k * half..(k + 1) * half].iter().zip(&weights[k * half..]).map(|(f, w)| f * w).sum();
+    [dot(0), dot(1)]
+}
+
 /// The error a slide's straightness adds to its row (eq. 19's angles and the row's translation, in its
 /// parent's frame) at extension `d` (mm), `directions` `eₖ` its two lateral directions
 /// ([`thermokin_chain::lateral_directions`]), `axis` its unit axis `a`, `c = [κ₁, κ₂, ρ, σ₁, σ₂]`:
@@ -293,6 +301,8 @@ pub struct RobotModel {
     joints: Vec<JointCorrection>,
     /// Per joint: the weights of a gravity compliance known without masses (empty when none).
     gravity_loads: Vec<Vec<f64>>,
+    /// Per joint: the weights of a lateral compliance known without masses (empty when none).
+    lateral_loads: Vec<Vec<f64>>,
     drift: Vec<DriftRow>,
     payload: Option<LinkMass>,
     down: Unit<Vector3<f64>>,
@@ -306,6 +316,7 @@ impl RobotModel {
             robot,
             joints: vec![JointCorrection::NONE; n],
             gravity_loads: vec![Vec::new(); n],
+            lateral_loads: vec![Vec::new(); n],
             drift: Vec::new(),
             payload: None,
             down: -Vector3::z_axis(),
@@ -380,6 +391,34 @@ impl RobotModel {
             }
         }
         self.gravity_loads = loads;
+        Ok(self)
+    }
+
+    /// The same model with a lateral compliance known without masses on some joints: per joint (one entry
+    /// each) none, or the weights `θ` of its row's tilts `φₖ = Σ θₖ,b fₖ,b(q)` about its two lateral
+    /// directions (radians; radians per mm for a term of a slide it carries) over the functions of
+    /// [`thermokin_chain::lateral_load_basis_into`] at the commanded joint values (the first half about
+    /// the first direction) — the bearing's compliance lumped with the unknown first moments of the links
+    /// it carries, as calibrated.
+    pub fn with_lateral_loads(mut self, loads: Vec<Vec<f64>>) -> Result<Self, DeformError> {
+        let chain = self.robot.chain();
+        if loads.len() != chain.dof() {
+            return Err(DeformError::RowCount { rows: loads.len(), joints: chain.dof() });
+        }
+        for (j, l) in loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+            let expected = thermokin_chain::lateral_load_basis_len(chain, j);
+            let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
+            if expected == 0 {
+                return bad("a lateral compliance without masses is for a revolute joint".into());
+            }
+            if l.len() != expected {
+                return bad(format!("{} lateral-load weights for the {expected} this joint's arm takes", l.len()));
+            }
+            if l.iter().any(|v| !v.is_finite()) {
+                return bad("every lateral-load weight must be finite".into());
+            }
+        }
+        self.lateral_loads = loads;
         Ok(self)
     }
 
@@ -487,6 +526,12 @@ impl RobotModel {
         &self.gravity_loads
     }
 
+    /// Per joint, the weights of a lateral compliance known without masses (empty when none):
+    /// [`RobotModel::with_lateral_loads`].
+    pub fn lateral_loads(&self) -> &[Vec<f64>] {
+        &self.lateral_loads
+    }
+
     /// `true` when the joint values the chain sees differ from the commanded ones (a gear ratio, a cyclic
     /// error, a compliance with or without masses).
     pub fn corrects_joints(&self) -> bool {
@@ -502,7 +547,7 @@ impl RobotModel {
     /// `true` when some joint's row tilts with the configuration (a lateral compliance, a slide's
     /// straightness): the chain in force then depends on the joint values ([`RobotModel::chain_at_joints`]).
     pub fn bends(&self) -> bool {
-        self.joints.iter().any(JointCorrection::bends)
+        self.joints.iter().any(JointCorrection::bends) || self.lateral_loads.iter().any(|l| !l.is_empty())
     }
 
     /// The drift rows.
@@ -609,6 +654,9 @@ impl RobotModel {
             if c.lateral != [0.0; 6] {
                 out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
             }
+            if !self.lateral_loads[j].is_empty() {
+                out.push(format!("joint {} ({}): lateral compliance without masses", j + 1, names[j]));
+            }
             if c.straightness != [0.0; 5] {
                 out.push(format!("joint {} ({}): straightness of its guide", j + 1, names[j]));
             }
@@ -671,6 +719,16 @@ impl RobotModel {
             let bend = lateral_row_error(&c.lateral, &directions, &axis, moments, commanded[j])
                 .add(&straightness_row_error(&c.straightness, &directions, &axis, commanded[j]));
             let row = chain.joints()[j].error.add(&bend);
+            chain.set_joint_error(j, row)?;
+        }
+        let mut basis = Vec::new();
+        for (j, weights) in self.lateral_loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+            let plain = self.robot.chain();
+            thermokin_chain::lateral_load_basis_into(plain, commanded, None, &self.down, j, &mut basis)?;
+            let Some(directions) = thermokin_chain::lateral_directions(plain, j) else { continue };
+            let axis = plain.joints()[j].axis.into_inner();
+            let tilts = lumped_tilts(&basis, weights);
+            let row = chain.joints()[j].error.add(&lateral_row_error(&tilts, &directions, &axis, [1.0; 2], 0.0));
             chain.set_joint_error(j, row)?;
         }
         Ok(chain)

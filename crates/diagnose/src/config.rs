@@ -60,6 +60,9 @@ pub struct Config {
     pub extrapolation: Extrapolation,
     /// Whether the robot file's link masses are trusted ([`Masses`]).
     pub masses: Masses,
+    /// Which joints' lateral compliance is a candidate ([`thermokin_identify::Lateral`]): a column's by
+    /// default, every joint's bearing when the user says the joints are elastic.
+    pub lateral: thermokin_identify::Lateral,
     /// Where the order the poses were measured in comes from, for a backlash (the direction each joint
     /// last moved in): their times, or also the file's lines when it lists them as measured
     /// ([`thermokin_chain::MeasuringOrder`]). A step of the measurement frame is scanned in the file's
@@ -237,7 +240,12 @@ pub enum Validation {
 impl Config {
     /// The measurement setup these settings describe: frame, tool, orientation lever.
     pub fn setup(&self) -> Setup {
-        Setup { frame: self.frame, tool: self.tool, orientation_lever_mm: self.orientation_lever_mm }
+        Setup {
+            frame: self.frame,
+            tool: self.tool,
+            orientation_lever_mm: self.orientation_lever_mm,
+            lateral: self.lateral,
+        }
     }
 
     /// The RMS a model at the measurement noise leaves (3-D, or position and orientation combined with
@@ -323,6 +331,7 @@ impl Default for Config {
             shrinkage: Shrinkage::default(),
             extrapolation: Extrapolation::default(),
             masses: Masses::default(),
+            lateral: thermokin_identify::Lateral::default(),
             order: thermokin_chain::MeasuringOrder::default(),
         }
     }

@@ -58,6 +58,7 @@ fn shaped(e: Effect) -> bool {
             | Effect::JointCompliance(_)
             | Effect::LumpedCompliance(..)
             | Effect::LateralCompliance(..)
+            | Effect::LumpedLateralCompliance(..)
             | Effect::Straightness(_)
             | Effect::ComplianceCoupling(_)
             | Effect::Backlash(_)

@@ -120,7 +120,13 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     let screen = OutlierScreen {
         model: which,
         with_compliance: effects.iter().any(|e| {
-            matches!(e, Effect::JointCompliance(_) | Effect::LumpedCompliance(..) | Effect::LateralCompliance(..))
+            matches!(
+                e,
+                Effect::JointCompliance(_)
+                    | Effect::LumpedCompliance(..)
+                    | Effect::LateralCompliance(..)
+                    | Effect::LumpedLateralCompliance(..)
+            )
         }),
         scale_mm,
         scale_from,

@@ -269,6 +269,14 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let moved = turn * lever_of(j) + v[3].hypot(v[4]) * d * d;
             over("the turn of the carriage at the full extension", deg(turn), moved, lever_of(j), "°")
         }
+        Effect::LumpedLateralCompliance(j, n) => {
+            // As a compliance without masses: each function at most 1 in size, the sum of each direction's
+            // weights bounds its tilt; the larger of the two at the row's lever.
+            let half = n as usize / 2;
+            let tilt =
+                (0..2).map(|k| v[k * half..(k + 1) * half].iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max);
+            over("the largest tilt under gravity", deg(tilt), tilt * lever_of(j), lever_of(j), "°")
+        }
         Effect::LumpedCompliance(j, _) => {
             // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of
             // the weights bounds the deflection over every pose.

@@ -93,6 +93,7 @@ impl HiddenEffect {
                 }
                 (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
                 (Effect::LumpedCompliance(..), _) => rng.random_range(-0.02..0.02),
+                (Effect::LumpedLateralCompliance(..), _) => rng.random_range(-0.005..0.005),
                 (Effect::ComplianceCoupling(_), _) => {
                     rng.random_range(3e-4..1e-3) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }
                 }

@@ -191,6 +191,13 @@ pub enum Effect {
     /// [`thermokin_deform::lateral_row_error`]). The count is 2 for a revolute joint and 6 for a prismatic
     /// one: make one with [`Effect::named`] (`"lateral_compliance"`; it needs the file's masses).
     LateralCompliance(JointIndex, u8),
+    /// Lateral gravity compliance of revolute joint `j` when the robot file carries no masses: its row
+    /// tilts about the two directions across its axis by `φₖ = Σ θₖ,b fₖ,b(q)`, the functions of
+    /// [`thermokin_chain::lateral_load_basis_into`] whose span holds the gravity moments across the joint
+    /// under any masses of the links it carries — the bearing's compliance lumped with their unknown first
+    /// moments (radians; radians per mm for a slide it carries). The count is the basis' length, fixed by
+    /// the robot: make one with [`Effect::named`] (`"lateral_compliance"` on a robot without masses).
+    LumpedLateralCompliance(JointIndex, u8),
     /// Straightness of a slide's guide ([`thermokin_deform::straightness_row_error`]): its row tilts about
     /// the two directions across its axis and rolls about it in proportion to the extension `d`, and the
     /// carriage bows across in proportion to `d²` — `[κ₁, κ₂, ρ, σ₁, σ₂]`, radians per mm and per mm (5;
@@ -258,7 +265,7 @@ impl Effect {
             }
             "joint_compliance" => Ok(Effect::JointCompliance(on(joint)?)),
             "lateral_compliance" if robot.masses().iter().all(Option::is_none) => {
-                Err(IdentifyError::MassesNeeded { effect: name.to_string() })
+                Effect::lumped_lateral_compliance(robot, on(joint)?)
             }
             "lateral_compliance" => Ok(Effect::lateral_compliance(robot, on(joint)?)),
             "straightness" => {
@@ -293,6 +300,17 @@ impl Effect {
         }
     }
 
+    /// Lateral gravity compliance of revolute joint `j` with no masses known
+    /// ([`Effect::LumpedLateralCompliance`]); for a slide (whose bending needs the moments themselves) an
+    /// error saying it needs the file's masses.
+    pub fn lumped_lateral_compliance(robot: &Robot, j: JointIndex) -> Result<Self, IdentifyError> {
+        let n = thermokin_chain::lateral_load_basis_len(robot.chain(), j.index());
+        match u8::try_from(n) {
+            Ok(count) if count > 0 => Ok(Effect::LumpedLateralCompliance(j, count)),
+            _ => Err(IdentifyError::MassesNeeded { effect: "lateral_compliance of a slide".into() }),
+        }
+    }
+
     /// Lateral gravity compliance of joint `j` ([`Effect::LateralCompliance`]): two parameters for a
     /// revolute joint, six for a slide (it bends with its extension, and its foot shifts).
     pub fn lateral_compliance(robot: &Robot, j: JointIndex) -> Self {
@@ -321,6 +339,7 @@ impl Effect {
             | Effect::JointCompliance(j)
             | Effect::LumpedCompliance(j, _)
             | Effect::LateralCompliance(j, _)
+            | Effect::LumpedLateralCompliance(j, _)
             | Effect::Straightness(j)
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
@@ -368,7 +387,9 @@ impl Effect {
             | Effect::Backlash(_) => 1,
             Effect::Periodic(_) => 4,
             Effect::Straightness(_) => 5,
-            Effect::LumpedCompliance(_, n) | Effect::LateralCompliance(_, n) => *n as usize,
+            Effect::LumpedCompliance(_, n)
+            | Effect::LateralCompliance(_, n)
+            | Effect::LumpedLateralCompliance(_, n) => *n as usize,
         }
     }
 
@@ -389,7 +410,7 @@ impl Effect {
             Effect::LinkDeviation(_) => "link_deviation",
             Effect::JointCompliance(_) | Effect::LumpedCompliance(..) => "joint_compliance",
             Effect::ComplianceCoupling(_) => "compliance_coupling",
-            Effect::LateralCompliance(..) => "lateral_compliance",
+            Effect::LateralCompliance(..) | Effect::LumpedLateralCompliance(..) => "lateral_compliance",
             Effect::Straightness(_) => "straightness",
             Effect::JointScale(_) => "joint_scale",
             Effect::Periodic(_) => "periodic",
@@ -406,7 +427,7 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Linear) => " (linear)",
             Effect::ThermalDrift(_, DriftShape::Exponential) => " (exponential)",
             Effect::ThermalDrift(_, DriftShape::Temperature) => " (temperature)",
-            Effect::LumpedCompliance(..) => " (no masses)",
+            Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
             _ => "",
@@ -439,6 +460,10 @@ impl Effect {
                 .iter()
                 .map(|t| format!("{prefix}.{t}"))
                 .collect(),
+            Effect::LumpedLateralCompliance(_, n) => {
+                let half = *n as usize / 2;
+                (0..2 * half).map(|b| format!("{prefix}.tilt{}_load{:02}_deg", b / half + 1, b % half + 1)).collect()
+            }
             Effect::Straightness(_) => {
                 ["tilt1_deg_per_mm", "tilt2_deg_per_mm", "roll_deg_per_mm", "bow1_per_mm", "bow2_per_mm"]
                     .iter()
@@ -484,6 +509,7 @@ impl Effect {
             Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
                 | Effect::LateralCompliance(..)
+                | Effect::LumpedLateralCompliance(..)
                 | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
@@ -514,6 +540,7 @@ impl Effect {
                 Effect::JointOffset(_)
                 | Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
+                | Effect::LumpedLateralCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::Periodic(_)
                 | Effect::Backlash(_)

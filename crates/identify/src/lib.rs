@@ -26,7 +26,7 @@ mod residuals;
 mod sampling;
 mod terms;
 
-pub use catalogue::{FrameMode, Setup, ToolMode, approach_counts, gravity_compliance};
+pub use catalogue::{FrameMode, Lateral, Setup, ToolMode, approach_counts, gravity_compliance};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
 pub use effect::{
     DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, SensorId, StepAt,

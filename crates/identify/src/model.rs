@@ -179,13 +179,17 @@ impl Model {
         let dof = robot.chain().dof();
         let mut joints = vec![JointCorrection::NONE; dof];
         let mut loads: Vec<Vec<f64>> = vec![Vec::new(); dof];
+        let mut lateral_loads: Vec<Vec<f64>> = vec![Vec::new(); dof];
         let mut drift = Vec::new();
         let first = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min));
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
-                Effect::LumpedCompliance(j, n) => {
-                    let own = &mut loads[j.index()];
+                Effect::LumpedCompliance(j, n) | Effect::LumpedLateralCompliance(j, n) => {
+                    let own = match e {
+                        Effect::LumpedCompliance(..) => &mut loads[j.index()],
+                        _ => &mut lateral_loads[j.index()],
+                    };
                     own.resize(n as usize, 0.0);
                     own.iter_mut().zip(&theta[o..o + n as usize]).for_each(|(l, t)| *l += t);
                 }
@@ -233,6 +237,7 @@ impl Model {
             .with_gravity(down)
             .with_joint_corrections(joints)?
             .with_gravity_loads(loads)?
+            .with_lateral_loads(lateral_loads)?
             .with_drift(drift)?)
     }
 
@@ -286,6 +291,7 @@ impl Model {
                 Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
                 | Effect::LateralCompliance(..)
+                | Effect::LumpedLateralCompliance(..)
                 | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
                 | Effect::JointScale(_)
@@ -343,6 +349,7 @@ impl Model {
                 | Effect::ThermalDrift(j, _)
                 | Effect::SensorDrift(j, _)
                 | Effect::LateralCompliance(j, _)
+                | Effect::LumpedLateralCompliance(j, _)
                 | Effect::Straightness(j) => rows.joints[j.index()] = true,
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)

@@ -128,6 +128,7 @@ impl Model {
                             Effect::JointCompliance(_)
                                 | Effect::LumpedCompliance(..)
                                 | Effect::LateralCompliance(..)
+                                | Effect::LumpedLateralCompliance(..)
                                 | Effect::ComplianceCoupling(_)
                         )
                     })
@@ -196,19 +197,8 @@ impl Model {
                     q[j] += theta[o] * cached.torques[j];
                 }
                 Effect::LumpedCompliance(j, n) => {
-                    // The basis at the measured joint values (as the torques are), kept for the Jacobian.
                     let (j, n) = (j.index(), n as usize);
-                    if let Some((chain, down)) = &cached.gravity {
-                        thermokin_chain::gravity_load_basis_into(
-                            chain,
-                            &m.q,
-                            inputs.sin_cos,
-                            down,
-                            j,
-                            &mut cached.basis,
-                        )?;
-                    }
-                    cached.loads[o..o + n].copy_from_slice(&cached.basis[..n]);
+                    load_basis(cached, *e, &m.q, inputs.sin_cos, o)?;
                     q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
                 }
                 Effect::ComplianceCoupling(j) => {
@@ -232,6 +222,12 @@ impl Model {
                     let (j, s) = (j.index(), inputs.sensors.get(sensor.index()).copied().unwrap_or(0.0));
                     add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
+                }
+                Effect::LumpedLateralCompliance(j, n) => {
+                    let n = n as usize;
+                    load_basis(cached, *e, &m.q, inputs.sin_cos, o)?;
+                    let tilts = thermokin_deform::lumped_tilts(&cached.loads[o..o + n], &theta[o..o + n]);
+                    add_to_row(&mut drift_rows, j.index(), bent_row(*e, robot.chain(), &tilts, [1.0; 2], 0.0));
                 }
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
                     let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j.index()]);
@@ -414,6 +410,21 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
+                Effect::LumpedLateralCompliance(j, n) => {
+                    // ∂p/∂θₖ,b = ∂p/∂angles · eₖ fₖ,b(q).
+                    let (j, half) = (j.index(), n as usize / 2);
+                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+                    let row = layout.joint(j) + 3;
+                    for (k, dir) in dirs.iter().enumerate() {
+                        for r in 0..6 {
+                            let turn = (0..3).map(|c| pj[(r, row + c)] * dir[c]).sum::<f64>();
+                            for b in 0..half {
+                                let col = o + k * half + b;
+                                jac[(r, col)] = turn * cached.loads[col];
+                            }
+                        }
+                    }
+                }
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
                     bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
                 }
@@ -502,11 +513,39 @@ fn bent_row(e: Effect, chain: &Chain, c: &[f64], moments: [f64; 2], d: f64) -> E
     let directions = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
     let axis = chain.joints()[j].axis.into_inner();
     match e {
-        Effect::LateralCompliance(..) => thermokin_deform::lateral_row_error(c, &directions, &axis, moments, d),
+        // Without masses the tilts themselves, at unit moments.
+        Effect::LateralCompliance(..) | Effect::LumpedLateralCompliance(..) => {
+            thermokin_deform::lateral_row_error(c, &directions, &axis, moments, d)
+        }
         Effect::Straightness(_) => {
             let c = [c[0], c[1], c[2], c[3], c[4]];
             thermokin_deform::straightness_row_error(&c, &directions, &axis, d)
         }
         _ => ErrorParams::ZERO,
     }
+}
+
+/// A compliance without masses' functions of the measured joint values `q` (as the torques are computed,
+/// on the model's gravity chain), kept in `cached.loads` at the effect's offset `o` for its Jacobian:
+/// [`thermokin_chain::gravity_load_basis_into`]'s for a joint's, [`thermokin_chain::lateral_load_basis_into`]'s
+/// for a lateral one.
+fn load_basis(
+    cached: &mut ChainCache,
+    e: Effect,
+    q: &[f64],
+    given: Option<&[(f64, f64)]>,
+    o: usize,
+) -> Result<(), IdentifyError> {
+    let Some(j) = e.joint().map(|j| j.index()) else { return Ok(()) };
+    if let Some((chain, down)) = &cached.gravity {
+        match e {
+            Effect::LumpedCompliance(..) => {
+                thermokin_chain::gravity_load_basis_into(chain, q, given, down, j, &mut cached.basis)?
+            }
+            _ => thermokin_chain::lateral_load_basis_into(chain, q, given, down, j, &mut cached.basis)?,
+        }
+    }
+    let n = e.len();
+    cached.loads[o..o + n].copy_from_slice(&cached.basis[..n]);
+    Ok(())
 }

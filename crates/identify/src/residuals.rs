@@ -263,7 +263,7 @@ mod tests {
         assert_eq!(effects, vec![Effect::LateralCompliance(joint(0), 6), Effect::LateralCompliance(joint(2), 2)]);
         let model = Model::new(&robot, effects).unwrap();
         let terms = PoseTerms::of(&robot, &data, 0.0);
-        // Tilts of ~1e-4 rad at a few hundred N·m; the bending term per mm, the shift in mm per N·m.
+        // Weights of 1e-3 rad: tilts of a few 1e-4 rad.at a few hundred N·m; the bending term per mm, the shift in mm per N·m.
         let theta = vec![3e-7, -2e-7, 4e-10, 1e-10, 2e-4, -3e-4, 5e-7, 2e-7];
         jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
         let exported = model.robot_model(&robot, &theta, &data).unwrap();
@@ -278,6 +278,51 @@ mod tests {
             moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
         }
         // And it moves the tool: by a tenth of a millimetre or more somewhere.
+        assert!(moved > 0.1, "{moved}");
+    }
+
+    /// Lateral compliances of a lifted IRB 140 whose file has no masses (their loads lumped): the
+    /// shoulder's and the elbow's — the analytic Jacobian against central differences, and the exported
+    /// robot's forward model against the fit's prediction.
+    #[test]
+    fn a_lumped_lateral_compliance_matches_the_differences_and_its_export() {
+        let arm = irb140_table9();
+        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
+            .with_limits(0.0, 800.0);
+        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
+        let chain = thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap();
+        let robot = Robot::new("lifted IRB 140", chain);
+        let mut data = eight_poses(13);
+        for (k, m) in data.measurements.iter_mut().enumerate() {
+            m.q.insert(0, 100.0 * k as f64);
+        }
+        let effects = vec![
+            Effect::named(&robot, "lateral_compliance", Some(2)).unwrap(),
+            Effect::named(&robot, "lateral_compliance", Some(3)).unwrap(),
+        ];
+        let joint = |j| JointIndex::of(&robot, j).unwrap();
+        // Per direction: 3 for the joint's own link, 2 per revolute joint beyond.
+        assert_eq!(
+            effects,
+            vec![Effect::LumpedLateralCompliance(joint(2), 22), Effect::LumpedLateralCompliance(joint(3), 18)]
+        );
+        assert!(Effect::named(&robot, "lateral_compliance", Some(0)).is_err(), "a slide's needs the masses");
+        let model = Model::new(&robot, effects).unwrap();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        // Weights of 1e-3 rad: tilts of a few 1e-4 rad.
+        let theta: Vec<f64> = (0..40).map(|k| 1e-3 * ((k as f64 * 0.7).sin())).collect();
+        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
+        let exported = model.robot_model(&robot, &theta, &data).unwrap();
+        assert!(exported.bends());
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
+        let (plain, mut moved) = (robot.chain(), 0.0f64);
+        for (i, m) in data.measurements.iter().enumerate() {
+            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
+            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
+            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
+        }
         assert!(moved > 0.1, "{moved}");
     }
 

@@ -144,6 +144,9 @@ struct JointSpec {
     /// Lateral compliance: degrees per N·m about the joint's two lateral directions, then a slide's
     /// degrees per N·m per mm of extension and mm per N·m of shift: `[c1, c2]` or `[c1, c2, c1', c2', s1, s2]`.
     lateral_compliance_deg_per_nm: Option<Vec<f64>>,
+    /// Lateral compliance known without masses, degrees (degrees per mm for a slide the joint carries):
+    /// the weights of `thermokin_chain::lateral_load_basis_into`'s functions.
+    lateral_load_deg: Option<Vec<f64>>,
     /// A slide's straightness: `[tilt1, tilt2, roll]` degrees per mm of extension, then `[bow1, bow2]`
     /// mm per mm² (`thermokin_deform::straightness_row_error`).
     straightness: Option<[f64; 5]>,
@@ -194,7 +197,7 @@ pub fn parse_robot_toml(path: &Path, text: &str) -> Result<Robot, IoError> {
         return Err(IoError::input(
             path,
             None,
-            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm, straightness, backlash",
+            "drift, scale, cyclic_deg, compliance_deg_per_nm, compliance_coupling_deg_per_nm, gravity_load_deg, lateral_compliance_deg_per_nm, lateral_load_deg, straightness, backlash",
             format!(
                 "this robot carries state-dependent corrections ({what}), which this command would drop: use fk, ik or compensate with it"
             ),
@@ -401,6 +404,7 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
     let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
     let mut joints = vec![JointCorrection::NONE; robot.chain().dof()];
     let mut loads = vec![Vec::new(); robot.chain().dof()];
+    let mut lateral_loads = vec![Vec::new(); robot.chain().dof()];
     for (i, spanned) in file.joint.iter().enumerate() {
         let (line, spec) = (at(spanned.span()), spanned.get_ref());
         let field = |f: &str| format!("joint[{}].{f}", i + 1);
@@ -424,6 +428,10 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         if let Some(v) = &spec.gravity_load_deg {
             finite(path, line, &field("gravity_load_deg"), v)?;
             loads[i] = v.iter().map(|&d| units::radians(d)).collect();
+        }
+        if let Some(v) = &spec.lateral_load_deg {
+            finite(path, line, &field("lateral_load_deg"), v)?;
+            lateral_loads[i] = v.iter().map(|&d| units::radians(d)).collect();
         }
         if let Some(v) = spec.backlash {
             finite(path, line, &field("backlash"), &[v])?;
@@ -456,6 +464,7 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
     let mut model = RobotModel::new(robot)
         .with_joint_corrections(joints)
         .and_then(|m| m.with_gravity_loads(loads))
+        .and_then(|m| m.with_lateral_loads(lateral_loads))
         .map_err(|e| {
             let joint = match &e {
                 thermokin_deform::DeformError::BadCorrection { joint, .. } => *joint,
@@ -779,6 +788,14 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
                 model.gravity_loads()[i].iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
             s.push_str(&format!(
                 "# gravity compliance without masses: the weights of the gravity-load functions of this joint\ngravity_load_deg = [{}]\n",
+                deg.join(", ")
+            ));
+        }
+        if !model.lateral_loads()[i].is_empty() {
+            let deg: Vec<String> =
+                model.lateral_loads()[i].iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
+            s.push_str(&format!(
+                "# lateral compliance without masses: the weights of the lateral-load functions of this joint (about its first direction across the axis, then its second)\nlateral_load_deg = [{}]\n",
                 deg.join(", ")
             ));
         }

@@ -41,10 +41,15 @@ fn calibrated() -> RobotModel {
     // Joint 3's gravity compliance known without masses: 8 weights (two per revolute link it carries).
     let mut loads = vec![Vec::new(); 6];
     loads[2] = (0..8).map(|k| (0.01 * (k as f64 - 3.5)).to_radians()).collect();
+    // Joint 4's bearing tilting without masses: 2 × (3 + 2 · 2) weights.
+    let mut lateral = vec![Vec::new(); 6];
+    lateral[3] = (0..14).map(|k| (0.004 * (k as f64 - 6.0)).to_radians()).collect();
     RobotModel::new(robot)
         .with_joint_corrections(joints)
         .unwrap()
         .with_gravity_loads(loads)
+        .unwrap()
+        .with_lateral_loads(lateral)
         .unwrap()
         .with_drift(drift)
         .unwrap()
@@ -117,10 +122,17 @@ fn a_calibrated_robot_reads_back_to_the_same_forward_model() {
         let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
         assert!(e.contains("cal.toml") && e.contains("joint[2]") && e.contains(says), "{e}");
     }
+    assert!(e.contains("joint 4 (") && e.contains("lateral compliance without masses"), "{e}");
     // A weight count that is not the joint's is refused, naming the joint and its line.
     let wrong = text.replacen("gravity_load_deg = [", "gravity_load_deg = [0.1, ", 1);
     let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
     assert!(e.contains("cal.toml") && e.contains("joint[3]") && e.contains("9 gravity-load weights for the 8"), "{e}");
+    let wrong = text.replacen("lateral_load_deg = [", "lateral_load_deg = [0.1, ", 1);
+    let e = parse_robot_model_toml("cal.toml".as_ref(), &wrong).unwrap_err().to_string();
+    assert!(
+        e.contains("cal.toml") && e.contains("joint[4]") && e.contains("15 lateral-load weights for the 14"),
+        "{e}"
+    );
 }
 
 #[test]
