@@ -34,6 +34,49 @@ pub fn profile_of(spec: &str, dof: usize) -> PyResult<TimeProfile> {
     thermokin_io::read_profile_spec(&spec, dof).map_err(io)
 }
 
+/// The directions of approach a call takes: one list for every row (`[1, -1, 0, …]`, per joint), or one
+/// list per row of a batch (`(N, n)`).
+#[derive(FromPyObject)]
+pub enum Approaches {
+    /// One list per row of the batch.
+    PerRow(Vec<Vec<i64>>),
+    /// One list for every row.
+    One(Vec<i64>),
+}
+
+/// The operating states of a batch of `rows`: [`state`] once when `approach` is one list (or none), once
+/// per row when it gives one list per row — an error naming the counts when they differ.
+pub fn states(
+    time_min: Option<f64>,
+    temps: Option<HashMap<String, f64>>,
+    approach: Option<Approaches>,
+    rows: usize,
+) -> PyResult<Vec<OperatingState>> {
+    match approach {
+        None => Ok(vec![state(time_min, temps, None)?]),
+        Some(Approaches::One(a)) => Ok(vec![state(time_min, temps, Some(a))?]),
+        Some(Approaches::PerRow(per)) => {
+            if per.len() != rows {
+                return Err(input(format!(
+                    "approach: {} rows of directions for {rows} rows (give one list for all, or one per row)",
+                    per.len()
+                )));
+            }
+            per.into_iter()
+                .enumerate()
+                .map(|(i, a)| {
+                    state(time_min, temps.clone(), Some(a)).map_err(|e| input(format!("approach row {i}: {e}")))
+                })
+                .collect()
+        }
+    }
+}
+
+/// The state of row `i` of a batch whose states [`states`] gave.
+pub fn state_of(states: &[OperatingState], i: usize) -> &OperatingState {
+    if states.len() == 1 { &states[0] } else { &states[i] }
+}
+
 /// The operating state of `time_min` (minutes of the warm-up), `temps` (°C by sensor name; the
 /// `temp_` prefix added when left out) and `approach` (per joint the direction it last moved in: 1 rising,
 /// -1 falling, 0 not known — what a backlash follows).

@@ -15,7 +15,7 @@ use thermokin_ik::{Goal, Params, Solution, Workspace};
 use thermokin_io::units::{joints_to_external, joints_to_internal, rotation_from_matrix};
 
 use crate::arrays::{Rows, output};
-use crate::convert::{profile_of, semantics_of, state};
+use crate::convert::{Approaches, profile_of, semantics_of, state_of, states};
 use crate::errors::{input, io, must_exist};
 
 /// A robot: its kinematic chain (same-orientation joint frames with their error parameters) and what a
@@ -200,8 +200,8 @@ impl PyRobot {
     /// Forward kinematics: `q` in degrees (mm for prismatic joints), `(n,)` or `(N, n)`; returns the tool
     /// pose in the base frame as a 4×4 homogeneous matrix in mm, `(4, 4)` or `(N, 4, 4)`. `time_min` and
     /// `temps` (°C by sensor) give the operating state of a calibrated robot's drift, `approach` (per joint
-    /// 1, -1 or 0: the direction it last moved in) a backlash's side. A batch runs on every core without
-    /// the GIL.
+    /// 1, -1 or 0: the direction it last moved in; one list for every row, or one per row `(N, n)`) a
+    /// backlash's side. A batch runs on every core without the GIL.
     #[pyo3(signature = (q, *, time_min=None, temps=None, approach=None))]
     fn fk<'py>(
         &self,
@@ -209,16 +209,18 @@ impl PyRobot {
         q: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
-        approach: Option<Vec<i64>>,
+        approach: Option<Approaches>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let state = state(time_min, temps, approach)?;
-        self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();
         let rows = Rows::read(&q, n, "q")?;
+        let states = states(time_min, temps, approach, rows.count())?;
+        for s in &states {
+            self.model.check_state(s, false, false).map_err(input)?;
+        }
         let batch = rows.batch;
         let model = &self.model;
-        let plain = model.is_plain() && state == OperatingState::default();
+        let plain = model.is_plain() && states.iter().all(|s| *s == OperatingState::default());
         let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
         let data = py.detach(|| -> Result<Vec<f64>, String> {
             let mut out = vec![0.0; rows.count() * 16];
@@ -234,7 +236,7 @@ impl PyRobot {
                     let (p, r) = if plain {
                         chain.tool_position_rotation(q).map_err(|e| at(e.to_string()))?
                     } else {
-                        let pose = model.tool_pose(q, &state).map_err(|e| at(e.to_string()))?;
+                        let pose = model.tool_pose(q, state_of(&states, i)).map_err(|e| at(e.to_string()))?;
                         (pose.translation.vector, *pose.rotation.to_rotation_matrix().matrix())
                     };
                     for row in 0..3 {
@@ -264,12 +266,14 @@ impl PyRobot {
         q: PyArrayLikeDyn<'py, f64, AllowTypeChange>,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
-        approach: Option<Vec<i64>>,
+        approach: Option<Approaches>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let state = state(time_min, temps, approach)?;
-        self.model.check_state(&state, false, false).map_err(input)?;
-        let chain = self.model.chain_at(&state).map_err(input)?;
         let (rows, batch) = self.joint_rows(q, "q")?;
+        let states = states(time_min, temps, approach, rows.len())?;
+        for s in &states {
+            self.model.check_state(s, false, false).map_err(input)?;
+        }
+        let chain = self.model.chain_at(&states[0]).map_err(input)?;
         let (n, model) = (chain.dof(), &self.model);
         let data = py.detach(|| -> Result<Vec<f64>, String> {
             let per: Vec<Vec<f64>> = rows
@@ -277,7 +281,7 @@ impl PyRobot {
                 .enumerate()
                 .map(|(i, q)| {
                     let bent = if model.bends() {
-                        Some(model.chain_at_joints(&state, q).map_err(|e| format!("q row {i}: {e}"))?)
+                        Some(model.chain_at_joints(state_of(&states, i), q).map_err(|e| format!("q row {i}: {e}"))?)
                     } else {
                         None
                     };
@@ -292,7 +296,9 @@ impl PyRobot {
 
     /// Inverse kinematics on the robot as it is in the state (`time_min`, `temps`): `pose` a 4×4 matrix
     /// (mm) or `(N, 4, 4)`; with `position_only=True`, a point `(3,)` or `(N, 3)`. `seed` in degrees
-    /// (zeros by default), one for every target or `(N, n)`, one per target. Returns an `IKResult`: the
+    /// (zeros by default), one for every target or `(N, n)`, one per target; `approach` (a backlash's
+    /// side, per joint 1, -1 or 0) likewise one list for every target or one per target. Returns an
+    /// `IKResult`: the
     /// joints to command (a calibrated robot's joint corrections inverted and re-measured), the status
     /// — `"Converged"` only when FK of the answer, recomputed independently of the solver, is within
     /// the tolerances — and the re-measured errors.
@@ -308,11 +314,9 @@ impl PyRobot {
         position_only: bool,
         time_min: Option<f64>,
         temps: Option<HashMap<String, f64>>,
-        approach: Option<Vec<i64>>,
+        approach: Option<Approaches>,
         restarts: Option<usize>,
     ) -> PyResult<IkResult> {
-        let state = state(time_min, temps, approach)?;
-        self.model.check_state(&state, false, false).map_err(input)?;
         let chain = self.chain();
         let n = chain.dof();
         let (goals, batch) = if position_only {
@@ -329,6 +333,10 @@ impl PyRobot {
                 .collect::<PyResult<Vec<_>>>()?;
             (goals, rows.batch)
         };
+        let states = states(time_min, temps, approach, goals.len())?;
+        for s in &states {
+            self.model.check_state(s, false, false).map_err(input)?;
+        }
         // One seed for every target, or one per target (`(N, n)` for N targets).
         let seeds: Vec<Vec<f64>> = match seed {
             Some(s) => {
@@ -357,7 +365,8 @@ impl PyRobot {
                     || Workspace::new(n),
                     |ws, (i, goal)| {
                         let seed = if seeds.len() == 1 { &seeds[0] } else { &seeds[i] };
-                        thermokin_compensate::solve_on_model(model, &state, goal, seed, &params, ws, i as u64)
+                        let state = state_of(&states, i);
+                        thermokin_compensate::solve_on_model(model, state, goal, seed, &params, ws, i as u64)
                             .map_err(|e| if batch.is_some() { format!("pose {i}: {e}") } else { e.to_string() })
                     },
                 )

@@ -370,3 +370,31 @@ def test_a_backlash_follows_the_direction_given(root, tmp_path):
         np.testing.assert_allclose(T, plain.fk(moved), rtol=0, atol=1e-9)
     with pytest.raises(ThermokinError, match=r"approach\[1\]"):
         robot.fk(Q, approach=[0, 2, 0, 0, 0, 0])
+    # A batch takes one direction per row: each row on its own flank.
+    rows = np.array([Q, Q, Q], dtype=float)
+    sides = [[0, 0, s, 0, 0, 0] for s in (1, -1, 0)]
+    moved = rows.copy()
+    moved[:, 2] += 0.02 * np.array([1, -1, 0])
+    np.testing.assert_allclose(robot.fk(rows, approach=sides), plain.fk(moved), rtol=0, atol=1e-9)
+    # ik of those poses, each with its row's direction: the joints that reach them on that flank.
+    solved = robot.ik(plain.fk(moved), seed=rows, approach=sides)
+    assert list(solved.status) == ["Converged"] * 3
+    np.testing.assert_allclose(robot.fk(solved.q, approach=sides), plain.fk(moved), rtol=0, atol=1e-6)
+    with pytest.raises(ThermokinError, match="2 rows of directions for 3 rows"):
+        robot.fk(rows, approach=sides[:2])
+
+
+def test_lateral_joints_offers_a_bearings_tilt_without_masses(root, tmp_path):
+    # The IRB 140 without masses, its base bearing tilting (simulated with lumped weights): named only
+    # where the user says the joints are elastic.
+    lines = (root / "configs" / "irb140.toml").read_text().splitlines()
+    path = tmp_path / "massless.toml"
+    path.write_text("\n".join(l for l in lines if not l.startswith(("mass_kg", "com_mm"))) + "\n")
+    robot = thermokin.Robot.from_file(path)
+    data = thermokin.simulate(robot, ["lateral_compliance:1"], poses=240, minutes=0)
+    joints = thermokin.diagnose(robot, data, noise_mm=0.005, lateral="joints")
+    assert "lateral_compliance[1] (no masses)" in joints.effects, joints.text
+    by_default = thermokin.diagnose(robot, data, noise_mm=0.005)
+    assert not any(e.startswith("lateral_compliance") for e in by_default.effects), by_default.text
+    with pytest.raises(InputError, match="lateral"):
+        thermokin.diagnose(robot, data, lateral="all")

@@ -58,7 +58,7 @@ class Robot:
         *,
         time_min: float | None = None,
         temps: dict[str, float] | None = None,
-        approach: list[int] | None = None,
+        approach: list[int] | list[list[int]] | None = None,
     ) -> _F64: ...
     def jacobian(
         self,
@@ -66,7 +66,7 @@ class Robot:
         *,
         time_min: float | None = None,
         temps: dict[str, float] | None = None,
-        approach: list[int] | None = None,
+        approach: list[int] | list[list[int]] | None = None,
     ) -> _F64: ...
     def ik(
         self,
@@ -76,7 +76,7 @@ class Robot:
         position_only: bool = False,
         time_min: float | None = None,
         temps: dict[str, float] | None = None,
-        approach: list[int] | None = None,
+        approach: list[int] | list[list[int]] | None = None,
         restarts: int | None = None,
     ) -> IKResult: ...
     def deformed(

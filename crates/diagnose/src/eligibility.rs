@@ -111,7 +111,7 @@ fn room_for(scorer: &Scorer<'_>, always: &[Effect], e: Effect) -> Option<Refusal
             fewest * stride
         ),
         remedy: format!(
-            "measure at least {} poses, or give the robot file's link masses (a compliance on them has one parameter)",
+            "measure at least {} poses, or give the robot file's link masses (a compliance on them has one parameter per direction)",
             (crate::MIN_REDUNDANCY * parameters).div_ceil(stride) * scorer.data.len().max(1) / fewest.max(1)
         ),
     })

@@ -196,11 +196,11 @@ impl Setup {
     /// The catalogue's candidates for `robot` and `data`, in catalogue order: the base and tool frames
     /// where they are not always estimated; per joint its offset and link deviation, a gravity compliance
     /// where the joint carries mass, a coupling of two neighbouring joints' compliances where gravity loads
-    /// both, a gear-ratio scale and a cyclic error of a revolute joint, a slide's scale and straightness, a
-    /// backlash where the measuring
-    /// order approaches the joint from both sides; a thermal
-    /// drift (linear and exponential) when the data span time, one per kelvin when they carry
-    /// temperatures.
+    /// both, a column's lateral compliance (every joint's with [`Lateral::Joints`]), a gear-ratio scale and
+    /// a cyclic error of a revolute joint, a slide's scale and straightness, a backlash where the
+    /// measuring order approaches the joint from both sides; a thermal drift (linear and exponential) when
+    /// the data span time, one per kelvin when they carry temperatures; a row driven by each sensor
+    /// column that varies.
     pub fn candidates(&self, robot: &Robot, data: &Dataset) -> Result<Vec<Effect>, IdentifyError> {
         let joints =
             (0..robot.chain().dof()).map(|j| JointIndex::of(robot, j)).collect::<Result<Vec<_>, IdentifyError>>()?;
