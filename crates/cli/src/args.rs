@@ -473,6 +473,10 @@ pub struct PlanArgs {
     /// Tool point.
     #[arg(long, value_parser = choice(ToolMode::CHOICES), default_value_t = Params::default().tool)]
     pub tool: ToolMode,
+    /// Which joints' lateral compliance to plan for, as `diagnose --lateral`: a column's, or every
+    /// joint's bearing too (poses that vary the moments across the joints).
+    #[arg(long, value_parser = choice(thermokin_identify::Lateral::CHOICES), default_value_t = Params::default().lateral)]
+    pub lateral: thermokin_identify::Lateral,
     /// Unit of the candidates' and measured poses' revolute joint columns.
     #[arg(long, value_parser = choice(JointUnits::CHOICES), default_value_t = JointUnits::default())]
     pub joint_units: JointUnits,

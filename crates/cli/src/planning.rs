@@ -46,6 +46,7 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         criterion: a.criterion,
         frame: a.frame,
         tool: a.tool,
+        lateral: a.lateral,
         effects: (!effects.is_empty()).then_some(effects),
         seed: a.seed,
         ..Params::default()

@@ -9,8 +9,8 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Measurement, Robot, units};
 use thermokin_identify::{
-    Effect, Eligibility, FixedParameter, Lateral, Model, PoseTerms, Setup, arc_needed, identifiable,
-    residuals_and_jacobian, travel,
+    Effect, Eligibility, FixedParameter, Model, PoseTerms, Setup, arc_needed, identifiable, residuals_and_jacobian,
+    travel,
 };
 
 use crate::error::PlanError;
@@ -77,8 +77,7 @@ fn effects(
     measured: &Dataset,
     params: &Params,
 ) -> Result<(Vec<Effect>, Vec<LeftOut>), PlanError> {
-    let setup =
-        Setup { frame: params.frame, tool: params.tool, orientation_lever_mm: 0.0, lateral: Lateral::default() };
+    let setup = Setup { frame: params.frame, tool: params.tool, orientation_lever_mm: 0.0, lateral: params.lateral };
     let mut effects = setup.always_estimated(pool);
     let mut left_out = Vec::new();
     let chosen = match &params.effects {

@@ -2,7 +2,7 @@
 
 use nalgebra::Vector3;
 use serde::Serialize;
-use thermokin_identify::{Effect, Eligibility, FrameMode, ToolMode};
+use thermokin_identify::{Effect, Eligibility, FrameMode, Lateral, ToolMode};
 
 use crate::error::PlanError;
 
@@ -48,6 +48,9 @@ pub struct Params {
     pub frame: FrameMode,
     /// Whether the tool point is known; an unknown one is estimated with every model. Default: known.
     pub tool: ToolMode,
+    /// Which joints' lateral compliance the catalogue offers, as the diagnosis' (`thermokin_identify::Lateral`,
+    /// the same default: a column's).
+    pub lateral: Lateral,
     /// The effects to plan for; `None`: the catalogue's for the robot (every pose-dependent effect the
     /// diagnosis considers — base and tool frames where not estimated anyway, per joint its offset and
     /// link deviation, a gravity compliance where the joint carries mass, a gear-ratio scale and a
@@ -73,6 +76,7 @@ impl Default for Params {
             noise_mm: 0.02,
             frame: FrameMode::Base,
             tool: ToolMode::Known,
+            lateral: Lateral::default(),
             effects: None,
             seed: 0x91a7,
             random_draws: 5,

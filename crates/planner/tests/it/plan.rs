@@ -138,3 +138,18 @@ fn effects_no_choice_of_the_candidates_makes_eligible_are_left_out_with_the_reas
     assert!(p.effects.iter().any(|e| e == "joint_scale[2]"), "{:?}", p.effects);
     assert!(p.text().contains("Not planned for"), "{}", p.text());
 }
+
+/// A robot file without masses: by default the plan carries no lateral compliance; with
+/// `Lateral::Joints` (as `diagnose --lateral joints`) it plans for each loaded joint's, its loads lumped.
+#[test]
+fn the_plan_carries_the_lateral_compliances_the_diagnosis_will_offer() {
+    let robot = irb140().with_masses(vec![None; 6]).unwrap();
+    let pool = Candidates::sampled(&robot, 400, 17, None).unwrap();
+    let lateral =
+        |p: &thermokin_planner::Plan| p.effects.iter().filter(|e| e.starts_with("lateral_compliance")).count();
+    let by_default = plan(&robot, &pool, &[], &Params { poses: 60, ..Params::default() }).unwrap();
+    assert_eq!(lateral(&by_default), 0, "{:?}", by_default.effects);
+    let params = Params { poses: 60, lateral: thermokin_identify::Lateral::Joints, ..Params::default() };
+    let joints = plan(&robot, &pool, &[], &params).unwrap();
+    assert!(joints.effects.iter().any(|e| e == "lateral_compliance[2] (no masses)"), "{:?}", joints.effects);
+}
