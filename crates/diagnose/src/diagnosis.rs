@@ -167,7 +167,9 @@ fn judged_beside_the_folds(
 /// k-means blocks of joint space, [`crate::folds::neighbourhood_folds`]), by the selection's gate over
 /// those blocks. Time blocks break what time confounds (a drift, a tracker that moved); neighbourhoods
 /// break what the arm's configuration does — a gain that only one of them shows is a claim the data do
-/// not carry. The sentence the report gives when it does not hold.
+/// not carry. The sentence the report gives when it does not hold. (Where the session visited some
+/// configurations in one stretch of time, neighbourhoods and time blocks are confounded alike: a step of
+/// the frame there is said by [`steps_between_configurations`].)
 fn unconfirmed_by_neighbourhoods(
     scorer: &Scorer<'_>,
     config: &Config,
@@ -281,6 +283,7 @@ fn run(
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
     all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
+    all_warnings.extend(steps_between_configurations(robot, data, &tables.effects));
     all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "backlash").map(backlash_warning));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
@@ -377,6 +380,58 @@ fn backlash_warning(e: &crate::report::EffectReport) -> String {
         2.0 * half.abs(),
         e.label
     )
+}
+
+/// A chosen step of the measurement frame whose poses before and after it occupy two separate ranges of
+/// some joint (no pose of either side within the other side's range): the session visited those
+/// configurations in one stretch of time, so a step of the frame there and an error of those
+/// configurations fit alike (`sessions.rs`: joint 2 off wherever joint 1 stands above 30°, joint 1's poses
+/// measured in order, taken for two steps of the frame and drifts — folds of neighbouring configurations
+/// confirmed them too, as they are confounded alike). The sentences the report gives. Strict separation
+/// needs no threshold, and poses of mixed configurations on both sides of a knock do not show it (the
+/// one- and two-knock sessions of `sessions.rs` say nothing).
+fn steps_between_configurations(robot: &Robot, data: &Dataset, effects: &[thermokin_identify::Effect]) -> Vec<String> {
+    let steps = effects.iter().filter_map(|e| match e {
+        thermokin_identify::Effect::FrameStep(at) => Some(*at),
+        _ => None,
+    });
+    let mut said = Vec::new();
+    for at in steps {
+        let after = |i: usize| at.applies(data.measurements[i].time_min, data.line_of(i));
+        let range = |side: bool, j: usize| {
+            crate::stats::span((0..data.len()).filter(|&i| after(i) == side).map(|i| data.measurements[i].q[j]))
+        };
+        let separated = (0..robot.chain().dof()).find_map(|j| {
+            let ((lo_b, hi_b), (lo_a, hi_a)) = (range(false, j), range(true, j));
+            let kind = robot.chain().joints()[j].kind;
+            let shown = |v: f64| thermokin_chain::units::joint_value_out(kind, v);
+            let unit = if kind == thermokin_chain::JointKind::Revolute { "°" } else { " mm" };
+            if hi_b < lo_a {
+                Some(format!(
+                    "joint {} at or above {:.1}{unit}, and all those before it below {:.1}{unit}",
+                    j + 1,
+                    shown(lo_a),
+                    shown(hi_b)
+                ))
+            } else if hi_a < lo_b {
+                Some(format!(
+                    "joint {} at or below {:.1}{unit}, and all those before it above {:.1}{unit}",
+                    j + 1,
+                    shown(hi_a),
+                    shown(lo_b)
+                ))
+            } else {
+                None
+            }
+        });
+        if let Some(where_) = separated {
+            said.push(format!(
+                "the poses after the step of the frame at {} all have {where_}: the session measured those configurations in one stretch of time, so the step and an error of those configurations fit alike — measure some of them again at another time (or in a mixed order) to tell",
+                at.describe()
+            ));
+        }
+    }
+    said
 }
 
 /// What an operator should check when the measurement frame stepped: where, by how much, and what moves

@@ -216,3 +216,35 @@ fn a_tracker_knocked_twice_is_two_steps_of_the_frame() {
     );
     assert!(holdout.same_frame.selected.heldout_rms_mm < 2.0 * crate::tracker::NOISE_MM * 3f64.sqrt());
 }
+
+/// A negative control of the claims of time: an error of one arm configuration (joint 2 off by 0.1°
+/// wherever joint 1 stands above 30°, which no catalogue effect describes), measured in an order that
+/// visits those configurations in one stretch of the session — joint 1's poses sorted, so that time and
+/// configuration go together. The data cannot tell a tracker that moved in that stretch from the arm's
+/// configuration there (steps of the frame are named, and folds of neighbouring configurations, sorted
+/// along joint 1 too, confirm them); every step named is said to coincide with a boundary of joint 1's
+/// range, with what to measure.
+#[test]
+fn a_gain_of_one_configuration_is_not_claimed_as_one_of_time() {
+    let (robot, mut data) = session(300, 180.0, 4851, |q| {
+        let mut a = q.to_vec();
+        if q[0] > 30f64.to_radians() {
+            a[1] += 0.1f64.to_radians();
+        }
+        a
+    });
+    // Measured in order of joint 1's value, the times kept evenly spaced.
+    let times: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
+    data.measurements.sort_by(|a, b| a.q[0].total_cmp(&b.q[0]));
+    for (m, t) in data.measurements.iter_mut().zip(times) {
+        m.time_min = t;
+    }
+    let config = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let report = diagnose(&robot, &data, None, &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    eprintln!("chose {chosen:?}\n{:#?}", report.warnings);
+    // A step of the frame, if one is named, is said to coincide with a boundary of joint 1's range.
+    let steps = chosen.iter().filter(|e| e.starts_with("frame_step")).count();
+    let said = report.warnings.iter().filter(|w| w.contains("fit alike") && w.contains("all have joint 1")).count();
+    assert_eq!(said, steps, "{chosen:?}");
+}
