@@ -153,3 +153,33 @@ fn the_plan_carries_the_lateral_compliances_the_diagnosis_will_offer() {
     let joints = plan(&robot, &pool, &[], &params).unwrap();
     assert!(joints.effects.iter().any(|e| e == "lateral_compliance[2] (no masses)"), "{:?}", joints.effects);
 }
+
+/// An IRB 140 on an 800 mm lift: the plan carries the slide's scale and its guide's straightness, and
+/// its poses reach both ends of the stroke (a tilt and a bow growing with the extension are seen between
+/// its ends, as a scale is).
+#[test]
+fn a_lifts_plan_carries_its_straightness_and_spans_the_stroke() {
+    let text = std::fs::read_to_string(thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
+    let at = text.find("[[joint]]").unwrap();
+    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\n\n";
+    let text = format!("{}{lift}{}", &text[..at], &text[at..]);
+    let robot = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap();
+    let pool = Candidates::sampled(&robot, 600, 23, None).unwrap();
+    let p = plan(&robot, &pool, &[], &Params { poses: 40, ..Params::default() }).unwrap();
+    for effect in ["straightness[1]", "joint_scale[1]"] {
+        assert!(p.effects.iter().any(|e| e == effect), "{:?}", p.effects);
+    }
+    let (lo, hi) = p
+        .poses
+        .iter()
+        .map(|x| x.joints_rad[0])
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| (l.min(d), h.max(d)));
+    // The plan takes the ends the candidates offer (within a tenth of their span).
+    let (plo, phi) = pool_range(&pool);
+    eprintln!("stroke planned {lo:.0} … {hi:.0} mm of the candidates' {plo:.0} … {phi:.0}");
+    assert!(lo - plo < 0.1 * (phi - plo) && phi - hi < 0.1 * (phi - plo), "{lo} … {hi} of {plo} … {phi}");
+}
+
+fn pool_range(pool: &Candidates) -> (f64, f64) {
+    pool.joints().iter().map(|q| q[0]).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| (l.min(d), h.max(d)))
+}
