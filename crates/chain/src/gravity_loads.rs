@@ -103,14 +103,31 @@ pub fn gravity_load_basis_into(
         if i == joint {
             w = down.cross(&(rot * axis.into_inner()));
         }
-        match joints[i].kind {
-            JointKind::Revolute => {
-                let rw = rot.transpose() * w;
-                out.extend(perpendiculars(axis).iter().map(|e| e.dot(&rw)));
-            }
-            JointKind::Prismatic => out.push(q[i] * (rot * axis.into_inner()).dot(&w)),
-        }
+        let (terms, n) = link_terms(joints[i].kind, axis, rot, q[i], &w, false);
+        out.extend_from_slice(&terms[..n]);
     })
+}
+
+/// The functions of joint `l`'s link for a moment along `w = d × u` (the module's derivation): a
+/// revolute one's `eₗ,ₖ · (Rₗᵀ w)` for the two perpendiculars of its axis — and `aₗ · (Rₗᵀ w)` when it is
+/// the loaded joint's own link of a lateral moment (`own_axial`) —, a prismatic one's `qₗ (Rₗ aₗ) · w`;
+/// how many of the three are used.
+fn link_terms(
+    kind: JointKind,
+    axis: &Unit<Vector3<f64>>,
+    rot: &Matrix3<f64>,
+    q: f64,
+    w: &Vector3<f64>,
+    own_axial: bool,
+) -> ([f64; 3], usize) {
+    match kind {
+        JointKind::Revolute => {
+            let rw = rot.transpose() * w;
+            let [e1, e2] = perpendiculars(axis);
+            ([e1.dot(&rw), e2.dot(&rw), axis.dot(&rw)], if own_axial { 3 } else { 2 })
+        }
+        JointKind::Prismatic => ([q * (rot * axis.into_inner()).dot(w), 0.0, 0.0], 1),
+    }
 }
 
 /// The number of functions [`lateral_load_basis_into`] gives for joint `joint` (0-based): per lateral
@@ -165,26 +182,13 @@ pub fn lateral_load_basis_into(
                 w[k] = down.cross(&(parent * directions[k]));
             }
         }
-        for k in 0..2 {
-            let slot = &mut out[k * half..(k + 1) * half];
-            match joints[i].kind {
-                JointKind::Revolute => {
-                    let rw = rot.transpose() * w[k];
-                    let [e1, e2] = perpendiculars(axis);
-                    slot[at] = e1.dot(&rw);
-                    slot[at + 1] = e2.dot(&rw);
-                    if i == joint {
-                        slot[at + 2] = axis.dot(&rw);
-                    }
-                }
-                JointKind::Prismatic => slot[at] = q[i] * (rot * axis.into_inner()).dot(&w[k]),
-            }
+        let mut used = 0;
+        for (k, w) in w.iter().enumerate() {
+            let (terms, n) = link_terms(joints[i].kind, axis, rot, q[i], w, i == joint);
+            out[k * half + at..k * half + at + n].copy_from_slice(&terms[..n]);
+            used = n;
         }
-        at += match joints[i].kind {
-            JointKind::Revolute if i == joint => 3,
-            JointKind::Revolute => 2,
-            JointKind::Prismatic => 1,
-        };
+        at += used;
     })
 }
 

@@ -130,6 +130,34 @@ pub fn lateral_row_error(
     ErrorParams::new(translation, rotation)
 }
 
+/// Per joint of `chain` (one entry each) none, or as many finite weights as `expected` gives the joint
+/// (`thermokin_chain::gravity_load_basis_len` or `lateral_load_basis_len`, zero where it takes none): a
+/// compliance known without masses, `kind` `"gravity"` or `"lateral"`.
+fn check_load_weights(
+    chain: &Chain,
+    loads: &[Vec<f64>],
+    expected: fn(&Chain, usize) -> usize,
+    kind: &str,
+) -> Result<(), DeformError> {
+    if loads.len() != chain.dof() {
+        return Err(DeformError::RowCount { rows: loads.len(), joints: chain.dof() });
+    }
+    for (j, l) in loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
+        let expected = expected(chain, j);
+        let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
+        if expected == 0 {
+            return bad(format!("a {kind} compliance without masses is for a revolute joint"));
+        }
+        if l.len() != expected {
+            return bad(format!("{} {kind}-load weights for the {expected} this joint's arm takes", l.len()));
+        }
+        if l.iter().any(|v| !v.is_finite()) {
+            return bad(format!("every {kind}-load weight must be finite"));
+        }
+    }
+    Ok(())
+}
+
 /// The tilts `[φ₁, φ₂]` of a lateral compliance known without masses: the weights times the functions of
 /// [`thermokin_chain::lateral_load_basis_into`], the first half of each about the first direction.
 pub fn lumped_tilts(basis: &[f64], weights: &[f64]) -> [f64; 2] {
@@ -373,23 +401,7 @@ impl RobotModel {
     /// commanded joint values — the joint's stiffness lumped with the unknown first moments of the links
     /// it carries, as calibrated (a payload given at use does not change them).
     pub fn with_gravity_loads(mut self, loads: Vec<Vec<f64>>) -> Result<Self, DeformError> {
-        let chain = self.robot.chain();
-        if loads.len() != chain.dof() {
-            return Err(DeformError::RowCount { rows: loads.len(), joints: chain.dof() });
-        }
-        for (j, l) in loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
-            let expected = thermokin_chain::gravity_load_basis_len(chain, j);
-            let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
-            if expected == 0 {
-                return bad("a gravity compliance without masses is for a revolute joint".into());
-            }
-            if l.len() != expected {
-                return bad(format!("{} gravity-load weights for the {expected} this joint's arm takes", l.len()));
-            }
-            if l.iter().any(|v| !v.is_finite()) {
-                return bad("every gravity-load weight must be finite".into());
-            }
-        }
+        check_load_weights(self.robot.chain(), &loads, thermokin_chain::gravity_load_basis_len, "gravity")?;
         self.gravity_loads = loads;
         Ok(self)
     }
@@ -401,23 +413,7 @@ impl RobotModel {
     /// the first direction) — the bearing's compliance lumped with the unknown first moments of the links
     /// it carries, as calibrated.
     pub fn with_lateral_loads(mut self, loads: Vec<Vec<f64>>) -> Result<Self, DeformError> {
-        let chain = self.robot.chain();
-        if loads.len() != chain.dof() {
-            return Err(DeformError::RowCount { rows: loads.len(), joints: chain.dof() });
-        }
-        for (j, l) in loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
-            let expected = thermokin_chain::lateral_load_basis_len(chain, j);
-            let bad = |message: String| Err(DeformError::BadCorrection { joint: j + 1, message });
-            if expected == 0 {
-                return bad("a lateral compliance without masses is for a revolute joint".into());
-            }
-            if l.len() != expected {
-                return bad(format!("{} lateral-load weights for the {expected} this joint's arm takes", l.len()));
-            }
-            if l.iter().any(|v| !v.is_finite()) {
-                return bad("every lateral-load weight must be finite".into());
-            }
-        }
+        check_load_weights(self.robot.chain(), &loads, thermokin_chain::lateral_load_basis_len, "lateral")?;
         self.lateral_loads = loads;
         Ok(self)
     }

@@ -237,24 +237,53 @@ mod tests {
         assert!((moved - plain).norm() > 1e-3);
     }
 
+    /// Table 9's IRB 140 on a vertical lift of 800 mm stroke (its first joint).
+    fn lifted_irb140_chain() -> thermokin_chain::Chain {
+        let arm = irb140_table9();
+        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
+            .with_limits(0.0, 800.0);
+        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
+        thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap()
+    }
+
+    /// `data` with the lift's extension `from + step · k` (mm) before pose `k`'s joints.
+    fn lifted(mut data: Dataset, from: f64, step: f64) -> Dataset {
+        for (k, m) in data.measurements.iter_mut().enumerate() {
+            m.q.insert(0, from + step * k as f64);
+        }
+        data
+    }
+
+    /// For a model whose rows bend with the configuration: its analytic Jacobian at `theta` against
+    /// central differences, and its exported robot's forward model against the fit's prediction at every
+    /// pose (1e-9 mm); the largest distance the export moves the tool from the plain robot's.
+    fn bends_as_fitted(robot: &Robot, model: &Model, theta: &[f64], data: &Dataset, terms: &PoseTerms) -> f64 {
+        jacobian_is_the_differences(robot, model, theta, data, terms, 1e-9);
+        let exported = model.robot_model(robot, theta, data).unwrap();
+        assert!(exported.bends());
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let r = residuals(robot, model, theta, data, &rows, terms).unwrap();
+        let (plain, mut moved) = (robot.chain(), 0.0f64);
+        for (i, m) in data.measurements.iter().enumerate() {
+            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
+            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
+            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
+        }
+        moved
+    }
+
     /// Lateral compliances of an IRB 140 on a vertical lift, with masses: the lift's six terms (its foot's
     /// tilt and shift, its bending with the extension) and the shoulder's two — the analytic Jacobian
     /// against central differences, and the exported robot's forward model against the fit's prediction.
     #[test]
     fn a_lateral_compliance_matches_the_differences_and_its_export() {
-        let arm = irb140_table9();
-        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
-            .with_limits(0.0, 800.0);
-        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
-        let chain = thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap();
+        let chain = lifted_irb140_chain();
         let masses = (0..7)
             .map(|j| Some(LinkMass { mass_kg: 12.0 - j as f64, com_mm: Vector3::new(80.0, 15.0 * j as f64, 60.0) }))
             .collect();
         let robot = Robot::new("lifted IRB 140", chain).with_masses(masses).unwrap();
-        let mut data = eight_poses(9);
-        for (k, m) in data.measurements.iter_mut().enumerate() {
-            m.q.insert(0, 100.0 * k as f64);
-        }
+        let data = lifted(eight_poses(9), 0.0, 100.0);
         let effects = vec![
             Effect::named(&robot, "lateral_compliance", Some(0)).unwrap(),
             Effect::named(&robot, "lateral_compliance", Some(2)).unwrap(),
@@ -263,20 +292,9 @@ mod tests {
         assert_eq!(effects, vec![Effect::LateralCompliance(joint(0), 6), Effect::LateralCompliance(joint(2), 2)]);
         let model = Model::new(&robot, effects).unwrap();
         let terms = PoseTerms::of(&robot, &data, 0.0);
-        // Weights of 1e-3 rad: tilts of a few 1e-4 rad.at a few hundred N·m; the bending term per mm, the shift in mm per N·m.
+        // Tilts of ~1e-4 rad at a few hundred N·m; the bending term per mm, the shift in mm per N·m.
         let theta = vec![3e-7, -2e-7, 4e-10, 1e-10, 2e-4, -3e-4, 5e-7, 2e-7];
-        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
-        let exported = model.robot_model(&robot, &theta, &data).unwrap();
-        assert!(exported.bends());
-        let rows: Vec<usize> = (0..data.len()).collect();
-        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
-        let (plain, mut moved) = (robot.chain(), 0.0f64);
-        for (i, m) in data.measurements.iter().enumerate() {
-            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
-            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
-            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
-            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
-        }
+        let moved = bends_as_fitted(&robot, &model, &theta, &data, &terms);
         // And it moves the tool: by a tenth of a millimetre or more somewhere.
         assert!(moved > 0.1, "{moved}");
     }
@@ -286,16 +304,9 @@ mod tests {
     /// robot's forward model against the fit's prediction.
     #[test]
     fn a_lumped_lateral_compliance_matches_the_differences_and_its_export() {
-        let arm = irb140_table9();
-        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
-            .with_limits(0.0, 800.0);
-        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
-        let chain = thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap();
+        let chain = lifted_irb140_chain();
         let robot = Robot::new("lifted IRB 140", chain);
-        let mut data = eight_poses(13);
-        for (k, m) in data.measurements.iter_mut().enumerate() {
-            m.q.insert(0, 100.0 * k as f64);
-        }
+        let data = lifted(eight_poses(13), 0.0, 100.0);
         let effects = vec![
             Effect::named(&robot, "lateral_compliance", Some(2)).unwrap(),
             Effect::named(&robot, "lateral_compliance", Some(3)).unwrap(),
@@ -311,18 +322,7 @@ mod tests {
         let terms = PoseTerms::of(&robot, &data, 0.0);
         // Weights of 1e-3 rad: tilts of a few 1e-4 rad.
         let theta: Vec<f64> = (0..40).map(|k| 1e-3 * ((k as f64 * 0.7).sin())).collect();
-        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
-        let exported = model.robot_model(&robot, &theta, &data).unwrap();
-        assert!(exported.bends());
-        let rows: Vec<usize> = (0..data.len()).collect();
-        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
-        let (plain, mut moved) = (robot.chain(), 0.0f64);
-        for (i, m) in data.measurements.iter().enumerate() {
-            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
-            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
-            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
-            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
-        }
+        let moved = bends_as_fitted(&robot, &model, &theta, &data, &terms);
         assert!(moved > 0.1, "{moved}");
     }
 
@@ -330,16 +330,9 @@ mod tests {
     /// differences, and the exported robot's forward model against the fit's prediction.
     #[test]
     fn a_slides_straightness_matches_the_differences_and_its_export() {
-        let arm = irb140_table9();
-        let lift = thermokin_chain::Joint::prismatic("lift", Vector3::new(0.0, 0.0, 300.0), Vector3::z_axis())
-            .with_limits(0.0, 800.0);
-        let joints: Vec<_> = std::iter::once(lift).chain(arm.joints().iter().cloned()).collect();
-        let chain = thermokin_chain::Chain::new(arm.base().clone(), joints, arm.tool().clone()).unwrap();
+        let chain = lifted_irb140_chain();
         let robot = Robot::new("lifted IRB 140", chain);
-        let mut data = eight_poses(11);
-        for (k, m) in data.measurements.iter_mut().enumerate() {
-            m.q.insert(0, 90.0 * k as f64 + 20.0);
-        }
+        let data = lifted(eight_poses(11), 20.0, 90.0);
         let effects = vec![Effect::named(&robot, "straightness", Some(0)).unwrap()];
         assert_eq!(effects, vec![Effect::Straightness(JointIndex::of(&robot, 0).unwrap())]);
         assert!(Effect::named(&robot, "straightness", Some(2)).is_err(), "a revolute joint has no guide");
@@ -347,18 +340,7 @@ mod tests {
         let terms = PoseTerms::of(&robot, &data, 0.0);
         // Turns of ~1e-4 rad over the stroke, a bow of ~0.1 mm.
         let theta = vec![2e-7, -1.5e-7, 1e-7, 3e-7, -2e-7];
-        jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
-        let exported = model.robot_model(&robot, &theta, &data).unwrap();
-        assert!(exported.bends());
-        let rows: Vec<usize> = (0..data.len()).collect();
-        let r = residuals(&robot, &model, &theta, &data, &rows, &terms).unwrap();
-        let (plain, mut moved) = (robot.chain(), 0.0f64);
-        for (i, m) in data.measurements.iter().enumerate() {
-            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
-            let predicted = m.position_mm - Vector3::new(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
-            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
-            moved = moved.max((pose.translation.vector - plain.tool_pose(&m.q).unwrap().translation.vector).norm());
-        }
+        let moved = bends_as_fitted(&robot, &model, &theta, &data, &terms);
         assert!(moved > 0.1, "{moved}");
     }
 

@@ -783,21 +783,21 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
     }
     for (i, j) in robot.chain().joints().iter().enumerate() {
         joint_toml(&mut s, robot, i, j, &model.joint_corrections()[i]);
-        if !model.gravity_loads()[i].is_empty() {
-            let deg: Vec<String> =
-                model.gravity_loads()[i].iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
-            s.push_str(&format!(
-                "# gravity compliance without masses: the weights of the gravity-load functions of this joint\ngravity_load_deg = [{}]\n",
-                deg.join(", ")
-            ));
-        }
-        if !model.lateral_loads()[i].is_empty() {
-            let deg: Vec<String> =
-                model.lateral_loads()[i].iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
-            s.push_str(&format!(
-                "# lateral compliance without masses: the weights of the lateral-load functions of this joint (about its first direction across the axis, then its second)\nlateral_load_deg = [{}]\n",
-                deg.join(", ")
-            ));
+        let weights = [
+            (
+                &model.gravity_loads()[i],
+                "gravity compliance without masses: the weights of the gravity-load functions of this joint",
+                "gravity_load_deg",
+            ),
+            (
+                &model.lateral_loads()[i],
+                "lateral compliance without masses: the weights of the lateral-load functions of this joint (about its first direction across the axis, then its second)",
+                "lateral_load_deg",
+            ),
+        ];
+        for (values, comment, key) in weights.into_iter().filter(|(v, ..)| !v.is_empty()) {
+            let deg: Vec<String> = values.iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
+            s.push_str(&format!("# {comment}\n{key} = [{}]\n", deg.join(", ")));
         }
     }
     if robot.chain().base() != &FixedRow::identity() {

@@ -29,6 +29,16 @@ pub fn rokae_robot_b(file: &str) -> PathBuf {
     workspace("fixtures/real/rokae-robot-b").join(file)
 }
 
+/// The bundled IRB 140's robot file (`configs/irb140.toml`) on a vertical lift of 800 mm stroke — a
+/// prismatic first joint 300 mm under the arm — with `extra` lines (TOML, each ending in a newline) in
+/// the lift's table.
+pub fn lifted_irb140_toml(extra: &str) -> String {
+    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).expect("the bundled IRB 140");
+    let at = text.find("[[joint]]").expect("a [[joint]] table");
+    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\n";
+    format!("{}{lift}{extra}\n{}", &text[..at], &text[at..])
+}
+
 /// One of the public URDFs (`fixtures/urdf/`).
 pub fn urdf(file: &str) -> PathBuf {
     workspace("fixtures/urdf").join(file)

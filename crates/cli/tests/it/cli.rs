@@ -1241,11 +1241,8 @@ fn a_robot_with_backlash_follows_the_order_of_its_moves() {
 /// setting that does not exist is refused naming the flag and its choices.
 #[test]
 fn a_lifts_straightness_from_simulate_to_fk() {
-    let text = std::fs::read_to_string(thermokin_testdata::workspace(ROBOT)).unwrap();
-    let at = text.find("[[joint]]").unwrap();
-    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\n\n";
     let robot = tmp("lift.toml");
-    std::fs::write(&robot, format!("{}{lift}{}", &text[..at], &text[at..])).unwrap();
+    std::fs::write(&robot, thermokin_testdata::lifted_irb140_toml("")).unwrap();
     let hidden = ["straightness:1=2e-5,-1e-5,0,-1e-7,0", "joint_scale:1=8e-4"];
     let m = tmp("lift.csv");
     let r = robot.to_str().unwrap();
@@ -1283,11 +1280,8 @@ fn a_lifts_straightness_from_simulate_to_fk() {
     assert!(exported.contains("straightness = ["), "{exported}");
     // The robot file with the hidden values, written by hand.
     let truth = tmp("lift-truth.toml");
-    let hand = lift.replace(
-        "limits = [0.0, 800.0]\n",
-        "limits = [0.0, 800.0]\nstraightness = [2e-5, -1e-5, 0.0, -1e-7, 0.0]\nscale = 8e-4\n",
-    );
-    std::fs::write(&truth, format!("{}{hand}{}", &text[..at], &text[at..])).unwrap();
+    let hand = "straightness = [2e-5, -1e-5, 0.0, -1e-7, 0.0]\nscale = 8e-4\n";
+    std::fs::write(&truth, thermokin_testdata::lifted_irb140_toml(hand)).unwrap();
     for joints in ["100,10,20,-10,30,40,50", "750,-40,35,15,-20,60,-30"] {
         let ours = fk_position(&["fk", "--robot", calibrated.to_str().unwrap(), "--joints", joints, "--json"]);
         let theirs = fk_position(&["fk", "--robot", truth.to_str().unwrap(), "--joints", joints, "--json"]);

@@ -110,10 +110,7 @@ fn reading(seed: u64, i: usize) -> f64 {
 }
 
 fn lifted_irb140() -> Robot {
-    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
-    let at = text.find("[[joint]]").unwrap();
-    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\nmass_kg = 40.0\ncom_mm = [0.0, 0.0, 100.0]\n\n";
-    let text = format!("{}{lift}{}", &text[..at], &text[at..]);
+    let text = thermokin_testdata::lifted_irb140_toml("mass_kg = 40.0\ncom_mm = [0.0, 0.0, 100.0]\n");
     thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap()
 }
 

@@ -192,9 +192,7 @@ fn targets_carry_their_time_and_temperatures() {
 #[test]
 fn a_slides_straightness_reads_back_and_a_revolute_joint_refuses_one() {
     let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
-    let at = text.find("[[joint]]").unwrap();
-    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\nstraightness = [1.5e-5, -1e-5, 4e-6, 2e-7, -1e-7]\n\n";
-    let lifted = format!("{}{lift}{}", &text[..at], &text[at..]);
+    let lifted = thermokin_testdata::lifted_irb140_toml("straightness = [1.5e-5, -1e-5, 4e-6, 2e-7, -1e-7]\n");
     let model = parse_robot_model_toml("lift.toml".as_ref(), &lifted).unwrap();
     let c = model.joint_corrections()[0].straightness;
     assert!((c[0] - 1.5e-5f64.to_radians()).abs() < 1e-20 && c[3] == 2e-7, "{c:?}");

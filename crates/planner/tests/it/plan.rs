@@ -159,10 +159,7 @@ fn the_plan_carries_the_lateral_compliances_the_diagnosis_will_offer() {
 /// its ends, as a scale is).
 #[test]
 fn a_lifts_plan_carries_its_straightness_and_spans_the_stroke() {
-    let text = std::fs::read_to_string(thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
-    let at = text.find("[[joint]]").unwrap();
-    let lift = "[[joint]]\nname = \"lift\"\naxis = \"Z\"\ntype = \"prismatic\"\noffset_mm = [0.0, 0.0, 300.0]\nlimits = [0.0, 800.0]\n\n";
-    let text = format!("{}{lift}{}", &text[..at], &text[at..]);
+    let text = thermokin_testdata::lifted_irb140_toml("");
     let robot = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap();
     let pool = Candidates::sampled(&robot, 600, 23, None).unwrap();
     let p = plan(&robot, &pool, &[], &Params { poses: 40, ..Params::default() }).unwrap();
