@@ -109,9 +109,9 @@ pub fn gravity_load_basis_into(
 }
 
 /// The functions of joint `l`'s link for a moment along `w = d × u` (the module's derivation): a
-/// revolute one's `eₗ,ₖ · (Rₗᵀ w)` for the two perpendiculars of its axis — and `aₗ · (Rₗᵀ w)` when it is
-/// the loaded joint's own link of a lateral moment (`own_axial`) —, a prismatic one's `qₗ (Rₗ aₗ) · w`;
-/// how many of the three are used.
+/// revolute one's `eₗ,ₖ · (Rₗᵀ w)` for the two perpendiculars of its axis, a prismatic one's
+/// `qₗ (Rₗ aₗ) · w` — and, for the loaded joint's own link of a lateral moment (`own_axial`, revolute or
+/// prismatic), all three components `eₗ,₁`, `eₗ,₂`, `aₗ` of `Rₗᵀ w`; how many of the three are used.
 fn link_terms(
     kind: JointKind,
     axis: &Unit<Vector3<f64>>,
@@ -121,10 +121,15 @@ fn link_terms(
     own_axial: bool,
 ) -> ([f64; 3], usize) {
     match kind {
+        _ if own_axial => {
+            let rw = rot.transpose() * w;
+            let [e1, e2] = perpendiculars(axis);
+            ([e1.dot(&rw), e2.dot(&rw), axis.dot(&rw)], 3)
+        }
         JointKind::Revolute => {
             let rw = rot.transpose() * w;
             let [e1, e2] = perpendiculars(axis);
-            ([e1.dot(&rw), e2.dot(&rw), axis.dot(&rw)], if own_axial { 3 } else { 2 })
+            ([e1.dot(&rw), e2.dot(&rw), 0.0], 2)
         }
         JointKind::Prismatic => ([q * (rot * axis.into_inner()).dot(w), 0.0, 0.0], 1),
     }
@@ -132,16 +137,18 @@ fn link_terms(
 
 /// The number of functions [`lateral_load_basis_into`] gives for joint `joint` (0-based): per lateral
 /// direction, three for the joint's own link and, from the next joint outwards, two per revolute and one
-/// per prismatic joint; zero for a prismatic `joint` or one past the chain.
+/// per prismatic joint; zero for a joint past the chain.
 pub fn lateral_load_basis_len(chain: &Chain, joint: usize) -> usize {
-    match gravity_load_basis_len(chain, joint) {
-        0 => 0,
-        n => 2 * (n + 1),
+    let joints = chain.joints();
+    if joint >= joints.len() {
+        return 0;
     }
+    let beyond: usize = joints[joint + 1..].iter().map(|j| if j.kind == JointKind::Revolute { 2 } else { 1 }).sum();
+    2 * (3 + beyond)
 }
 
-/// The functions of the joint values `q` whose weighted sums are revolute joint `joint`'s gravity moments
-/// across its axis ([`crate::lateral_gravity_moments_into`], along its two [`crate::lateral_directions`]
+/// The functions of the joint values `q` whose weighted sums are joint `joint`'s gravity moments across
+/// its axis ([`crate::lateral_gravity_moments_into`], along its two [`crate::lateral_directions`]
 /// `uₖ`) under any masses on the links it carries, into `out` (length [`lateral_load_basis_len`]; the
 /// first half along `u₁`, the second along `u₂`).
 ///
@@ -149,7 +156,8 @@ pub fn lateral_load_basis_len(chain: &Chain, joint: usize) -> usize {
 /// the torque's derivation ([`gravity_load_basis_into`], the module's) with `w` for `d × aⱼ`. The terms
 /// fold inwards alike, with one difference: the joint's own link keeps all three components of its first
 /// moment, since `w` is not perpendicular to the joint's axis (its component along the axis does not
-/// turn with the joint, but still varies with the joints before). So each direction gives
+/// turn with the joint, but still varies with the joints before; a slide's own link does not turn with
+/// it at all, and its moment about the carriage's origin is the same three terms). So each direction gives
 /// `eⱼ,₁ · (Rⱼᵀ w)`, `eⱼ,₂ · (Rⱼᵀ w)`, `aⱼ · (Rⱼᵀ w)`, then per joint `l` beyond a revolute one's two
 /// `eₗ,ₖ · (Rₗᵀ w)` and a prismatic one's `qₗ (Rₗ aₗ) · w`. A test checks that the lateral moments of a
 /// robot with masses lie in their span.
@@ -302,9 +310,12 @@ mod tests {
         // Gravity a little off the base's −Z (a registered base): no function may rely on its direction.
         let down = Unit::new_normalize(Vector3::new(0.03, -0.02, -1.0));
         let qs = poses(300);
-        for joint in 1..7 {
+        // The lift (joint 1) too: a column's moments about its carriage.
+        for joint in 0..7 {
             let n = lateral_load_basis_len(&chain, joint);
-            assert_eq!(n, 2 * (gravity_load_basis_len(&chain, joint) + 1));
+            if joint > 0 {
+                assert_eq!(n, 2 * (gravity_load_basis_len(&chain, joint) + 1));
+            }
             let mut basis = Vec::new();
             let mut moments = Vec::new();
             for k in 0..2 {
@@ -325,6 +336,7 @@ mod tests {
                 assert!(misfit < 1e-9, "joint {} direction {k}: {misfit}", joint + 1);
             }
         }
-        assert_eq!(lateral_load_basis_len(&chain, 0), 0);
+        assert_eq!(lateral_load_basis_len(&chain, 0), 2 * (3 + 12));
+        assert_eq!(lateral_load_basis_len(&chain, 7), 0);
     }
 }

@@ -166,6 +166,39 @@ pub fn lumped_tilts(basis: &[f64], weights: &[f64]) -> [f64; 2] {
     [dot(0), dot(1)]
 }
 
+/// How many weights a lateral compliance known without masses takes on joint `joint` (0-based): the
+/// functions of [`thermokin_chain::lateral_load_basis_len`] once for a revolute joint (its bearing's
+/// tilt), three times for a slide (a column's foot tilting, its beam bending over the extension, its
+/// foot shifting: the three coefficients of [`lateral_row_error`], each lumped with the unknown moments);
+/// zero past the chain.
+pub fn lumped_lateral_weights_len(chain: &Chain, joint: usize) -> usize {
+    let n = thermokin_chain::lateral_load_basis_len(chain, joint);
+    match chain.joints().get(joint).map(|j| j.kind) {
+        Some(JointKind::Prismatic) => 3 * n,
+        _ => n,
+    }
+}
+
+/// The error a lateral compliance known without masses adds to its joint's row at joint value `d` (a
+/// slide's extension, mm): [`lateral_row_error`] at unit moments with its coefficients the weights' sums
+/// over `basis` ([`thermokin_chain::lateral_load_basis_into`] at the pose) — `[c₁M₁, c₂M₂]` from the first
+/// set of weights (a revolute joint's only one), `[c′₁M₁, c′₂M₂]` from a slide's second and
+/// `[s₁M₁, s₂M₂]` from its third ([`lumped_lateral_weights_len`]): each product of a compliance and the
+/// moment is linear in lumped weights, as [`thermokin_chain::lateral_load_basis_into`]'s span holds the
+/// moments of any masses.
+pub fn lumped_lateral_row_error(
+    basis: &[f64],
+    weights: &[f64],
+    directions: &[Vector3<f64>; 2],
+    axis: &Vector3<f64>,
+    d: f64,
+) -> ErrorParams {
+    let n = basis.len();
+    let set = |s: usize| weights.get(s * n..(s + 1) * n).map_or([0.0; 2], |w| lumped_tilts(basis, w));
+    let [tilt, bend, shift] = [set(0), set(1), set(2)];
+    lateral_row_error(&[tilt[0], tilt[1], bend[0], bend[1], shift[0], shift[1]], directions, axis, [1.0; 2], d)
+}
+
 /// The error a slide's straightness adds to its row (eq. 19's angles and the row's translation, in its
 /// parent's frame) at extension `d` (mm), `directions` `eₖ` its two lateral directions
 /// ([`thermokin_chain::lateral_directions`]), `axis` its unit axis `a`, `c = [κ₁, κ₂, ρ, σ₁, σ₂]`:
@@ -411,9 +444,10 @@ impl RobotModel {
     /// directions (radians; radians per mm for a term of a slide it carries) over the functions of
     /// [`thermokin_chain::lateral_load_basis_into`] at the commanded joint values (the first half about
     /// the first direction) — the bearing's compliance lumped with the unknown first moments of the links
-    /// it carries, as calibrated.
+    /// it carries, as calibrated; for a slide three such sets, its foot's tilt, its bending and its foot's
+    /// shift ([`lumped_lateral_row_error`], [`lumped_lateral_weights_len`]).
     pub fn with_lateral_loads(mut self, loads: Vec<Vec<f64>>) -> Result<Self, DeformError> {
-        check_load_weights(self.robot.chain(), &loads, thermokin_chain::lateral_load_basis_len, "lateral")?;
+        check_load_weights(self.robot.chain(), &loads, lumped_lateral_weights_len, "lateral")?;
         self.lateral_loads = loads;
         Ok(self)
     }
@@ -723,8 +757,8 @@ impl RobotModel {
             thermokin_chain::lateral_load_basis_into(plain, commanded, None, &self.down, j, &mut basis)?;
             let Some(directions) = thermokin_chain::lateral_directions(plain, j) else { continue };
             let axis = plain.joints()[j].axis.into_inner();
-            let tilts = lumped_tilts(&basis, weights);
-            let row = chain.joints()[j].error.add(&lateral_row_error(&tilts, &directions, &axis, [1.0; 2], 0.0));
+            let bend = lumped_lateral_row_error(&basis, weights, &directions, &axis, commanded[j]);
+            let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
         }
         Ok(chain)

@@ -5,7 +5,7 @@
 
 use thermokin_chain::{Dataset, Robot, units};
 use thermokin_deform::MAX_CORRECTION_SLOPE;
-use thermokin_identify::{DriftShape, Effect, max_gravity_torques};
+use thermokin_identify::{DriftShape, Effect, Support, max_gravity_torques};
 
 use crate::config::Plausibility;
 use crate::report::Refusal;
@@ -269,13 +269,21 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let moved = turn * lever_of(j) + v[3].hypot(v[4]) * d * d;
             over("the turn of the carriage at the full extension", deg(turn), moved, lever_of(j), "°")
         }
-        Effect::LumpedLateralCompliance(j, n) => {
+        Effect::LumpedLateralCompliance(j, n, support) => {
             // As a compliance without masses: each function at most 1 in size, the sum of each direction's
-            // weights bounds its tilt; the larger of the two at the row's lever.
-            let half = n as usize / 2;
-            let tilt =
-                (0..2).map(|k| v[k * half..(k + 1) * half].iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max);
-            over("the largest tilt under gravity", deg(tilt), tilt * lever_of(j), lever_of(j), "°")
+            // weights bounds its tilt (a column's bend at the full extension the data reach added, and its
+            // shift moving the row as it is); the larger of the two directions at the row's lever.
+            let (per_set, reach) = (n as usize / support.sets(), scale.reach[j.index()]);
+            let half = per_set / 2;
+            let bound = |set: usize| {
+                let at = |k: usize| set * per_set + k * half;
+                (0..2).map(|k| v[at(k)..at(k) + half].iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
+            };
+            let (tilt, shift) = match support {
+                Support::Bearing => (bound(0), 0.0),
+                Support::Column => (bound(0) + bound(1) * reach, bound(2) + bound(1) * reach * reach / 2.0),
+            };
+            over("the largest tilt under gravity", deg(tilt), tilt * lever_of(j) + shift, lever_of(j), "°")
         }
         Effect::LumpedCompliance(j, _) => {
             // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of

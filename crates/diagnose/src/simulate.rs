@@ -4,7 +4,7 @@ use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Dataset, Measurement, Robot};
-use thermokin_identify::{DriftShape, Effect, IdentifyError, Model, PoseInputs, PoseTerms, normal};
+use thermokin_identify::{DriftShape, Effect, IdentifyError, Model, PoseInputs, PoseTerms, Support, normal};
 
 use crate::error::DiagnoseError;
 
@@ -81,7 +81,8 @@ impl HiddenEffect {
 
     /// The effect at a random size typical of a calibrated industrial arm, drawn from `rng`: a zero
     /// offset of 0.02–0.06° either way, a compliance of 5e-4–1.5e-3 °/N·m (a coupling of two: 3e-4–1e-3
-    /// either way), a lateral compliance within ±8e-6 °/N·m (a slide's growth within ±8e-9 °/N·m per mm),
+    /// either way), a lateral compliance within ±8e-6 °/N·m (a slide's growth within ±8e-9 °/N·m per mm;
+    /// without masses each weight within ±0.005°, a column's bend weights ±5e-6 °/mm and shift ±0.01 mm),
     /// a slide's straightness within ±2e-5 °/mm (bows within ±2e-7 per mm), a gear-ratio error of 2e-4–6e-4,
     /// cyclic amplitudes within ±0.03°, an exponential drift's τ of 30–90 min, translations within
     /// ±0.4 mm and rotations within ±0.02° otherwise.
@@ -93,6 +94,13 @@ impl HiddenEffect {
                 }
                 (Effect::JointCompliance(_), _) => rng.random_range(5e-4..1.5e-3),
                 (Effect::LumpedCompliance(..), _) => rng.random_range(-0.02..0.02),
+                // A column's bend weights per mm (0.005° over a metre), its shift weights in mm.
+                (Effect::LumpedLateralCompliance(_, n, Support::Column), k) if 3 * k >= 2 * n as usize => {
+                    rng.random_range(-0.01..0.01)
+                }
+                (Effect::LumpedLateralCompliance(_, n, Support::Column), k) if 3 * k >= n as usize => {
+                    rng.random_range(-5e-6..5e-6)
+                }
                 (Effect::LumpedLateralCompliance(..), _) => rng.random_range(-0.005..0.005),
                 (Effect::ComplianceCoupling(_), _) => {
                     rng.random_range(3e-4..1e-3) * if rng.random_bool(0.5) { 1.0 } else { -1.0 }

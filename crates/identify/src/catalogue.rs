@@ -44,7 +44,7 @@ fn lateral_loads(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
     (0..2).any(|k| hi[k] - lo[k] > 1.0)
 }
 
-/// Whether some lateral-load function of revolute joint `j` ([`thermokin_chain::lateral_load_basis_into`])
+/// Whether some lateral-load function of joint `j` ([`thermokin_chain::lateral_load_basis_into`])
 /// varies over the data's poses: where none does, a lateral compliance is a constant tilt — a link
 /// deviation's.
 fn lateral_loads_vary(robot: &Robot, data: &Dataset, j: JointIndex) -> bool {
@@ -224,18 +224,19 @@ impl Setup {
             }
         }
         // A column's lateral compliance where the file's masses load a slide across its axis and the load
-        // changes over the data: the column bending under the arm's moment, more at its top extensions.
-        // A revolute joint's (a bearing tilting) where the user says the joints are elastic ([`Lateral`]):
-        // on the file's masses, or without masses its loads lumped (a torso carrying an arm: the moments
-        // of unknown masses are the lateral-load functions' sums, which a fixed link deviation cannot take
-        // where they vary over the data).
+        // changes over the data — the column bending under the arm's moment, more at its top extensions —
+        // or, without masses, where its lateral-load functions vary (its loads lumped). A revolute joint's
+        // (a bearing tilting) where the user says the joints are elastic ([`Lateral`]): on the file's
+        // masses, or without masses its loads lumped (a torso carrying an arm: the moments of unknown
+        // masses are the lateral-load functions' sums, which a fixed link deviation cannot take where they
+        // vary over the data).
         for &j in &joints {
             let slide = robot.chain().joints()[j.index()].kind == JointKind::Prismatic;
             if !slide && self.lateral == Lateral::Slides {
                 continue;
             }
             if massless {
-                if !slide && lateral_loads_vary(robot, data, j) {
+                if lateral_loads_vary(robot, data, j) {
                     c.push(Effect::lumped_lateral_compliance(robot, j)?);
                 }
             } else if robot.masses().iter().skip(j.index()).any(Option::is_some) && lateral_loads(robot, data, j) {

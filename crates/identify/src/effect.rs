@@ -189,15 +189,18 @@ pub enum Effect {
     /// a bearing's or a mount's tilt under the arm's moment (2, radians per N·m); a slide's, a column's,
     /// also bends as a beam of its extension's length and its foot shifts (6: `[c₁, c₂, c′₁, c′₂, s₁, s₂]`,
     /// [`thermokin_deform::lateral_row_error`]). The count is 2 for a revolute joint and 6 for a prismatic
-    /// one: make one with [`Effect::named`] (`"lateral_compliance"`; it needs the file's masses).
+    /// one: make one with [`Effect::named`] (`"lateral_compliance"` on a robot with masses).
     LateralCompliance(JointIndex, u8),
-    /// Lateral gravity compliance of revolute joint `j` when the robot file carries no masses: its row
-    /// tilts about the two directions across its axis by `φₖ = Σ θₖ,b fₖ,b(q)`, the functions of
+    /// Lateral gravity compliance of joint `j` when the robot file carries no masses: its row tilts about
+    /// the two directions across its axis by `φₖ = Σ θₖ,b fₖ,b(q)`, the functions of
     /// [`thermokin_chain::lateral_load_basis_into`] whose span holds the gravity moments across the joint
     /// under any masses of the links it carries — the bearing's compliance lumped with their unknown first
-    /// moments (radians; radians per mm for a slide it carries). The count is the basis' length, fixed by
-    /// the robot: make one with [`Effect::named`] (`"lateral_compliance"` on a robot without masses).
-    LumpedLateralCompliance(JointIndex, u8),
+    /// moments (radians; radians per mm for a slide it carries). A slide's ([`Support::Column`]) takes three
+    /// such sets: its foot's tilt, its bending over the extension (radians per mm) and its foot's shift
+    /// (mm) — [`Effect::LateralCompliance`]'s six coefficients, each lumped with the moments
+    /// ([`thermokin_deform::lumped_lateral_row_error`]). The count is fixed by the robot: make one with
+    /// [`Effect::named`] (`"lateral_compliance"` on a robot without masses).
+    LumpedLateralCompliance(JointIndex, u8, Support),
     /// Straightness of a slide's guide ([`thermokin_deform::straightness_row_error`]): its row tilts about
     /// the two directions across its axis and rolls about it in proportion to the extension `d`, and the
     /// carriage bows across in proportion to `d²` — `[κ₁, κ₂, ρ, σ₁, σ₂]`, radians per mm and per mm (5;
@@ -225,6 +228,25 @@ pub enum Effect {
     /// a point of the measuring order: the poses from there on are measured in the frame moved by a
     /// translation (3, mm) and a rotation `Rx·Ry·Rz` (3), applied in the measurement frame (6).
     FrameStep(StepAt),
+}
+
+/// What a lateral compliance without masses bends ([`Effect::LumpedLateralCompliance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Support {
+    /// A revolute joint's bearing: its row tilts (one set of weights).
+    Bearing,
+    /// A slide's column: its foot tilts, it bends over the extension and its foot shifts (three sets).
+    Column,
+}
+
+impl Support {
+    /// How many sets of weights it takes.
+    pub fn sets(self) -> usize {
+        match self {
+            Support::Bearing => 1,
+            Support::Column => 3,
+        }
+    }
 }
 
 /// The effect names of reports and flags, in catalogue order.
@@ -300,14 +322,18 @@ impl Effect {
         }
     }
 
-    /// Lateral gravity compliance of revolute joint `j` with no masses known
-    /// ([`Effect::LumpedLateralCompliance`]); for a slide (whose bending needs the moments themselves) an
-    /// error saying it needs the file's masses.
+    /// Lateral gravity compliance of joint `j` with no masses known ([`Effect::LumpedLateralCompliance`]):
+    /// a revolute joint's bearing tilting, a slide's column tilting, bending and shifting
+    /// ([`thermokin_deform::lumped_lateral_weights_len`]); an error for an arm too long to count.
     pub fn lumped_lateral_compliance(robot: &Robot, j: JointIndex) -> Result<Self, IdentifyError> {
-        let n = thermokin_chain::lateral_load_basis_len(robot.chain(), j.index());
+        let n = thermokin_deform::lumped_lateral_weights_len(robot.chain(), j.index());
+        let support = match robot.chain().joints()[j.index()].kind {
+            thermokin_chain::JointKind::Prismatic => Support::Column,
+            thermokin_chain::JointKind::Revolute => Support::Bearing,
+        };
         match u8::try_from(n) {
-            Ok(count) if count > 0 => Ok(Effect::LumpedLateralCompliance(j, count)),
-            _ => Err(IdentifyError::MassesNeeded { effect: "lateral_compliance of a slide".into() }),
+            Ok(count) if count > 0 => Ok(Effect::LumpedLateralCompliance(j, count, support)),
+            _ => Err(IdentifyError::MassesNeeded { effect: format!("lateral_compliance of joint {}", j.number()) }),
         }
     }
 
@@ -339,7 +365,7 @@ impl Effect {
             | Effect::JointCompliance(j)
             | Effect::LumpedCompliance(j, _)
             | Effect::LateralCompliance(j, _)
-            | Effect::LumpedLateralCompliance(j, _)
+            | Effect::LumpedLateralCompliance(j, ..)
             | Effect::Straightness(j)
             | Effect::ComplianceCoupling(j)
             | Effect::JointScale(j)
@@ -389,7 +415,7 @@ impl Effect {
             Effect::Straightness(_) => 5,
             Effect::LumpedCompliance(_, n)
             | Effect::LateralCompliance(_, n)
-            | Effect::LumpedLateralCompliance(_, n) => *n as usize,
+            | Effect::LumpedLateralCompliance(_, n, _) => *n as usize,
         }
     }
 
@@ -460,9 +486,17 @@ impl Effect {
                 .iter()
                 .map(|t| format!("{prefix}.{t}"))
                 .collect(),
-            Effect::LumpedLateralCompliance(_, n) => {
-                let half = *n as usize / 2;
-                (0..2 * half).map(|b| format!("{prefix}.tilt{}_load{:02}_deg", b / half + 1, b % half + 1)).collect()
+            Effect::LumpedLateralCompliance(_, n, support) => {
+                // A bearing's one set (tilt) or a column's three (tilt, bend, shift), each a half per direction.
+                let sets = [("tilt", "deg"), ("bend", "deg_per_mm"), ("shift", "mm")];
+                let half = *n as usize / 2 / support.sets();
+                (0..*n as usize)
+                    .map(|b| {
+                        let (set, at) = (b / (2 * half), b % (2 * half));
+                        let (kind, unit) = sets[set];
+                        format!("{prefix}.{kind}{}_load{:02}_{unit}", at / half + 1, at % half + 1)
+                    })
+                    .collect()
             }
             Effect::Straightness(_) => {
                 ["tilt1_deg_per_mm", "tilt2_deg_per_mm", "roll_deg_per_mm", "bow1_per_mm", "bow2_per_mm"]
@@ -540,13 +574,15 @@ impl Effect {
                 Effect::JointOffset(_)
                 | Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
-                | Effect::LumpedLateralCompliance(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::Periodic(_)
                 | Effect::Backlash(_)
                 | Effect::ToolRotation,
                 _,
             ) => true,
+            // A column's third set, its foot's shift, is millimetres.
+            (Effect::LumpedLateralCompliance(_, n, Support::Column), k) => k < 2 * (*n as usize) / 3,
+            (Effect::LumpedLateralCompliance(..), _) => true,
             // A slide's shift is millimetres per N·m.
             (Effect::LateralCompliance(..), k) => k < 4,
             // A bow is a length per squared length.

@@ -29,7 +29,7 @@ mod terms;
 pub use catalogue::{FrameMode, Lateral, Setup, ToolMode, approach_counts, gravity_compliance};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
 pub use effect::{
-    DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, SensorId, StepAt,
+    DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, SensorId, StepAt, Support,
     TAU_RANGE_MIN,
 };
 pub use error::IdentifyError;

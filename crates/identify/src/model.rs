@@ -185,7 +185,7 @@ impl Model {
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
                 Effect::JointCompliance(j) => joints[j.index()].compliance_rad_per_nm += theta[o],
-                Effect::LumpedCompliance(j, n) | Effect::LumpedLateralCompliance(j, n) => {
+                Effect::LumpedCompliance(j, n) | Effect::LumpedLateralCompliance(j, n, _) => {
                     let own = match e {
                         Effect::LumpedCompliance(..) => &mut loads[j.index()],
                         _ => &mut lateral_loads[j.index()],
@@ -349,7 +349,7 @@ impl Model {
                 | Effect::ThermalDrift(j, _)
                 | Effect::SensorDrift(j, _)
                 | Effect::LateralCompliance(j, _)
-                | Effect::LumpedLateralCompliance(j, _)
+                | Effect::LumpedLateralCompliance(j, ..)
                 | Effect::Straightness(j) => rows.joints[j.index()] = true,
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)

@@ -223,11 +223,15 @@ impl Model {
                     add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
                 }
-                Effect::LumpedLateralCompliance(j, n) => {
-                    let n = n as usize;
+                Effect::LumpedLateralCompliance(j, n, support) => {
+                    let (j, n) = (j.index(), n as usize);
                     load_basis(cached, *e, &m.q, inputs.sin_cos, o)?;
-                    let tilts = thermokin_deform::lumped_tilts(&cached.loads[o..o + n], &theta[o..o + n]);
-                    add_to_row(&mut drift_rows, j.index(), bent_row(*e, robot.chain(), &tilts, [1.0; 2], 0.0));
+                    let chain = robot.chain();
+                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+                    let basis = &cached.loads[o..o + n / support.sets()];
+                    let axis = chain.joints()[j].axis.into_inner();
+                    let row = thermokin_deform::lumped_lateral_row_error(basis, &theta[o..o + n], &dirs, &axis, m.q[j]);
+                    add_to_row(&mut drift_rows, j, row);
                 }
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
                     let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j.index()]);
@@ -410,20 +414,8 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
-                Effect::LumpedLateralCompliance(j, n) => {
-                    // ∂p/∂θₖ,b = ∂p/∂angles · eₖ fₖ,b(q).
-                    let (j, half) = (j.index(), n as usize / 2);
-                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
-                    let row = layout.joint(j) + 3;
-                    for (k, dir) in dirs.iter().enumerate() {
-                        for r in 0..6 {
-                            let turn = (0..3).map(|c| pj[(r, row + c)] * dir[c]).sum::<f64>();
-                            for b in 0..half {
-                                let col = o + k * half + b;
-                                jac[(r, col)] = turn * cached.loads[col];
-                            }
-                        }
-                    }
+                Effect::LumpedLateralCompliance(j, ..) => {
+                    bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
                 }
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
                     bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
@@ -476,6 +468,24 @@ fn bend_columns(
     let row = layout.joint(j);
     let along = |r: usize, at: usize, v: &Vector3<f64>| (0..3).map(|c| pj[(r, row + at + c)] * v[c]).sum::<f64>();
     match e {
+        Effect::LumpedLateralCompliance(_, n, support) => {
+            // Per set s, direction k, function b: the column of c (s = 0), c′ (1) or s (2) above at unit
+            // moment, times fₖ,b(q) — ∂p/∂θ = ∂p/∂c · fₖ,b.
+            let half = n as usize / 2 / support.sets();
+            for (k, dir) in dirs.iter().enumerate() {
+                let across = dir.cross(&axis);
+                for r in 0..6 {
+                    let (turn, shift) = (along(r, 3, dir), along(r, 0, &across));
+                    let per_set = [turn, turn * d - shift * 0.5 * d * d, shift];
+                    for (s, v) in per_set.iter().enumerate().take(support.sets()) {
+                        for b in 0..half {
+                            let col = o + s * 2 * half + k * half + b;
+                            jac[(r, col)] = v * cached.loads[col];
+                        }
+                    }
+                }
+            }
+        }
         Effect::LateralCompliance(_, n) => {
             let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
             for (k, dir) in dirs.iter().enumerate() {
@@ -513,10 +523,7 @@ fn bent_row(e: Effect, chain: &Chain, c: &[f64], moments: [f64; 2], d: f64) -> E
     let directions = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
     let axis = chain.joints()[j].axis.into_inner();
     match e {
-        // Without masses the tilts themselves, at unit moments.
-        Effect::LateralCompliance(..) | Effect::LumpedLateralCompliance(..) => {
-            thermokin_deform::lateral_row_error(c, &directions, &axis, moments, d)
-        }
+        Effect::LateralCompliance(..) => thermokin_deform::lateral_row_error(c, &directions, &axis, moments, d),
         Effect::Straightness(_) => {
             let c = [c[0], c[1], c[2], c[3], c[4]];
             thermokin_deform::straightness_row_error(&c, &directions, &axis, d)
@@ -545,7 +552,10 @@ fn load_basis(
             _ => thermokin_chain::lateral_load_basis_into(chain, q, given, down, j, &mut cached.basis)?,
         }
     }
-    let n = e.len();
-    cached.loads[o..o + n].copy_from_slice(&cached.basis[..n]);
+    // A column's three sets of weights share the functions: one copy per set, each weight's own.
+    let (n, per_set) = (e.len(), cached.basis.len().min(e.len()));
+    for at in (o..o + n).step_by(per_set.max(1)) {
+        cached.loads[at..at + per_set].copy_from_slice(&cached.basis[..per_set]);
+    }
     Ok(())
 }

@@ -129,7 +129,7 @@ mod tests {
     use thermokin_testdata::{gauss, irb140_table9, measured_point};
 
     use super::{residuals, residuals_and_jacobian};
-    use crate::{Effect, JointIndex, Model, PoseTerms};
+    use crate::{Effect, JointIndex, Model, PoseTerms, Support};
 
     /// The analytic Jacobian of `model` at `theta` on every measurement of `data`, checked column by column
     /// against central differences of step `h` of the residuals (which are `measured − predicted`: the
@@ -258,7 +258,7 @@ mod tests {
     /// central differences, and its exported robot's forward model against the fit's prediction at every
     /// pose (1e-9 mm); the largest distance the export moves the tool from the plain robot's.
     fn bends_as_fitted(robot: &Robot, model: &Model, theta: &[f64], data: &Dataset, terms: &PoseTerms) -> f64 {
-        jacobian_is_the_differences(robot, model, theta, data, terms, 1e-9);
+        jacobian_is_the_differences(robot, model, theta, data, terms, 1e-7);
         let exported = model.robot_model(robot, theta, data).unwrap();
         assert!(exported.bends());
         let rows: Vec<usize> = (0..data.len()).collect();
@@ -300,28 +300,43 @@ mod tests {
     }
 
     /// Lateral compliances of a lifted IRB 140 whose file has no masses (their loads lumped): the
-    /// shoulder's and the elbow's — the analytic Jacobian against central differences, and the exported
-    /// robot's forward model against the fit's prediction.
+    /// column's (tilting, bending, shifting), the shoulder's and the elbow's — the analytic Jacobian
+    /// against central differences, and the exported robot's forward model against the fit's prediction.
     #[test]
     fn a_lumped_lateral_compliance_matches_the_differences_and_its_export() {
         let chain = lifted_irb140_chain();
         let robot = Robot::new("lifted IRB 140", chain);
         let data = lifted(eight_poses(13), 0.0, 100.0);
         let effects = vec![
+            Effect::named(&robot, "lateral_compliance", Some(0)).unwrap(),
             Effect::named(&robot, "lateral_compliance", Some(2)).unwrap(),
             Effect::named(&robot, "lateral_compliance", Some(3)).unwrap(),
         ];
         let joint = |j| JointIndex::of(&robot, j).unwrap();
-        // Per direction: 3 for the joint's own link, 2 per revolute joint beyond.
+        // Per direction: 3 for the joint's own link, 2 per revolute joint beyond; a column's three sets.
         assert_eq!(
             effects,
-            vec![Effect::LumpedLateralCompliance(joint(2), 22), Effect::LumpedLateralCompliance(joint(3), 18)]
+            vec![
+                Effect::LumpedLateralCompliance(joint(0), 90, Support::Column),
+                Effect::LumpedLateralCompliance(joint(2), 22, Support::Bearing),
+                Effect::LumpedLateralCompliance(joint(3), 18, Support::Bearing)
+            ]
         );
-        assert!(Effect::named(&robot, "lateral_compliance", Some(0)).is_err(), "a slide's needs the masses");
         let model = Model::new(&robot, effects).unwrap();
         let terms = PoseTerms::of(&robot, &data, 0.0);
-        // Weights of 1e-3 rad: tilts of a few 1e-4 rad.
-        let theta: Vec<f64> = (0..40).map(|k| 1e-3 * ((k as f64 * 0.7).sin())).collect();
+        // Weights of 1e-3 rad (the column's 1e-5 rad, its bend 1e-8 rad/mm, its shift 0.01 mm): tilts of a
+        // few 1e-4 rad.
+        let theta: Vec<f64> = (0..model.len())
+            .map(|k| {
+                let size = match k {
+                    0..30 => 1e-5,
+                    30..60 => 1e-8,
+                    60..90 => 0.01,
+                    _ => 1e-3,
+                };
+                size * ((k as f64 * 0.7).sin())
+            })
+            .collect();
         let moved = bends_as_fitted(&robot, &model, &theta, &data, &terms);
         assert!(moved > 0.1, "{moved}");
     }

@@ -145,7 +145,9 @@ struct JointSpec {
     /// degrees per N·m per mm of extension and mm per N·m of shift: `[c1, c2]` or `[c1, c2, c1', c2', s1, s2]`.
     lateral_compliance_deg_per_nm: Option<Vec<f64>>,
     /// Lateral compliance known without masses, degrees (degrees per mm for a slide the joint carries):
-    /// the weights of `thermokin_chain::lateral_load_basis_into`'s functions.
+    /// the weights of `thermokin_chain::lateral_load_basis_into`'s functions; a slide's own three sets
+    /// (`thermokin_deform::lumped_lateral_row_error`): its tilt's in degrees, its bend's in degrees per mm,
+    /// its shift's in mm.
     lateral_load_deg: Option<Vec<f64>>,
     /// A slide's straightness: `[tilt1, tilt2, roll]` degrees per mm of extension, then `[bow1, bow2]`
     /// mm per mm² (`thermokin_deform::straightness_row_error`).
@@ -431,7 +433,9 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         }
         if let Some(v) = &spec.lateral_load_deg {
             finite(path, line, &field("lateral_load_deg"), v)?;
-            lateral_loads[i] = v.iter().map(|&d| units::radians(d)).collect();
+            let angles = lateral_load_angles(&robot, i, v.len());
+            lateral_loads[i] =
+                v.iter().enumerate().map(|(k, &d)| if k < angles { units::radians(d) } else { d }).collect();
         }
         if let Some(v) = spec.backlash {
             finite(path, line, &field("backlash"), &[v])?;
@@ -766,6 +770,12 @@ pub fn urdf_in_state(
     Ok((thermokin_urdf::export_robot_noting(&working, &beyond), beyond))
 }
 
+/// How many of joint `i`'s `len` lateral-load weights are angles (degrees in a file, radians inside): all
+/// of a revolute joint's; a slide's tilt and bend sets, not its shift set (mm).
+fn lateral_load_angles(robot: &Robot, i: usize, len: usize) -> usize {
+    if robot.chain().joints()[i].kind == JointKind::Prismatic { 2 * len / 3 } else { len }
+}
+
 /// The robot with every correction it carries as TOML (what [`read_robot_model`] reads back): per joint
 /// `scale`, `cyclic_deg`, `compliance_deg_per_nm` beside the geometry; `gravity`, `[payload]` and one
 /// `[[drift]]` table per drifting row with its law. Millimetres and degrees, numbers rounded to 1e-12.
@@ -796,7 +806,13 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
             ),
         ];
         for (values, comment, key) in weights.into_iter().filter(|(v, ..)| !v.is_empty()) {
-            let deg: Vec<String> = values.iter().map(|&v| format!("{:e}", units::degrees(v))).collect();
+            let angles =
+                if key == "lateral_load_deg" { lateral_load_angles(robot, i, values.len()) } else { values.len() };
+            let deg: Vec<String> = values
+                .iter()
+                .enumerate()
+                .map(|(k, &v)| format!("{:e}", if k < angles { units::degrees(v) } else { v }))
+                .collect();
             s.push_str(&format!("# {comment}\n{key} = [{}]\n", deg.join(", ")));
         }
     }

@@ -296,6 +296,28 @@ fn a_column_bending_under_the_arms_moment_is_named_and_its_top_poses_kept() {
     column_named_at_the_noise(&robot, &data, &fresh, &["lateral_compliance[1]"]);
 }
 
+/// The same bending column diagnosed from the lift's file without its masses (the construction robot's
+/// case without them): the column's lateral compliance with its loads lumped is named — its foot's tilt,
+/// its bending over the extension and its foot's shift each weighting the functions whose sums are the
+/// moments of any masses — no pose is flagged, and fresh poses are at the noise in both protocols.
+#[test]
+fn a_column_bending_under_an_arm_of_unknown_masses_is_named_and_its_top_poses_kept() {
+    let robot = lifted_irb140();
+    let massless = robot.clone().with_masses(vec![None; robot.chain().dof()]).unwrap();
+    let session = |n: usize, seed: u64| {
+        let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
+        for m in &mut data.measurements {
+            let mut off = m.q.clone();
+            off[3] += 0.02f64.to_radians();
+            let plain = robot.chain().tool_pose(&m.q).unwrap().translation.vector;
+            m.position_mm += bent_column(&robot, &off) - plain;
+        }
+        data
+    };
+    let (data, fresh) = (session(300, 4731), session(150, 4732));
+    column_named_at_the_noise(&massless, &data, &fresh, &["lateral_compliance[1] (no masses)"]);
+}
+
 /// The lifted arm's diagnosis of `data`, `fresh` held out (tracker frame): every label of `named` chosen,
 /// no gross error, fresh poses at the noise in both protocols.
 fn column_named_at_the_noise(robot: &Robot, data: &Dataset, fresh: &Dataset, named: &[&str]) {

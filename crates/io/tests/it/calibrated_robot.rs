@@ -215,3 +215,34 @@ fn a_slides_straightness_reads_back_and_a_revolute_joint_refuses_one() {
     let e = parse_robot_model_toml("arm.toml".as_ref(), &on_revolute).unwrap_err().to_string();
     assert!(e.contains("arm.toml") && e.contains("joint[1]") && e.contains("slide's guide"), "{e}");
 }
+
+/// A lift's column whose lateral compliance is known without masses (its tilt, bend and shift weights):
+/// written and read back to the same weights and tool poses; its shift weights are millimetres in the
+/// file (written as given, not as degrees), its tilt and bend weights degrees.
+#[test]
+fn a_columns_lumped_lateral_compliance_is_written_and_read_back() {
+    let text = thermokin_testdata::lifted_irb140_toml("");
+    let robot = parse_robot_toml("lift.toml".as_ref(), &text).unwrap();
+    let n = thermokin_deform::lumped_lateral_weights_len(robot.chain(), 0);
+    assert_eq!(n, 90);
+    // Tilt weights 1e-5 rad, bend 1e-8 rad/mm, shift 0.01 mm, each signed by its place.
+    let weights: Vec<f64> = (0..n).map(|k| [1e-5, 1e-8, 0.01][k / 30] * if k % 2 == 0 { 1.0 } else { -0.5 }).collect();
+    let mut loads = vec![Vec::new(); 7];
+    loads[0] = weights.clone();
+    let model = RobotModel::new(robot).with_lateral_loads(loads).unwrap();
+    let written = robot_model_to_toml(&model);
+    let line = written.lines().find(|l| l.starts_with("lateral_load_deg")).unwrap();
+    assert!(
+        line.contains("1e-2") && line.contains("-5e-3") && line.contains(&format!("{:e}", 1e-5f64.to_degrees())),
+        "{line}"
+    );
+    let back = parse_robot_model_toml("lift.toml".as_ref(), &written).unwrap();
+    for (a, b) in back.lateral_loads()[0].iter().zip(&weights) {
+        assert!((a - b).abs() <= 1e-9 * b.abs(), "{a} vs {b}");
+    }
+    let state = OperatingState::default();
+    let q = [420.0, 0.3, -0.4, 0.2, 0.1, 0.5, -0.2];
+    let (a, b) = (model.tool_pose(&q, &state).unwrap(), back.tool_pose(&q, &state).unwrap());
+    assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
+    assert!((a.translation.vector - model.robot().chain().tool_pose(&q).unwrap().translation.vector).norm() > 0.01);
+}
