@@ -9,7 +9,7 @@ use thermokin_identify::{DriftShape, Effect, JointIndex};
 
 use crate::config::Config;
 use crate::error::DiagnoseError;
-use crate::plausibility::{Judged, implausible};
+use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
 use crate::selection::{Candidate, Scored, Selection, score, unsettled};
 
@@ -26,30 +26,50 @@ pub(crate) fn forward(
     sel: &mut Selection,
     mut pool: Vec<Effect>,
 ) -> Result<(), DiagnoseError> {
+    // Candidates refused for their size in the current model: out of the pool until another effect
+    // joins (see `refuse`).
+    let mut resting = Vec::new();
     while sel.chosen().len() < config.max_effects && !pool.is_empty() {
-        let results = score_round(scorer, config, sel, &mut pool)?;
+        let results = score_round(scorer, config, sel, &mut pool, &mut resting)?;
         let Some(best) = results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)) else {
             break;
         };
         if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
             break;
         }
-        let Some((c, b, theta)) = choose(scorer, config, sel, &results, best, &mut pool)? else { break };
+        let Some((c, b, theta)) = choose(scorer, config, sel, &results, best, &mut pool, &mut resting)? else { break };
         sel.accept(&c, b, theta, format!("+ {}", c.effect.label()));
         pool.retain(|e| *e != c.effect);
+        pool.append(&mut resting);
     }
     Ok(())
 }
 
+/// Refuses candidate `c` for `why`, judged as `judged`: its refusal replaces an earlier one of the same
+/// effect. A value beyond its size bound is a fit of this model — where the model still lacks the
+/// rows it is trading with, a candidate absorbs their errors (on an elastic arm whose geometry is
+/// millimetres off, a compliance fitted before the rows bends by degrees) — so it rests until another
+/// effect joins and is tried again then; a refusal in kind (a joint rising under its load, a drift over
+/// before the poses, a slope no joint correction has) is final.
+fn refuse(sel: &mut Selection, c: Effect, why: &Implausible, judged: Judged, resting: &mut Vec<Effect>) {
+    let refusal = why.refusal(c, judged);
+    sel.refused.retain(|r| r.effect != refusal.effect);
+    sel.refused.push(refusal);
+    if why.excess().is_some() {
+        resting.push(c);
+    }
+}
+
 /// One round's scored candidates: the screen's shortlist of the linear candidates, then the exponential
-/// drifts whose linear twin earns half the best gain. Candidates the screen or every fold finds
-/// implausible are refused and leave the pool; those that add nothing identifiable are recorded as
-/// skipped; the pool keeps the others.
+/// drifts whose linear twin earns half the best gain. Candidates every fold finds implausible are
+/// refused and leave the pool (for their size: until another effect joins, `refuse`); those that add
+/// nothing identifiable are recorded as skipped; the pool keeps the others.
 fn score_round(
     scorer: &Scorer<'_>,
     config: &Config,
     sel: &mut Selection,
     pool: &mut Vec<Effect>,
+    resting: &mut Vec<Effect>,
 ) -> Result<Vec<Candidate>, DiagnoseError> {
     let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exponential(c)).collect();
     let effects = sel.effects.clone();
@@ -87,9 +107,11 @@ fn score_round(
         match s {
             Scored::AddsNothing(reason) => sel.skip(c, reason),
             Scored::Candidate(s) => match &s.runaway {
-                Some(why) => sel.refused.push(why.refusal(c, Judged::FittedOnEveryFold)),
+                Some(why) => refuse(sel, c, why, Judged::FittedOnEveryFold, resting),
                 None if s.unsettled => sel.refused.push(unsettled(c)),
                 None => {
+                    // Plausible in this model: an earlier refusal for its size no longer holds.
+                    sel.refused.retain(|r| r.effect != c.label());
                     still.push(c);
                     results.push(s);
                 }
@@ -104,8 +126,8 @@ fn score_round(
 /// Parsimony within the step: the smallest block within `parsimony` of the best gain, itself
 /// significant; ties between blocks of one size go to the conventional one (base_frame, tool_frame,
 /// joint_offset), then the lowest error. A time-dependent candidate must also lower the forward-chained
-/// error; one whose values fitted on all data are implausible is refused (and leaves the pool); the
-/// information criterion must fall.
+/// error; one whose values fitted on all data are implausible is refused (and leaves the pool, for its
+/// size until another effect joins); the information criterion must fall.
 fn choose(
     scorer: &Scorer<'_>,
     config: &Config,
@@ -113,6 +135,7 @@ fn choose(
     results: &[Candidate],
     best: &Candidate,
     pool: &mut Vec<Effect>,
+    resting: &mut Vec<Effect>,
 ) -> Result<Option<(Candidate, f64, Vec<f64>)>, DiagnoseError> {
     let gate = config.gate_standard_errors;
     let gain = sel.current.heldout_rms_mm - best.stats.heldout_rms_mm;
@@ -148,7 +171,7 @@ fn choose(
         let o = model.offsets()[model.offsets().len() - 1];
         let values = &full.theta[o..o + cand.effect.len()];
         if let Some(why) = implausible(&scorer.scale, values, cand.effect, &config.plausibility) {
-            sel.refused.push(why.refusal(cand.effect, Judged::Fitted));
+            refuse(sel, cand.effect, &why, Judged::Fitted, resting);
             pool.retain(|c| *c != cand.effect);
             continue;
         }

@@ -5,7 +5,7 @@
 
 use thermokin_chain::{Dataset, Robot, units};
 use thermokin_deform::MAX_CORRECTION_SLOPE;
-use thermokin_identify::{DriftShape, Effect, Support, max_gravity_torques};
+use thermokin_identify::{DriftShape, Effect, max_gravity_torques};
 
 use crate::config::Plausibility;
 use crate::report::Refusal;
@@ -46,6 +46,85 @@ pub(crate) struct RobotScale {
     pub(crate) sensor_reach: Vec<f64>,
     /// Per joint, the largest gravity moment across its axis over the data (the file's masses), N·m.
     pub(crate) max_lateral_nm: Vec<f64>,
+    /// For a robot without masses (whose compliances are lumped), per joint the lumped load functions
+    /// at every pose of the data, pose after pose: [`thermokin_chain::gravity_load_basis_into`]'s and
+    /// [`thermokin_chain::lateral_load_basis_into`]'s, with the joint's value (a slide's extension) — so
+    /// that a lumped compliance is bounded by what it does over the data, as every other effect is.
+    pub(crate) loads: Vec<LumpedLoads>,
+}
+
+/// One joint's lumped load functions over the data ([`RobotScale::loads`]), pose-major.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct LumpedLoads {
+    /// [`thermokin_chain::gravity_load_basis_into`]'s functions, `gravity_len` per pose.
+    gravity: Vec<f64>,
+    gravity_len: usize,
+    /// [`thermokin_chain::lateral_load_basis_into`]'s functions, `lateral_len` per pose.
+    lateral: Vec<f64>,
+    lateral_len: usize,
+    /// The joint's value at each pose.
+    q: Vec<f64>,
+}
+
+impl LumpedLoads {
+    /// Joint `j`'s functions over `data` (gravity along −Z of the base, as the catalogue judges them).
+    fn of(robot: &Robot, data: &Dataset, j: usize) -> Self {
+        let chain = robot.chain();
+        let down = -nalgebra::Vector3::z_axis();
+        let (mut loads, mut basis) = (Self::default(), Vec::new());
+        for m in &data.measurements {
+            if thermokin_chain::gravity_load_basis_into(chain, &m.q, None, &down, j, &mut basis).is_ok() {
+                loads.gravity_len = basis.len();
+                loads.gravity.extend_from_slice(&basis);
+            }
+            if thermokin_chain::lateral_load_basis_into(chain, &m.q, None, &down, j, &mut basis).is_ok() {
+                loads.lateral_len = basis.len();
+                loads.lateral.extend_from_slice(&basis);
+            }
+            loads.q.push(m.q[j]);
+        }
+        loads
+    }
+
+    /// How far the deflection `Σ θ_b f_b(q)` of a compliance without masses changes over the data
+    /// (largest less smallest, radians): what a zero offset cannot take. Its level is not bounded — the
+    /// functions' span holds offset-like parts that trade with the joint's offset, whose own bound holds.
+    fn deflection_change(&self, weights: &[f64]) -> f64 {
+        let dot = |f: &[f64]| f.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
+        let (lo, hi) = crate::stats::span(self.gravity.chunks(self.gravity_len.max(1)).map(dot));
+        if lo <= hi { hi - lo } else { 0.0 }
+    }
+
+    /// How far a lateral compliance without masses (`sets` sets of weights: a bearing's tilt, a column's
+    /// tilt, bend and shift — [`thermokin_deform::lumped_lateral_row_error`]) changes its row over the
+    /// data: the change of its tilt (radians; each direction's largest less smallest, combined) and what
+    /// that moves the tool point by at `lever` with the change of the row's shift, mm — what a fixed link
+    /// deviation cannot take, as [`LumpedLoads::deflection_change`].
+    fn tilt_change(&self, weights: &[f64], sets: usize, lever: f64) -> (f64, f64) {
+        let n = self.lateral_len.max(1);
+        // Per pose the turn about, and the shift along, the two (orthonormal) directions.
+        let rows: Vec<[f64; 4]> = self
+            .lateral
+            .chunks(n)
+            .zip(&self.q)
+            .map(|(f, &d)| {
+                let set = |s: usize| {
+                    weights
+                        .get(s * n..(s + 1) * n)
+                        .filter(|_| s < sets)
+                        .map_or([0.0; 2], |w| thermokin_deform::lumped_tilts(f, w))
+                };
+                let ([t1, t2], [b1, b2], [s1, s2]) = (set(0), set(1), set(2));
+                [t1 + b1 * d, t2 + b2 * d, s1 - 0.5 * b1 * d * d, s2 - 0.5 * b2 * d * d]
+            })
+            .collect();
+        let change = |k: usize| {
+            let (lo, hi) = crate::stats::span(rows.iter().map(|r| r[k]));
+            if lo <= hi { hi - lo } else { 0.0 }
+        };
+        let (tilt, shift) = (change(0).hypot(change(1)), change(2).hypot(change(3)));
+        (tilt, tilt * lever + shift)
+    }
 }
 
 impl RobotScale {
@@ -85,7 +164,9 @@ impl RobotScale {
         let sensor_reach = (0..data.sensor_names.len())
             .map(|k| data.sensor_values.iter().filter_map(|v| v.get(k)).fold(0.0, |a: f64, x| a.max(x.abs())))
             .collect();
+        let loads = if massive { Vec::new() } else { (0..dof).map(|j| LumpedLoads::of(robot, data, j)).collect() };
         Self {
+            loads,
             extent_mm: lever_mm.first().copied().unwrap_or(0.0),
             reach,
             revolute: chain.joints().iter().map(|j| j.kind == thermokin_chain::JointKind::Revolute).collect(),
@@ -269,27 +350,19 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let moved = turn * lever_of(j) + v[3].hypot(v[4]) * d * d;
             over("the turn of the carriage at the full extension", deg(turn), moved, lever_of(j), "°")
         }
-        Effect::LumpedLateralCompliance(j, n, support) => {
-            // As a compliance without masses: each function at most 1 in size, the sum of each direction's
-            // weights bounds its tilt (a column's bend at the full extension the data reach added, and its
-            // shift moving the row as it is); the larger of the two directions at the row's lever.
-            let (per_set, reach) = (n as usize / support.sets(), scale.reach[j.index()]);
-            let half = per_set / 2;
-            let bound = |set: usize| {
-                let at = |k: usize| set * per_set + k * half;
-                (0..2).map(|k| v[at(k)..at(k) + half].iter().map(|x| x.abs()).sum::<f64>()).fold(0.0, f64::max)
-            };
-            let (tilt, shift) = match support {
-                Support::Bearing => (bound(0), 0.0),
-                Support::Column => (bound(0) + bound(1) * reach, bound(2) + bound(1) * reach * reach / 2.0),
-            };
-            over("the largest tilt under gravity", deg(tilt), tilt * lever_of(j) + shift, lever_of(j), "°")
+        Effect::LumpedLateralCompliance(j, _, support) => {
+            // How far its tilt changes over the data's poses (a column's bend at each pose's extension
+            // added, and its shift moving the row as it is), at the row's lever.
+            let loads = scale.loads.get(j.index())?;
+            let (tilt, moved) = loads.tilt_change(v, support.sets(), lever_of(j));
+            over("the change of its tilt under gravity over the data", deg(tilt), moved, lever_of(j), "°")
         }
         Effect::LumpedCompliance(j, _) => {
-            // Each function is at most 1 in size (a slide's term at most its travel, left out): the sum of
-            // the weights bounds the deflection over every pose.
-            let (lever, deflection) = (scale.axis_lever_mm[j.index()].max(1.0), v.iter().map(|x| x.abs()).sum::<f64>());
-            over("the largest deflection under gravity", deg(deflection), deflection * lever, lever, "°")
+            // How far its deflection changes over the data's poses, at the joint's axis lever.
+            let lever = scale.axis_lever_mm[j.index()].max(1.0);
+            let deflection = scale.loads.get(j.index())?.deflection_change(v);
+            let what = "the change of its deflection under gravity over the data";
+            over(what, deg(deflection), deflection * lever, lever, "°")
         }
         Effect::JointOffset(j)
         | Effect::Backlash(j)
@@ -409,7 +482,60 @@ mod tests {
             times_min: Vec::new(),
             sensor_reach: Vec::new(),
             max_lateral_nm: vec![0.0; 6],
+            loads: Vec::new(),
         }
+    }
+
+    /// A compliance without masses is bounded by how far its deflection changes over the data's poses,
+    /// not by the sum of its weights: on an IRB 140 without masses whose joint 2 moves over ±0.6 rad,
+    /// joint 2's weights along the direction its functions are least excited over the data (the last
+    /// right singular vector of their matrix, here), summing to 1 rad (57°), change its deflection by
+    /// what the data's poses give them (computed here from the functions): plausible, where the sum alone
+    /// is far beyond the bound. Scaled to 1.5× the bound over the data they are refused; to half, not.
+    #[test]
+    fn a_lumped_compliance_is_bounded_by_what_it_does_over_the_data() {
+        use thermokin_chain::{Dataset, Measurement};
+        let robot = Robot::new("irb140", thermokin_testdata::irb140_table9());
+        let measurements = (0..50)
+            .map(|i| Measurement {
+                time_min: 0.0,
+                q: vec![0.0, -0.6 + 1.2 * i as f64 / 49.0, 0.3 + 0.4 * (i % 3) as f64, 0.0, 0.4, 0.0],
+                position_mm: nalgebra::Vector3::zeros(),
+                orientation: None,
+                position_std_mm: None,
+                temps: Vec::new(),
+            })
+            .collect();
+        let data = Dataset { measurements, ..Dataset::default() };
+        let scale = RobotScale::of(&robot, &data);
+        let j2 = JointIndex::of(&robot, 1).unwrap();
+        let e = Effect::lumped_compliance(&robot, j2).unwrap();
+        let down = -nalgebra::Vector3::z_axis();
+        let (mut basis, mut rows) = (Vec::new(), Vec::new());
+        for m in &data.measurements {
+            thermokin_chain::gravity_load_basis_into(robot.chain(), &m.q, None, &down, 1, &mut basis).unwrap();
+            rows.extend_from_slice(&basis);
+        }
+        let n = e.len();
+        let a = nalgebra::DMatrix::from_row_slice(data.len(), n, &rows);
+        let svd = a.clone().svd(false, true);
+        let last = svd.singular_values.imin();
+        let v: Vec<f64> = svd.v_t.unwrap().row(last).iter().copied().collect();
+        let norm1 = v.iter().map(|x| x.abs()).sum::<f64>();
+        let w: Vec<f64> = v.iter().map(|x| x / norm1).collect();
+        // How far the deflection changes over the data (what an offset cannot take).
+        let deflection = |w: &[f64]| {
+            let d = &a * nalgebra::DVector::from_column_slice(w);
+            d.max() - d.min()
+        };
+        let p = Plausibility::default();
+        let allowed_rad = p.displacement_of_extent * scale.extent_mm / scale.axis_lever_mm[1];
+        let small = deflection(&w);
+        assert!(small < 0.1 * allowed_rad && allowed_rad < 0.1, "{small} {allowed_rad}");
+        assert_eq!(implausible(&scale, &w, e, &p), None);
+        let scaled = |k: f64| w.iter().map(|x| x * k * allowed_rad / small).collect::<Vec<f64>>();
+        assert!(matches!(implausible(&scale, &scaled(1.5), e, &p), Some(Implausible::Beyond { .. })));
+        assert_eq!(implausible(&scale, &scaled(0.5), e, &p), None);
     }
 
     #[test]
