@@ -26,8 +26,8 @@ pub(crate) fn forward(
     sel: &mut Selection,
     mut pool: Vec<Effect>,
 ) -> Result<(), DiagnoseError> {
-    // Candidates refused for their size in the current model: out of the pool until another effect
-    // joins (see `refuse`).
+    // Candidates refused for their size in the model of their refusal: out of the pool until another
+    // effect joins and a linearised step puts them within bounds (`refuse`, `wake`).
     let mut resting = Vec::new();
     while sel.chosen().len() < config.max_effects && !pool.is_empty() {
         let results = score_round(scorer, config, sel, &mut pool, &mut resting)?;
@@ -40,16 +40,16 @@ pub(crate) fn forward(
         let Some((c, b, theta)) = choose(scorer, config, sel, &results, best, &mut pool, &mut resting)? else { break };
         sel.accept(&c, b, theta, format!("+ {}", c.effect.label()));
         pool.retain(|e| *e != c.effect);
-        pool.append(&mut resting);
+        wake(scorer, config, sel, &mut pool, &mut resting)?;
     }
     Ok(())
 }
 
 /// Refuses candidate `c` for `why`, judged as `judged`: its refusal replaces an earlier one of the same
-/// effect. A value beyond its size bound is a fit of this model — where the model still lacks the
-/// rows it is trading with, a candidate absorbs their errors (on an elastic arm whose geometry is
-/// millimetres off, a compliance fitted before the rows bends by degrees) — so it rests until another
-/// effect joins and is tried again then; a refusal in kind (a joint rising under its load, a drift over
+/// effect. A value beyond its size bound is a fit of this model — where the model still lacks the rows
+/// it trades with, a candidate absorbs their errors (on an elastic arm whose geometry is millimetres off,
+/// a compliance fitted before the rows bends by degrees) — so it rests (`resting`) and may return once
+/// other effects have joined ([`wake`]); a refusal in kind (a joint rising under its load, a drift over
 /// before the poses, a slope no joint correction has) is final.
 fn refuse(sel: &mut Selection, c: Effect, why: &Implausible, judged: Judged, resting: &mut Vec<Effect>) {
     let refusal = why.refusal(c, judged);
@@ -60,9 +60,36 @@ fn refuse(sel: &mut Selection, c: Effect, why: &Implausible, judged: Judged, res
     }
 }
 
+/// After an effect joined: the resting candidates whose values one linearised step on all data puts
+/// within their bounds in the model as it now stands return to the pool, to be fitted in full again
+/// ([`crate::screen::linearised_values`]); the others rest — a fit runs to about the values that step
+/// points at, so fitting them again would refuse them again at the cost of a fit per fold (on the UR10,
+/// `link_deviation[6]` trading with the probe at 27 mm, every round).
+fn wake(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &Selection,
+    pool: &mut Vec<Effect>,
+    resting: &mut Vec<Effect>,
+) -> Result<(), DiagnoseError> {
+    if resting.is_empty() {
+        return Ok(());
+    }
+    let values = crate::screen::linearised_values(scorer, &sel.effects, &sel.theta, resting)?;
+    let mut still = Vec::new();
+    for (c, v) in resting.drain(..).zip(values) {
+        match implausible(&scorer.scale, &v, c, &config.plausibility) {
+            Some(_) => still.push(c),
+            None => pool.push(c),
+        }
+    }
+    *resting = still;
+    Ok(())
+}
+
 /// One round's scored candidates: the screen's shortlist of the linear candidates, then the exponential
 /// drifts whose linear twin earns half the best gain. Candidates every fold finds implausible are
-/// refused and leave the pool (for their size: until another effect joins, `refuse`); those that add
+/// refused and leave the pool (for their size, to rest: `refuse`); those that add
 /// nothing identifiable are recorded as skipped; the pool keeps the others.
 fn score_round(
     scorer: &Scorer<'_>,

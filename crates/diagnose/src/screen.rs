@@ -136,6 +136,56 @@ fn linearised_heldout(
     Ok(sse)
 }
 
+/// Per candidate, the values one Gauss–Newton step on all data from the current fit gives its
+/// parameters (internal units; the current effects moving with it, as in [`linearised_heldout`]'s steps):
+/// what a candidate refused for its size would be fitted at in the model as it now stands, to first
+/// order — so that it is fitted in full again only where that could have changed. A column the data do
+/// not determine (negligible, or solved only through the ridge) may come out at any value: an estimate,
+/// never a fit.
+pub(crate) fn linearised_values(
+    scorer: &Scorer<'_>,
+    effects: &[Effect],
+    theta: &[f64],
+    candidates: &[Effect],
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
+    let all = scorer.all();
+    let mut out = Vec::with_capacity(candidates.len());
+    for &c in candidates {
+        let mut with = effects.to_vec();
+        with.push(c);
+        let model = scorer.model(&with, &all)?;
+        let mut at = model.initial();
+        at[..theta.len()].copy_from_slice(theta);
+        // All data's normal equations as the sum of the folds' test parts' (which partition it): never
+        // the whole Jacobian at once, as in `linearised_heldout`.
+        let p = model.len();
+        let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
+        for (_, test) in scorer.folds.iter().filter(|(_, t)| !t.is_empty()) {
+            let (r, j) = residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, test, &scorer.terms)?;
+            let (n_t, g_t) = normal_equations(&j, &r);
+            n += &n_t;
+            g += &g_t;
+        }
+        let norms: Vec<f64> = (0..p).map(|k| n[(k, k)].max(0.0).sqrt()).collect();
+        let largest = norms.iter().copied().fold(0.0, f64::max);
+        let used: Vec<usize> = (0..p).filter(|&k| norms[k] > NEGLIGIBLE_COLUMN * largest).collect();
+        let q = used.len();
+        let n_s = Mat::<f64>::from_fn(q, q, |i, k| n[(used[i], used[k])] / (norms[used[i]] * norms[used[k]]));
+        let g_s = Mat::<f64>::from_fn(q, 1, |i, _| g[(used[i], 0)] / norms[used[i]]);
+        let o = model.offsets()[effects.len()];
+        let mut values: Vec<f64> = at[o..o + c.len()].to_vec();
+        if let Some(step) = solve(&n_s, &g_s, &(0..q).collect::<Vec<_>>()) {
+            for (i, &col) in used.iter().enumerate() {
+                if (o..o + c.len()).contains(&col) {
+                    values[col - o] += step[i] / norms[col];
+                }
+            }
+        }
+        out.push(values);
+    }
+    Ok(out)
+}
+
 /// `JᵀJ` and `Jᵀr`.
 fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Mat<f64>) {
     let p = j.ncols();
