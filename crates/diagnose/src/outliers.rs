@@ -153,9 +153,12 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
         if robot.chain().joints()[j.index()].kind == thermokin_chain::JointKind::Prismatic {
             effects.push(Effect::JointScale(j));
             effects.push(Effect::Straightness(j));
-            // A column bending under what it carries, more at its top extensions: its tilt, with masses.
+            // A column bending under what it carries, more at its top extensions: its tilt, on the
+            // file's masses or, without them, its loads lumped.
             if robot.masses().iter().skip(j.index()).any(Option::is_some) {
                 lumped.push(Effect::lateral_compliance(robot, j));
+            } else if robot.masses().iter().all(Option::is_none) {
+                lumped.extend(Effect::lumped_lateral_compliance(robot, j).ok());
             }
         }
         // A backlash: the poses reached from its less usual side are no gross errors.

@@ -350,7 +350,7 @@ fn named_at_the_noise_with(robot: &Robot, data: &Dataset, fresh: &Dataset, named
 /// ([`bent_column`]) and tilts by what an accelerometer on its top reads (`acc_col_x`, within ±1: the
 /// column's row turned by `s · (0.02°, −0.01°, 0)`). Both are named — the column's lateral compliance and
 /// its row driven by the reading — no pose is a gross error, and fresh poses with their own readings are
-/// at the noise in both protocols.
+/// at the noise in both protocols; from the file with its masses and from the file without them.
 #[test]
 fn a_column_that_bends_and_tilts_with_its_accelerometer_is_told_apart() {
     let robot = lifted_irb140();
@@ -375,6 +375,14 @@ fn a_column_that_bends_and_tilts_with_its_accelerometer_is_told_apart() {
         &data,
         &fresh,
         &["lateral_compliance[1]", "sensor_drift[1] (driven by acc_col_x)"],
+    );
+    // And from the lift's file without its masses: the column's compliance with its loads lumped.
+    let massless = robot.clone().with_masses(vec![None; robot.chain().dof()]).unwrap();
+    column_named_at_the_noise(
+        &massless,
+        &data,
+        &fresh,
+        &["lateral_compliance[1] (no masses)", "sensor_drift[1] (driven by acc_col_x)"],
     );
 }
 
