@@ -89,8 +89,8 @@ fn wake(
 
 /// One round's scored candidates: the screen's shortlist of the linear candidates, then the exponential
 /// drifts whose linear twin earns half the best gain. Candidates every fold finds implausible are
-/// refused and leave the pool (for their size, to rest: `refuse`); those that add
-/// nothing identifiable are recorded as skipped; the pool keeps the others.
+/// refused and leave the pool (for their size, to rest: `refuse`); those that add nothing identifiable
+/// are recorded as skipped; the pool keeps the others.
 fn score_round(
     scorer: &Scorer<'_>,
     config: &Config,
@@ -154,7 +154,7 @@ fn score_round(
 /// significant; ties between blocks of one size go to the conventional one (base_frame, tool_frame,
 /// joint_offset), then the lowest error. A time-dependent candidate must also lower the forward-chained
 /// error; one whose values fitted on all data are implausible is refused (and leaves the pool, for its
-/// size until another effect joins); the information criterion must fall.
+/// size to rest: `refuse`); the information criterion must fall.
 fn choose(
     scorer: &Scorer<'_>,
     config: &Config,
