@@ -414,10 +414,7 @@ impl Model {
                 }
                 // Filled after the pose (zero for a measurement before the step): `frame_steps`.
                 Effect::FrameStep(_) => {}
-                Effect::LumpedLateralCompliance(j, ..) => {
-                    bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
-                }
-                Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
+                Effect::Straightness(j) | Effect::LateralCompliance(j, _) | Effect::LumpedLateralCompliance(j, ..) => {
                     bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
                 }
                 Effect::SensorDrift(j, _) => {
@@ -450,7 +447,9 @@ impl Model {
 /// ([`thermokin_deform::lateral_row_error`]): `∂p/∂cₖ = ∂p/∂angles · eₖ Mₖ`,
 /// `∂p/∂c′ₖ = d ∂p/∂cₖ − ∂p/∂translation · (eₖ × a) Mₖ d²/2`, `∂p/∂sₖ = ∂p/∂translation · (eₖ × a) Mₖ` —
 /// or a slide's straightness — the angles along `d·e₁, d·e₂, d·a`, the translation along `d²(eₖ × a)`
-/// ([`thermokin_deform::straightness_row_error`]). `d` is the joint's value (a slide's extension).
+/// ([`thermokin_deform::straightness_row_error`]) — or a lateral compliance without masses, each weight's
+/// column its coefficient's at unit moment times its function ([`thermokin_deform::lumped_lateral_row_error`]).
+/// `d` is the joint's value (a slide's extension).
 #[allow(clippy::too_many_arguments)] // The Jacobian's inputs, as fill_jacobian holds them.
 fn bend_columns(
     e: Effect,
