@@ -154,16 +154,22 @@ fn the_plan_carries_the_lateral_compliances_the_diagnosis_will_offer() {
     assert!(joints.effects.iter().any(|e| e == "lateral_compliance[2] (no masses)"), "{:?}", joints.effects);
 }
 
-/// An IRB 140 on an 800 mm lift: the plan carries the slide's scale and its guide's straightness, and
-/// its poses reach both ends of the stroke (a tilt and a bow growing with the extension are seen between
-/// its ends, as a scale is).
+/// An IRB 140 on an 800 mm lift: the plan carries the slide's scale, its guide's straightness and its
+/// column's lateral compliance (on the file's masses, or lumped from the file without them), and its
+/// poses reach both ends of the stroke (a tilt and a bow growing with the extension are seen between its
+/// ends, as a scale is).
 #[test]
 fn a_lifts_plan_carries_its_straightness_and_spans_the_stroke() {
     let text = thermokin_testdata::lifted_irb140_toml("");
     let robot = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap();
+    let massless = robot.clone().with_masses(vec![None; 7]).unwrap();
+    let pool = Candidates::sampled(&massless, 600, 23, None).unwrap();
+    let params = Params { poses: 40, ..Params::default() };
+    let without = plan(&massless, &pool, &[], &params).unwrap();
+    assert!(without.effects.iter().any(|e| e == "lateral_compliance[1] (no masses)"), "{:?}", without.effects);
     let pool = Candidates::sampled(&robot, 600, 23, None).unwrap();
-    let p = plan(&robot, &pool, &[], &Params { poses: 40, ..Params::default() }).unwrap();
-    for effect in ["straightness[1]", "joint_scale[1]"] {
+    let p = plan(&robot, &pool, &[], &params).unwrap();
+    for effect in ["straightness[1]", "joint_scale[1]", "lateral_compliance[1]"] {
         assert!(p.effects.iter().any(|e| e == effect), "{:?}", p.effects);
     }
     let (lo, hi) = p
