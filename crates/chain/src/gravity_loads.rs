@@ -121,17 +121,12 @@ fn link_terms(
     own_axial: bool,
 ) -> ([f64; 3], usize) {
     match kind {
-        _ if own_axial => {
+        JointKind::Prismatic if !own_axial => ([q * (rot * axis.into_inner()).dot(w), 0.0, 0.0], 1),
+        _ => {
             let rw = rot.transpose() * w;
             let [e1, e2] = perpendiculars(axis);
-            ([e1.dot(&rw), e2.dot(&rw), axis.dot(&rw)], 3)
+            ([e1.dot(&rw), e2.dot(&rw), axis.dot(&rw)], if own_axial { 3 } else { 2 })
         }
-        JointKind::Revolute => {
-            let rw = rot.transpose() * w;
-            let [e1, e2] = perpendiculars(axis);
-            ([e1.dot(&rw), e2.dot(&rw), 0.0], 2)
-        }
-        JointKind::Prismatic => ([q * (rot * axis.into_inner()).dot(w), 0.0, 0.0], 1),
     }
 }
 

@@ -268,6 +268,19 @@ fn bent_column(robot: &Robot, q: &[f64]) -> Vector3<f64> {
     foot + nalgebra::Rotation3::new(across * 1e-7) * (bent - foot)
 }
 
+/// `n` poses of the lifted arm (seeded `seed`) measured on its column bending as [`bent_column`], with
+/// joint 3 0.02° off.
+fn bending_column_session(robot: &Robot, n: usize, seed: u64) -> Dataset {
+    let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
+    for m in &mut data.measurements {
+        let mut off = m.q.clone();
+        off[3] += 0.02f64.to_radians();
+        let plain = robot.chain().tool_pose(&m.q).unwrap().translation.vector;
+        m.position_mm += bent_column(robot, &off) - plain;
+    }
+    data
+}
+
 /// A lifted IRB 140 whose column bends under the arm's moment, more at its top extensions
 /// ([`bent_column`], ~0.3 mm at the tool), and whose joint 3 is 0.02° off: the diagnosis names the
 /// column's lateral compliance and the offset, flags no pose (the top extensions are no gross errors),
@@ -276,17 +289,7 @@ fn bent_column(robot: &Robot, q: &[f64]) -> Vector3<f64> {
 #[test]
 fn a_column_bending_under_the_arms_moment_is_named_and_its_top_poses_kept() {
     let robot = lifted_irb140();
-    let session = |n: usize, seed: u64| {
-        let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
-        for m in &mut data.measurements {
-            let mut off = m.q.clone();
-            off[3] += 0.02f64.to_radians();
-            let plain = robot.chain().tool_pose(&m.q).unwrap().translation.vector;
-            m.position_mm += bent_column(&robot, &off) - plain;
-        }
-        data
-    };
-    let (data, fresh) = (session(300, 4731), session(150, 4732));
+    let (data, fresh) = (bending_column_session(&robot, 300, 4731), bending_column_session(&robot, 150, 4732));
     let largest = data
         .measurements
         .iter()
@@ -304,17 +307,7 @@ fn a_column_bending_under_the_arms_moment_is_named_and_its_top_poses_kept() {
 fn a_column_bending_under_an_arm_of_unknown_masses_is_named_and_its_top_poses_kept() {
     let robot = lifted_irb140();
     let massless = robot.clone().with_masses(vec![None; robot.chain().dof()]).unwrap();
-    let session = |n: usize, seed: u64| {
-        let mut data = crate::tracker::measure(robot.chain(), n, seed, <[f64]>::to_vec);
-        for m in &mut data.measurements {
-            let mut off = m.q.clone();
-            off[3] += 0.02f64.to_radians();
-            let plain = robot.chain().tool_pose(&m.q).unwrap().translation.vector;
-            m.position_mm += bent_column(&robot, &off) - plain;
-        }
-        data
-    };
-    let (data, fresh) = (session(300, 4731), session(150, 4732));
+    let (data, fresh) = (bending_column_session(&robot, 300, 4731), bending_column_session(&robot, 150, 4732));
     column_named_at_the_noise(&massless, &data, &fresh, &["lateral_compliance[1] (no masses)"]);
 }
 
