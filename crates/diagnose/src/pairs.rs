@@ -10,8 +10,8 @@
 //! drive stores the work its load does on it: the matrix is positive semidefinite — `kⱼ ≥ 0`,
 //! `kⱼ₊₁ ≥ 0` and `c² ≤ kⱼ·kⱼ₊₁` — and a matrix that is not has a load under which the pair would
 //! rise against it. So the phase puts beside every chosen coupling both joints' own compliances
-//! (eligible ones; a compliance the completion left out as not determined to three standard errors is
-//! still part of the pair), fits the model on all data, and refuses a coupling whose pair is not
+//! (eligible ones; a compliance the completion left out as not determined enough is still part of the
+//! pair), fits the model on all data, and refuses a coupling whose pair is not
 //! positive semidefinite — with the three values fitted — then drops it and the compliances it brought.
 //! Nothing is gated here: the pair is what the coupling means, and the held-out figures are rescored.
 //!

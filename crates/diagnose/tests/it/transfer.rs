@@ -98,6 +98,33 @@ fn ur10_series_c_transfers_to_series_b() {
     }
 }
 
+/// Sixty random poses of the real UR10's series C, diagnosed as a user runs it and scored on series B
+/// (registration and probe refitted): three seeded draws that ended at or above the nominal robot's
+/// 1.025 mm while the completion asked a compliance to lie three standard errors from zero (seed 111:
+/// 1.003, 113: 1.008, 114: 1.056 — joint 2 over 49° only, its real sag imitated by rows that
+/// extrapolate it wrong; `completion.rs`, `SEEN_STANDARD_ERRORS`). Measured now: 0.642, 0.590, 0.626.
+/// Fails if any of the three transfers worse than 0.9 × nominal. Of our twenty draws (seeds 100–119)
+/// the one nearest nominal is seed 112, at 1.020: a draw of 60 C poses may still not reach B
+/// (docs/diagnosis.md, "Small sets").
+#[test]
+fn sixty_random_poses_of_the_ur10_transfer_better_than_the_nominal_robot() {
+    use rand::SeedableRng;
+    let robot = ur10();
+    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+    let c = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_C.csv"), &kinds).unwrap();
+    let b = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_B.csv"), &kinds).unwrap();
+    let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
+    for seed in [111, 113, 114] {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let rows = rand::seq::index::sample(&mut rng, c.len(), 60).into_vec();
+        let report = diagnose(&robot, &c.subset(&rows), Some(&b), &config).unwrap();
+        let holdout = report.holdout.as_ref().unwrap();
+        let (nominal, selected) = (holdout.nominal.heldout_mean_mm, holdout.selected.heldout_mean_mm);
+        eprintln!("UR10 60 poses of C, seed {seed}: {nominal:.4} -> {selected:.4} mm on B");
+        assert!(selected < 0.9 * nominal, "seed {seed}: {selected} against the nominal {nominal}");
+    }
+}
+
 #[test]
 fn offsets_of_two_parallel_joints_come_out_as_two_offsets() {
     // Joints 2 and 3 of the IRB 140 turn about parallel axes: both offsets lie inside joint 3's link

@@ -53,7 +53,7 @@ fn wam_grid_to_random() {
         report.identifiability.not_identifiable
     );
     // A cable-driven arm sags under its own weight: the completion carries the compliances the data
-    // determine (three standard errors from zero), and none that rises under its load.
+    // determine (√2 standard errors from zero), and none that rises under its load.
     assert!(labels.iter().any(|l| l.starts_with("joint_compliance[")), "{labels:?}");
     for j in 1..=7 {
         assert!(labels.contains(&format!("link_deviation[{j}]").as_str()), "{labels:?}");
