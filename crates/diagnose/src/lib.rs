@@ -54,7 +54,7 @@ pub use render::ReportText;
 pub use report::{
     Along, Breakdown, Cluster, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested,
     OuterFold, Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report,
-    ScaleSource, ScreenModel, Skipped, TableRow,
+    ScaleSource, ScreenCompliance, ScreenModel, Skipped, TableRow,
 };
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::FALSE_ALARM;

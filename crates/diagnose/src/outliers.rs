@@ -42,7 +42,7 @@ use thermokin_identify::{
 use crate::clusters::blocks;
 use crate::config::{Config, Outliers};
 use crate::error::DiagnoseError;
-use crate::report::{Outlier, OutlierScreen, ScaleSource, ScreenModel};
+use crate::report::{Outlier, OutlierScreen, ScaleSource, ScreenCompliance, ScreenModel};
 use crate::scoring::prior;
 use crate::stats::{FALSE_ALARM, chi_square_upper_quantile};
 
@@ -119,15 +119,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
     let screen = OutlierScreen {
         model: which,
-        with_compliance: effects.iter().any(|e| {
-            matches!(
-                e,
-                Effect::JointCompliance(_)
-                    | Effect::LumpedCompliance(..)
-                    | Effect::LateralCompliance(..)
-                    | Effect::LumpedLateralCompliance(..)
-            )
-        }),
+        compliance: screened_compliance(robot, data, config, stride, &effects),
         scale_mm,
         scale_from,
         threshold_mm,
@@ -138,10 +130,30 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     Ok(Screened { kept, outliers, screen })
 }
 
+/// Which gravity compliance the screening model `effects` holds ([`ScreenCompliance`]).
+fn screened_compliance(
+    robot: &Robot,
+    data: &Dataset,
+    config: &Config,
+    stride: usize,
+    effects: &[Effect],
+) -> ScreenCompliance {
+    if effects.iter().any(|e| matches!(e, Effect::JointCompliance(_) | Effect::LateralCompliance(..))) {
+        ScreenCompliance::FileMasses
+    } else if effects.iter().any(|e| matches!(e, Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..))) {
+        ScreenCompliance::Lumped
+    } else if screening_effects(robot, data, config, stride).1 {
+        ScreenCompliance::TooFewPoses
+    } else {
+        ScreenCompliance::NotLoaded
+    }
+}
+
 /// The screening model's effects for this robot and these data: the always-estimated blocks, every
 /// joint row, every slide's scale and straightness and every loaded joint's compliance (and, for a
-/// warm-up, every row's drifts).
-fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usize) -> Vec<Effect> {
+/// warm-up, every row's drifts); and whether a compliance without masses was left out of them for the
+/// poses' number.
+fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usize) -> (Vec<Effect>, bool) {
     let mut effects = config.setup().always_estimated(data);
     let spans_time = data.time_span() > 0.0;
     let mut lumped = Vec::new();
@@ -195,8 +207,11 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
     let parameters: usize = effects.iter().chain(&lumped).map(Effect::len).sum();
     if data.len() * stride >= MIN_REDUNDANCY * parameters {
         effects.extend(lumped);
+        return (effects, false);
     }
-    effects
+    let compliance_left_out =
+        lumped.iter().any(|e| matches!(e, Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..)));
+    (effects, compliance_left_out)
 }
 
 /// The screening model for these data ([`ScreenModel`]): its effects and, where the data are too few
@@ -218,7 +233,7 @@ fn screening_model(
     config: &Config,
     terms: &PoseTerms,
 ) -> Result<(Vec<Effect>, ScreenModel, Option<Prior>), DiagnoseError> {
-    let full = screening_effects(robot, data, config, terms.stride());
+    let (full, _) = screening_effects(robot, data, config, terms.stride());
     let rows = data.len() * terms.stride();
     let parameters: usize = full.iter().map(Effect::len).sum();
     if rows >= MIN_REDUNDANCY * parameters {

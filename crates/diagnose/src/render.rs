@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use crate::report::{Report, ScaleSource, ScreenModel};
+use crate::report::{Report, ScaleSource, ScreenCompliance, ScreenModel};
 use crate::stats::Stats;
 
 /// The text rendering of a report ([`Report::text`]): held-out errors (nested, hold-out set, the
@@ -48,10 +48,15 @@ fn render(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
 /// The screen for gross errors: what it judged against, and every flagged measurement by its line.
 fn gross_errors(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     let s = &r.outlier_screen;
-    let geometry = if s.with_compliance {
-        "the full geometry with gravity compliance"
-    } else {
-        "the full geometry (no gravity compliance: the robot file's masses load no joint)"
+    let geometry = match s.compliance {
+        ScreenCompliance::FileMasses => "the full geometry with gravity compliance",
+        ScreenCompliance::Lumped => {
+            "the full geometry with gravity compliance, its loads lumped and fitted (no masses from the robot file)"
+        }
+        ScreenCompliance::NotLoaded => "the full geometry (no gravity compliance: gravity loads no joint here)",
+        ScreenCompliance::TooFewPoses => {
+            "the full geometry (no gravity compliance: the robot file gives no masses, and the poses are too few to fit its loads lumped)"
+        }
     };
     let model = match s.model {
         ScreenModel::FullGeometry => geometry.to_string(),

@@ -50,14 +50,27 @@ pub enum ScaleSource {
     StatedNoise,
 }
 
+/// The gravity compliance of the screen's model ([`OutlierScreen::compliance`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum ScreenCompliance {
+    /// On the robot file's masses.
+    FileMasses,
+    /// Its loads lumped and fitted from the data: the robot file gives no masses (or they are not trusted).
+    Lumped,
+    /// None: gravity loads no joint in these poses.
+    NotLoaded,
+    /// None: the robot file gives no masses, and the poses are too few to fit the loads lumped beside the
+    /// geometry (four residual rows per parameter).
+    TooFewPoses,
+}
+
 /// How the screen for gross errors judged.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct OutlierScreen {
     /// The model whose residuals were judged.
     pub model: ScreenModel,
-    /// Whether that model holds a joint's gravity compliance (none where the robot file's masses load no
-    /// joint).
-    pub with_compliance: bool,
+    /// Which gravity compliance that model holds.
+    pub compliance: ScreenCompliance,
     /// The residual scale per axis, mm: robust (`1.4826 · median |r|`) over every measurement, or
     /// the stated noise where that is larger. With the tracker's per-point standard deviations, the
     /// residuals are first divided by each point's over their mean: the scale is then the mean point's.

@@ -4,7 +4,7 @@
 
 use nalgebra::Vector3;
 use thermokin_chain::{Dataset, LinkMass, Robot, gravity_torques};
-use thermokin_diagnose::{Config, Masses, Validation, diagnose};
+use thermokin_diagnose::{Config, Masses, ScreenCompliance, Validation, diagnose};
 use thermokin_identify::FrameMode;
 use thermokin_testdata::workspace;
 
@@ -580,6 +580,10 @@ fn elastic_torso_arm(compliance: f64, rows: f64, camera_mm: f64) -> thermokin_di
     let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
     eprintln!("chose {chosen:?}; {} gross errors", report.outliers.len());
     assert!(report.outliers.is_empty(), "{:?}", report.outliers);
+    // The gross-error line says what it judged against: the compliances' loads lumped, not the file's
+    // masses (the humanoid's report said "with gravity compliance" where none could be fitted).
+    assert_eq!(report.outlier_screen.compliance, ScreenCompliance::Lumped);
+    assert!(report.text().to_string().contains("its loads lumped and fitted (no masses from the robot file)"));
     let noise_rms = (camera_mm.powi(2) + crate::tracker::NOISE_MM.powi(2)).sqrt() * 3f64.sqrt();
     let holdout = report.holdout.as_ref().unwrap();
     for (protocol, nominal, selected) in [
