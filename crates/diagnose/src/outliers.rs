@@ -66,7 +66,8 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     let terms = PoseTerms::of(robot, data, config.orientation_lever_mm);
     let stride = terms.stride();
     let all: Vec<usize> = (0..data.len()).collect();
-    let (effects, which, shrinkage) = screening_model(robot, data, config, &terms)?;
+    let (full, compliance_left_out) = screening_effects(robot, data, config, stride);
+    let (effects, which, shrinkage) = screening_model(robot, data, config, &terms, full)?;
     let threshold_sigmas = chi_square_upper_quantile(stride, FALSE_ALARM / data.len().max(1) as f64).sqrt();
     let mut kept = all.clone();
     let mut last = (0.0, ScaleSource::Residuals, vec![0.0; data.len()]);
@@ -119,7 +120,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
     let screen = OutlierScreen {
         model: which,
-        compliance: screened_compliance(robot, data, config, stride, &effects),
+        compliance: screened_compliance(&effects, compliance_left_out),
         scale_mm,
         scale_from,
         threshold_mm,
@@ -130,19 +131,14 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     Ok(Screened { kept, outliers, screen })
 }
 
-/// Which gravity compliance the screening model `effects` holds ([`ScreenCompliance`]).
-fn screened_compliance(
-    robot: &Robot,
-    data: &Dataset,
-    config: &Config,
-    stride: usize,
-    effects: &[Effect],
-) -> ScreenCompliance {
+/// Which gravity compliance the screening model `effects` holds ([`ScreenCompliance`]); `left_out`:
+/// whether one without masses was left out of it for the poses' number ([`screening_effects`]).
+fn screened_compliance(effects: &[Effect], left_out: bool) -> ScreenCompliance {
     if effects.iter().any(|e| matches!(e, Effect::JointCompliance(_) | Effect::LateralCompliance(..))) {
         ScreenCompliance::FileMasses
     } else if effects.iter().any(|e| matches!(e, Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..))) {
         ScreenCompliance::Lumped
-    } else if screening_effects(robot, data, config, stride).1 {
+    } else if left_out {
         ScreenCompliance::TooFewPoses
     } else {
         ScreenCompliance::NotLoaded
@@ -214,9 +210,10 @@ fn screening_effects(robot: &Robot, data: &Dataset, config: &Config, stride: usi
     (effects, compliance_left_out)
 }
 
-/// The screening model for these data ([`ScreenModel`]): its effects and, where the data are too few
-/// for its identifiable parameters to leave [`MIN_REDUNDANCY`] residual rows each, the prior toward the
-/// nominal robot that brings its effective parameters within them.
+/// The screening model for these data ([`ScreenModel`]), from the effects `full` of
+/// [`screening_effects`]: its effects and, where the data are too few for its identifiable parameters to
+/// leave [`MIN_REDUNDANCY`] residual rows each, the prior toward the nominal robot that brings its
+/// effective parameters within them.
 ///
 /// **Effective parameters.** A fit with a Gaussian prior (weights `D`, [`crate::shrinkage`]'s at unit
 /// strength times `λ`) bends to the data by `trace((JᵀJ + λD)⁻¹ JᵀJ)` degrees of freedom — the trace of
@@ -232,8 +229,8 @@ fn screening_model(
     data: &Dataset,
     config: &Config,
     terms: &PoseTerms,
+    full: Vec<Effect>,
 ) -> Result<(Vec<Effect>, ScreenModel, Option<Prior>), DiagnoseError> {
-    let (full, _) = screening_effects(robot, data, config, terms.stride());
     let rows = data.len() * terms.stride();
     let parameters: usize = full.iter().map(Effect::len).sum();
     if rows >= MIN_REDUNDANCY * parameters {
