@@ -208,6 +208,71 @@ pub(crate) fn blocks(
     (found, left)
 }
 
+/// The flagged poses among `left` whose departures are each a motion of one joint, and the flags left.
+///
+/// **The test.** A pose's residual `r` (its position rows, `stride` rows per pose in `residual`) and
+/// the motion `u` of joint `k` at that pose (`motions[k]`, the residual rows' change per unit of the
+/// joint): were the departure a gross error of no particular direction, `|cos ∠(r, u)|` would be uniform
+/// on [0, 1] (in three dimensions the cosine of a uniformly random direction with a fixed one is
+/// uniform), so `pᵢ = 1 − |cos|` is a p-value of the pose lying along the joint's motion. Sorted, the
+/// `m` smallest of `K` are all below `p₍ₘ₎` with the binomial tail `P(X ≥ m)`, `X ~ Binomial(K, p₍ₘ₎)`;
+/// the smallest tail over `m ≥` [`MIN_BLOCK`], times the `m` tried and the joints, bounds the chance
+/// that independent gross errors line up so. Below [`FALSE_ALARM`] those `m` poses are a block: a joint
+/// standing off by its own amount at each — its play read without the order it was approached in, a
+/// slipping joint or encoder — and kept. Each pose's amount is its least-squares motion `u·r / u·u`
+/// (degrees, or mm for a slide): the block's range.
+pub(crate) fn moved_joints(
+    robot: &Robot,
+    data: &Dataset,
+    left: &[usize],
+    residual: &[f64],
+    stride: usize,
+    motions: &[Vec<f64>],
+    residual_mm: &[f64],
+) -> (Vec<Cluster>, Vec<usize>) {
+    let k_all = left.len();
+    if k_all < MIN_BLOCK {
+        return (Vec::new(), left.to_vec());
+    }
+    let ln_fact = ln_factorials(k_all);
+    let dof = robot.chain().dof();
+    let along = |k: usize, i: usize| {
+        let r = &residual[i * stride..i * stride + 3];
+        let u = &motions[k][i * stride..i * stride + 3];
+        let (ru, uu, rr): (f64, f64, f64) =
+            (0..3).fold((0.0, 0.0, 0.0), |(a, b, c), x| (a + r[x] * u[x], b + u[x] * u[x], c + r[x] * r[x]));
+        let p = if uu > 0.0 && rr > 0.0 { 1.0 - (ru.abs() / (uu * rr).sqrt()).min(1.0) } else { 1.0 };
+        (p, if uu > 0.0 { ru / uu } else { 0.0 })
+    };
+    let mut best: Option<(f64, usize, Vec<usize>)> = None;
+    for k in 0..dof {
+        let mut ps: Vec<(f64, usize)> = left.iter().map(|&i| (along(k, i).0, i)).collect();
+        ps.sort_by(|a, b| a.0.total_cmp(&b.0));
+        for m in MIN_BLOCK..=k_all {
+            let tail = binomial_upper_tail(k_all, m, ps[m - 1].0, &ln_fact) * (k_all * dof) as f64;
+            if best.as_ref().is_none_or(|(t, _, _)| tail < *t) {
+                let mut members: Vec<usize> = ps[..m].iter().map(|&(_, i)| i).collect();
+                members.sort_unstable();
+                best = Some((tail, k, members));
+            }
+        }
+    }
+    let Some((chance, k, members)) = best.filter(|(chance, _, _)| *chance < FALSE_ALARM) else {
+        return (Vec::new(), left.to_vec());
+    };
+    let joint = &robot.chain().joints()[k];
+    let prismatic = joint.kind == thermokin_chain::JointKind::Prismatic;
+    let mut cluster =
+        describe(robot, data, Along::JointMotion { joint: k + 1, prismatic }, &members, residual_mm, chance);
+    cluster.range = {
+        let amounts = members.iter().map(|&i| units::joint_value_out(joint.kind, along(k, i).1));
+        let (lo, hi) = span(amounts);
+        [lo, hi]
+    };
+    let rest = left.iter().copied().filter(|i| members.binary_search(i).is_err()).collect();
+    (vec![cluster], rest)
+}
+
 /// A block as the report states it: where it lies along what it gathers on, which poses, how far off.
 fn describe(
     robot: &Robot,
@@ -225,7 +290,7 @@ fn describe(
         })
         .collect();
     let value = |i: usize| match &along {
-        Along::Lines | Along::Configurations => data.line_of(i).unwrap_or(i + 1) as f64,
+        Along::Lines | Along::Configurations | Along::JointMotion { .. } => data.line_of(i).unwrap_or(i + 1) as f64,
         Along::Time => data.measurements[i].time_min,
         Along::Joint { joint, .. } => {
             let j = joint - 1;

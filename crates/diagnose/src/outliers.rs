@@ -39,7 +39,7 @@ use thermokin_identify::{
     residuals, residuals_and_jacobian,
 };
 
-use crate::clusters::blocks;
+use crate::clusters::{blocks, moved_joints};
 use crate::config::{Config, Outliers};
 use crate::error::DiagnoseError;
 use crate::report::{Outlier, OutlierScreen, ScaleSource, ScreenCompliance, ScreenModel};
@@ -71,6 +71,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     let threshold_sigmas = chi_square_upper_quantile(stride, FALSE_ALARM / data.len().max(1) as f64).sqrt();
     let mut kept = all.clone();
     let mut last = (0.0, ScaleSource::Residuals, vec![0.0; data.len()]);
+    let mut fitted: Option<(Model, Vec<f64>, Vec<f64>)> = None;
     for _ in 0..ROUNDS {
         let model = Model::new(robot, effects.clone())?.with_start(initial_frames(robot, data, &kept, &effects)?);
         let mut start = Start::new(model.initial(), vec![true; model.len()]);
@@ -78,7 +79,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         let f = fit_from(robot, &model, data, &kept, &terms, &start)?;
         let raw_r = residuals(robot, &model, &f.theta, data, &all, &terms)?;
         let raw = norms(&raw_r, stride);
-        let r = standardised(data, raw_r, stride);
+        let r = standardised(data, raw_r.clone(), stride);
         let norm = norms(&r, stride);
         // Over every measurement, flagged ones included: the median's breakdown point (half the data)
         // keeps gross errors from inflating it, and a scale over the kept ones alone would shrink with
@@ -105,6 +106,7 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
         }
         let settled = next == kept;
         last = (scale, from, raw);
+        fitted = Some((model, f.theta, raw_r));
         kept = next;
         if settled {
             break;
@@ -114,7 +116,18 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     let threshold_mm = threshold_sigmas * scale_mm;
     // Flags that gather are a systematic effect, not gross errors: their poses are kept.
     let flagged: Vec<usize> = (0..data.len()).filter(|&i| kept.binary_search(&i).is_err()).collect();
-    let (clusters, isolated) = blocks(robot, data, &flagged, &raw, config);
+    let (mut clusters, isolated) = blocks(robot, data, &flagged, &raw, config);
+    // Flags left whose departures are each a motion of one joint (a joint standing off by its own amount
+    // at each pose, as a play read without the order it was approached in) are kept too.
+    let isolated = match &fitted {
+        Some((model, theta, raw_r)) => {
+            let motions = joint_motions(robot, data, model, theta, config)?;
+            let (found, left) = moved_joints(robot, data, &isolated, raw_r, stride, &motions, &raw);
+            clusters.extend(found);
+            left
+        }
+        None => isolated,
+    };
     let kept: Vec<usize> = (0..data.len()).filter(|i| isolated.binary_search(i).is_err()).collect();
     let outliers =
         isolated.iter().map(|&i| Outlier { line: data.line_of(i), measurement: i + 1, residual_mm: raw[i] }).collect();
@@ -129,6 +142,35 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     };
     let kept = if config.outliers == Outliers::Exclude { kept } else { all };
     Ok(Screened { kept, outliers, screen })
+}
+
+/// Per pose, per joint, how the residual rows of `model` at `theta` move when the joint moves by one
+/// radian (one millimetre for a slide): central differences of the commanded value, the poses' terms
+/// recomputed — the joint's motion at the tool point in the measurement frame, the model's deflections
+/// and all.
+fn joint_motions(
+    robot: &Robot,
+    data: &Dataset,
+    model: &Model,
+    theta: &[f64],
+    config: &Config,
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
+    let all: Vec<usize> = (0..data.len()).collect();
+    let moved = |j: usize, h: f64| -> Result<Vec<f64>, DiagnoseError> {
+        let mut shifted = data.clone();
+        shifted.measurements.iter_mut().for_each(|m| m.q[j] += h);
+        let terms = PoseTerms::of(robot, &shifted, config.orientation_lever_mm);
+        Ok(residuals(robot, model, theta, &shifted, &all, &terms)?)
+    };
+    (0..robot.chain().dof())
+        .map(|j| {
+            // A thousandth of a radian (or millimetre): the tool moves by ~1 mm, far above the rounding
+            // of positions of ~1 m, and the motion's curvature over it is ~1e-3 of the motion.
+            let h = 1e-3;
+            let (up, down) = (moved(j, h)?, moved(j, -h)?);
+            Ok(up.iter().zip(&down).map(|(a, b)| (a - b) / (2.0 * h)).collect())
+        })
+        .collect()
 }
 
 /// Which gravity compliance the screening model `effects` holds ([`ScreenCompliance`]); `left_out`:

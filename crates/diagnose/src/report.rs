@@ -110,6 +110,14 @@ pub enum Along {
     },
     /// One neighbourhood of arm configurations (a k-means block of the joint values, as the folds use).
     Configurations,
+    /// Wherever they lie, each pose's departure is a motion of one joint, by its own amount (the range:
+    /// degrees, mm for a prismatic joint).
+    JointMotion {
+        /// The joint, numbered from 1.
+        joint: usize,
+        /// Whether its amounts are millimetres.
+        prismatic: bool,
+    },
 }
 
 /// Flagged measurements that gather ([`OutlierScreen::clusters`]): a systematic effect the screening
@@ -160,6 +168,10 @@ impl Cluster {
                     .collect();
                 format!("in one neighbourhood of arm configurations ({})", ranges.join(", "))
             }
+            Along::JointMotion { joint, prismatic } => {
+                let unit = if *prismatic { " mm" } else { "°" };
+                format!("whose departures are each a motion of joint {joint} alone (by {lo:.4}{unit} … {hi:.4}{unit})")
+            }
         }
     }
 
@@ -180,9 +192,17 @@ impl Cluster {
                     self.after_mm.map_or(0.0, |a| a[0])
                 )
             }
-            Some([lo, hi]) => format!(
-                "{head}; no effect of the catalogue explains them (still {lo:.2}–{hi:.2} mm): look for what changes there — a moved tracker or base, a load, a joint's end stop"
-            ),
+            Some([lo, hi]) => {
+                let look = match self.along {
+                    Along::JointMotion { joint, .. } => format!(
+                        "joint {joint} stands off by a different amount at each pose — its play by the direction it was approached from (a backlash: measure with a time column, or say the file lists the poses as measured with --order file), or a slipping joint or encoder"
+                    ),
+                    _ => {
+                        "look for what changes there — a moved tracker or base, a load, a joint's end stop".to_string()
+                    }
+                };
+                format!("{head}; no effect of the catalogue explains them (still {lo:.2}–{hi:.2} mm): {look}")
+            }
             None => head,
         }
     }
