@@ -5,7 +5,9 @@
 //! pose, a compliance that grows at one end of a joint's range, a column that tilts at its top extension
 //! put their departures together. Such a block is a systematic effect: its poses are kept, the report
 //! says where it lies and by how much its poses depart, and, after the selection, whether the chosen
-//! effects explain them.
+//! effects explain them. The flags left are asked one thing more ([`moved_joints`]): whether each
+//! departure, wherever the pose lies, is a motion of one joint alone — a play read without the order it
+//! was approached in — which no tracker glitch's direction follows.
 //!
 //! **The test: a scan statistic with a Bonferroni bound.** Along each ordering of the poses (lines, time,
 //! each joint's value, each sensor column), the flagged poses sit at ranks `r₁ < … < r_K` among the `N`

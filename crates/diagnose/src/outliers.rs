@@ -120,13 +120,13 @@ pub(crate) fn screen(robot: &Robot, data: &Dataset, config: &Config) -> Result<S
     // Flags left whose departures are each a motion of one joint (a joint standing off by its own amount
     // at each pose, as a play read without the order it was approached in) are kept too.
     let isolated = match &fitted {
-        Some((model, theta, raw_r)) => {
+        Some((model, theta, raw_r)) if isolated.len() >= crate::clusters::MIN_BLOCK => {
             let motions = joint_motions(robot, data, model, theta, config)?;
             let (found, left) = moved_joints(robot, data, &isolated, raw_r, stride, &motions, &raw);
             clusters.extend(found);
             left
         }
-        None => isolated,
+        _ => isolated,
     };
     let kept: Vec<usize> = (0..data.len()).filter(|i| isolated.binary_search(i).is_err()).collect();
     let outliers =
