@@ -48,6 +48,17 @@ fn measure_with(
     Dataset { measurements, ..Dataset::default() }
 }
 
+/// `nominal` with every joint row off by a few tenths of a millimetre and a few hundredths of a degree
+/// (Gaussian, 0.3 mm and 0.03° per component, seeded by `seed`).
+fn every_row_off(nominal: &Chain, seed: u64) -> Chain {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut small = || 0.3 * gauss(&mut rng);
+    let rows: Vec<ErrorParams> = (0..6)
+        .map(|_| error_mm_deg([small(), small(), small(), 0.1 * small(), 0.1 * small(), 0.1 * small()]))
+        .collect();
+    nominal.with_errors_and_zeros(nominal.base().error, &rows, nominal.tool().error, &[0.0; 6]).unwrap()
+}
+
 #[test]
 fn a_small_set_is_shrunk_toward_nominal_and_predicts_the_whole_workspace_better() {
     let robot: Robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
@@ -57,12 +68,7 @@ fn a_small_set_is_shrunk_toward_nominal_and_predicts_the_whole_workspace_better(
     // shrunk (a prior worth 0.1 rows per parameter) 0.212, nominal 1.675; 0.207 since the completion takes a
     // compliance at √2 standard errors (joint 2's joins, which the truth lacks: the rows' errors over
     // the narrow arcs resemble its sag).
-    let mut rng = ChaCha8Rng::seed_from_u64(35);
-    let mut small = || 0.3 * gauss(&mut rng);
-    let rows: Vec<ErrorParams> = (0..6)
-        .map(|_| error_mm_deg([small(), small(), small(), 0.1 * small(), 0.1 * small(), 0.1 * small()]))
-        .collect();
-    let truth = nominal.with_errors_and_zeros(nominal.base().error, &rows, nominal.tool().error, &[0.0; 6]).unwrap();
+    let truth = every_row_off(&nominal, 35);
     let train = measure(&truth, 20, 1, 0.5, NOISE_MM);
     let test = measure(&truth, 400, 2, 0.8, 0.0);
     let run = |shrinkage| {
@@ -155,12 +161,7 @@ fn a_sag_the_selection_leaves_joins_the_completed_geometry_of_a_few_poses() {
     use thermokin_chain::gravity_torques;
     let robot: Robot = thermokin_io::read_robot(&workspace("configs/irb140.toml")).unwrap();
     let nominal = robot.chain().clone();
-    let mut rng = ChaCha8Rng::seed_from_u64(500);
-    let mut small = || 0.3 * gauss(&mut rng);
-    let rows: Vec<ErrorParams> = (0..6)
-        .map(|_| error_mm_deg([small(), small(), small(), 0.1 * small(), 0.1 * small(), 0.1 * small()]))
-        .collect();
-    let truth = nominal.with_errors_and_zeros(nominal.base().error, &rows, nominal.tool().error, &[0.0; 6]).unwrap();
+    let truth = every_row_off(&nominal, 500);
     let sagging = |q: &[f64]| {
         let tau = gravity_torques(robot.chain(), robot.masses(), q, &-nalgebra::Vector3::z_axis()).unwrap();
         let mut actual = q.to_vec();

@@ -14,6 +14,15 @@ fn ur10() -> thermokin_chain::Robot {
     thermokin_io::read_robot_with(&thermokin_testdata::urdf("ur10.urdf"), &options).unwrap()
 }
 
+/// The real UR10's series C and B (one tracker frame), read for `robot`.
+fn series_c_and_b(robot: &Robot) -> (thermokin_chain::Dataset, thermokin_chain::Dataset) {
+    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
+    let read = |file: &str| {
+        thermokin_io::read_measurements(&workspace(&format!("fixtures/real/ur10-ipa/{file}")), &kinds).unwrap()
+    };
+    (read("series_C.csv"), read("series_B.csv"))
+}
+
 #[test]
 fn ur10_series_c_transfers_to_series_b() {
     // All 2,773 poses of C diagnosed, nested, as a user runs it, and the chosen model scored on all
@@ -22,9 +31,7 @@ fn ur10_series_c_transfers_to_series_b() {
     // 500-pose subsample of C does not meet it (0.754 mm: joint 2 then covers 8 % of its travel and the
     // compliance is not found) — recorded in docs/diagnosis.md; the claim is tested on the whole file.
     let robot = ur10();
-    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
-    let c = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_C.csv"), &kinds).unwrap();
-    let b = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_B.csv"), &kinds).unwrap();
+    let (c, b) = series_c_and_b(&robot);
     assert_eq!((c.len(), b.len()), (2773, 1495));
     let train = c;
     let config = Config {
@@ -110,9 +117,7 @@ fn ur10_series_c_transfers_to_series_b() {
 fn sixty_random_poses_of_the_ur10_transfer_better_than_the_nominal_robot() {
     use rand::SeedableRng;
     let robot = ur10();
-    let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
-    let c = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_C.csv"), &kinds).unwrap();
-    let b = thermokin_io::read_measurements(&workspace("fixtures/real/ur10-ipa/series_B.csv"), &kinds).unwrap();
+    let (c, b) = series_c_and_b(&robot);
     let config = Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Config::default() };
     for seed in [111, 113, 114] {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
