@@ -4,29 +4,35 @@
 use rayon::prelude::*;
 
 use crate::config::Config;
+use crate::drifts::{keeps_its_law, rising_minutes};
 use crate::error::DiagnoseError;
-use crate::scoring::{Scorer, significantly_better};
+use crate::scoring::Scorer;
 use crate::selection::{Selection, without};
 use crate::stats::Stats;
 
+/// One chosen effect's removal scored: its index, the model without it on the folds (statistics and
+/// errors), and the minutes its law rises in where it is an exponential drift.
+type Removal = (usize, Stats, Vec<f64>, Option<(f64, f64)>);
+
 /// Phase 4: backward elimination. While some chosen effect can leave without the gate rejecting the
 /// smaller model (the full one is not significantly better held out), the one whose removal leaves the
-/// lowest held-out error leaves. An effect chosen early as a stand-in for later ones goes here.
+/// lowest held-out error leaves. An effect chosen early as a stand-in for later ones goes here. An
+/// exponential drift significantly better over the minutes in which it rises stays ([`crate::drifts`]).
 pub(crate) fn backward(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) -> Result<(), DiagnoseError> {
     loop {
-        let without: Vec<(usize, Stats, Vec<f64>)> = (sel.always..sel.effects.len())
+        let without: Vec<Removal> = (sel.always..sel.effects.len())
             .into_par_iter()
             .map(|k| {
                 let rest = without(&sel.effects, k);
                 let (s, e) = scorer.heldout_errors(&rest, &scorer.folds)?;
-                Ok((k, s, e))
+                Ok((k, s, e, rising_minutes(scorer, &sel.effects, k)?))
             })
             .collect::<Result<_, DiagnoseError>>()?;
         let removable = without
             .into_iter()
-            .filter(|(_, _, e)| !significantly_better(e, &sel.errors, config.gate_standard_errors, &scorer.blocks))
+            .filter(|(_, _, e, rising)| !keeps_its_law(scorer, config, e, &sel.errors, *rising))
             .min_by(|a, b| a.1.heldout_rms_mm.total_cmp(&b.1.heldout_rms_mm));
-        let Some((k, stats, errors)) = removable else { return Ok(()) };
+        let Some((k, stats, errors, _)) = removable else { return Ok(()) };
         let gone = sel.effects[k];
         let mut rest = sel.effects.clone();
         rest.remove(k);

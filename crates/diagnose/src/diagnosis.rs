@@ -13,7 +13,7 @@ use crate::scoring::{Scorer, significantly_better};
 use crate::select::select;
 use crate::tables::tables;
 use crate::validation::{nested, nested_folds, transfer_score};
-use crate::verdict::{honest_end, not_shown, verdict, warnings};
+use crate::verdict::{honest_end, said_first, verdict, warnings};
 
 /// Runs the diagnosis of `data` against `robot`.
 ///
@@ -279,7 +279,8 @@ fn run(
     };
     let report_started = std::time::Instant::now();
     // A transfer the poses cannot show is said first.
-    let mut all_warnings: Vec<String> = fell_back.into_iter().chain(not_shown(&tables, nested.as_ref())).collect();
+    let mut all_warnings: Vec<String> =
+        fell_back.into_iter().chain(said_first(config, &tables, nested.as_ref())).collect();
     all_warnings.extend(tables.warnings.iter().cloned());
     all_warnings.extend(warnings(robot, data, config, &tables));
     all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));

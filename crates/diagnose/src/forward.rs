@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use thermokin_identify::{DriftShape, Effect, JointIndex};
 
 use crate::config::Config;
+use crate::drifts::{keeps_its_law, rising_minutes};
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
@@ -30,18 +31,77 @@ pub(crate) fn forward(
     // effect joins and a linearised step puts them within bounds (`refuse`, `wake`).
     let mut resting = Vec::new();
     while sel.chosen().len() < config.max_effects && !pool.is_empty() {
-        let results = score_round(scorer, config, sel, &mut pool, &mut resting)?;
-        let Some(best) = results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)) else {
-            break;
+        let mut results = score_round(scorer, config, sel, &mut pool, &mut resting)?;
+        // The best candidate that passes every check joins. Where every block within parsimony of the
+        // best gain was a drift that forward chaining rejects (a later drift fitted on early minutes
+        // that still lack an earlier one), the next best are tried: on a warm-up rising over its first
+        // minutes, a slow row's drift ranks first and cannot carry forward until the fast one joined.
+        let chosen = loop {
+            let Some(best) =
+                results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)).cloned()
+            else {
+                break None;
+            };
+            if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
+                break None;
+            }
+            let mut not_forward = Vec::new();
+            match choose(scorer, config, sel, &results, &best, &mut pool, &mut resting, &mut not_forward)? {
+                Choice::Joins(c, b, theta) => break Some((*c, b, theta)),
+                Choice::OnlyNotForward => results.retain(|r| !not_forward.contains(&r.effect)),
+                Choice::None => break None,
+            }
         };
-        if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
-            break;
-        }
-        let Some((c, b, theta)) = choose(scorer, config, sel, &results, best, &mut pool, &mut resting)? else { break };
+        let Some((c, b, theta)) = chosen else { break };
         sel.accept(&c, b, theta, format!("+ {}", c.effect.label()));
         pool.retain(|e| *e != c.effect);
+        refine_to_exponential(scorer, config, sel, &mut pool)?;
         wake(scorer, config, sel, &mut pool, &mut resting)?;
     }
+    Ok(())
+}
+
+/// The linear drift that has just joined gives its place to its exponential twin where the exponential
+/// is significantly better held out — over the session, or over the minutes in which it rises
+/// ([`crate::drifts`]) — with plausible values. A round scores the exponential only where the linear
+/// drift earns half the best gain; once the linear one has joined, the twin is not scored again, and a
+/// warm-up whose joint rises over forty minutes would keep a straight line through it.
+fn refine_to_exponential(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    pool: &mut Vec<Effect>,
+) -> Result<(), DiagnoseError> {
+    let k = sel.effects.len() - 1;
+    let Some(&Effect::ThermalDrift(j, DriftShape::Linear)) = sel.effects.last() else { return Ok(()) };
+    let twin = Effect::ThermalDrift(j, DriftShape::Exponential);
+    if !pool.contains(&twin) {
+        return Ok(());
+    }
+    let mut swapped = sel.effects.clone();
+    swapped[k] = twin;
+    let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
+    let rising = rising_minutes(scorer, &swapped, k)?;
+    if !keeps_its_law(scorer, config, &sel.errors, &errors, rising) {
+        return Ok(());
+    }
+    let (model, full) = scorer.full_fit(&swapped)?;
+    let o = model.offsets()[k];
+    if implausible(&scorer.scale, &full.theta[o..o + twin.len()], twin, &config.plausibility).is_some() {
+        return Ok(());
+    }
+    let linear = sel.effects[k];
+    for s in sel.steps.iter_mut().filter(|s| s.effect == linear) {
+        s.effect = twin;
+    }
+    let bic = scorer.bic_of(&full);
+    let row = format!("{} replaces the linear (significantly better held out)", twin.label());
+    sel.replace(swapped, stats, errors, row);
+    sel.theta = full.theta;
+    if let Some(last) = sel.bic.last_mut() {
+        *last = bic;
+    }
+    pool.retain(|e| *e != twin);
     Ok(())
 }
 
@@ -49,15 +109,26 @@ pub(crate) fn forward(
 /// effect. A value beyond its size bound is a fit of this model — where the model still lacks the rows
 /// it trades with, a candidate absorbs their errors (on an elastic arm whose geometry is millimetres off,
 /// a compliance fitted before the rows bends by degrees) — so it rests (`resting`) and may return once
-/// other effects have joined ([`wake`]); a refusal in kind (a joint rising under its load, a drift over
-/// before the poses, a slope no joint correction has) is final.
+/// other effects have joined ([`wake`]); so does an exponential drift over before the poses in a model
+/// without its row's static deviation ([`holds_static_row`]); a refusal in kind (a joint rising under its
+/// load, a drift over before the poses beside its row, a slope no joint correction has) is final.
 fn refuse(sel: &mut Selection, c: Effect, why: &Implausible, judged: Judged, resting: &mut Vec<Effect>) {
     let refusal = why.refusal(c, judged);
     sel.refused.retain(|r| r.effect != refusal.effect);
     sel.refused.push(refusal);
-    if why.excess().is_some() {
+    let stands_in_for_its_row = matches!(why, Implausible::Instant { .. }) && !holds_static_row(&sel.effects, c);
+    if why.excess().is_some() || stands_in_for_its_row {
         resting.push(c);
     }
+}
+
+/// Whether `effects` hold a static deviation of the row a drift `c` moves (its joint's offset or link
+/// deviation). Without one, an exponential drift fitted where the row is off takes the static part
+/// itself, its time constant collapsing to a fraction of a minute (a law "over before the poses"): a
+/// refusal of that fit says nothing of the drift once the row is in the model ([`wake`]).
+fn holds_static_row(effects: &[Effect], c: Effect) -> bool {
+    let Effect::ThermalDrift(j, _) = c else { return false };
+    effects.contains(&Effect::LinkDeviation(j)) || effects.contains(&Effect::JointOffset(j))
 }
 
 /// After an effect joined: the resting candidates whose values one linearised step on all data puts
@@ -75,9 +146,14 @@ fn wake(
     if resting.is_empty() {
         return Ok(());
     }
-    let values = crate::screen::linearised_values(scorer, &sel.effects, &sel.theta, resting)?;
+    // A drift refused as over before the poses, where the model lacked its row: back once the row joined.
+    let (back, sized): (Vec<Effect>, Vec<Effect>) = resting.drain(..).partition(|&c| {
+        matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential)) && holds_static_row(&sel.effects, c)
+    });
+    pool.extend(back);
+    let values = crate::screen::linearised_values(scorer, &sel.effects, &sel.theta, &sized)?;
     let mut still = Vec::new();
-    for (c, v) in resting.drain(..).zip(values) {
+    for (c, v) in sized.into_iter().zip(values) {
         match implausible(&scorer.scale, &v, c, &config.plausibility) {
             Some(_) => still.push(c),
             None => pool.push(c),
@@ -163,7 +239,8 @@ fn choose(
     best: &Candidate,
     pool: &mut Vec<Effect>,
     resting: &mut Vec<Effect>,
-) -> Result<Option<(Candidate, f64, Vec<f64>)>, DiagnoseError> {
+    not_forward: &mut Vec<Effect>,
+) -> Result<Choice, DiagnoseError> {
     let gate = config.gate_standard_errors;
     let gain = sel.current.heldout_rms_mm - best.stats.heldout_rms_mm;
     let mut eligible: Vec<&Candidate> = results
@@ -179,6 +256,7 @@ fn choose(
             .then(a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm))
     });
     let mut forward_before: Option<f64> = None;
+    let tried: Vec<Effect> = eligible.iter().map(|c| c.effect).collect();
     for cand in eligible {
         let mut with = sel.effects.clone();
         with.push(cand.effect);
@@ -190,6 +268,7 @@ fn choose(
             };
             let after = scorer.heldout(&with, &scorer.forward)?;
             if after.heldout_rms_mm >= before {
+                not_forward.push(cand.effect);
                 continue;
             }
         }
@@ -206,7 +285,21 @@ fn choose(
         if b >= *sel.bic.last().unwrap_or(&f64::INFINITY) {
             continue;
         }
-        return Ok(Some((cand.clone(), b, full.theta)));
+        return Ok(Choice::Joins(Box::new(cand.clone()), b, full.theta));
     }
-    Ok(None)
+    Ok(if !tried.is_empty() && tried.iter().all(|e| not_forward.contains(e)) {
+        Choice::OnlyNotForward
+    } else {
+        Choice::None
+    })
+}
+
+/// What [`choose`] found.
+enum Choice {
+    /// This candidate joins, with its information criterion and its parameters fitted on all data.
+    Joins(Box<Candidate>, f64, Vec<f64>),
+    /// Every candidate it tried was a drift whose forward-chained error rose (listed by `choose`).
+    OnlyNotForward,
+    /// None joins.
+    None,
 }

@@ -16,6 +16,7 @@ mod clusters;
 mod completion;
 mod config;
 mod diagnosis;
+mod drifts;
 mod eligibility;
 mod error;
 mod extrapolation;

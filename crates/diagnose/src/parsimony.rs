@@ -8,6 +8,7 @@
 use thermokin_identify::{DriftShape, Effect};
 
 use crate::config::Config;
+use crate::drifts::{keeps_its_law, rising_minutes};
 use crate::error::DiagnoseError;
 use crate::scoring::{Relation, Scorer, significantly_better};
 use crate::selection::{Joined, Selection, Step, without};
@@ -36,14 +37,16 @@ pub(crate) fn parsimony(
     Ok(())
 }
 
-/// An exponential drift not significantly better than its linear twin becomes the linear one.
+/// An exponential drift not significantly better than its linear twin — over the session, nor over the
+/// minutes in which it rises ([`crate::drifts`]) — becomes the linear one.
 fn linear_for_exponential(scorer: &Scorer<'_>, config: &Config, sel: &mut Selection) -> Result<(), DiagnoseError> {
     for k in sel.always..sel.effects.len() {
         if let Effect::ThermalDrift(j, DriftShape::Exponential) = sel.effects[k] {
             let mut swapped = sel.effects.clone();
             swapped[k] = Effect::ThermalDrift(j, DriftShape::Linear);
             let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
-            if !significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
+            let rising = rising_minutes(scorer, &sel.effects, k)?;
+            if !keeps_its_law(scorer, config, &errors, &sel.errors, rising) {
                 let row = format!("{} replaces the exponential (not significantly worse)", swapped[k].label());
                 // The linear drift takes the exponential's step in the additive table.
                 for s in sel.steps.iter_mut().filter(|s| s.effect == sel.effects[k]) {
@@ -59,7 +62,9 @@ fn linear_for_exponential(scorer: &Scorer<'_>, config: &Config, sel: &mut Select
 /// A thermal drift not significantly better than its row's static deviation becomes the static one: a
 /// drift over before the data begin (an exponential whose time constant is short against the first
 /// measurement) or one the data cannot tell from constant is a static deviation in disguise, and the
-/// static explanation wins — it holds at every time, the drift's extrapolates.
+/// static explanation wins — it holds at every time, the drift's extrapolates. An exponential drift
+/// significantly better over the minutes in which it rises stays, whatever its plateau makes of the
+/// session's average ([`crate::drifts`]): those minutes are what its compensation is for.
 fn static_for_drift(
     scorer: &Scorer<'_>,
     config: &Config,
@@ -75,7 +80,8 @@ fn static_for_drift(
         let mut swapped = sel.effects.clone();
         swapped[k] = row;
         let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
-        if !significantly_better(&errors, &sel.errors, config.gate_standard_errors, &scorer.blocks) {
+        let rising = rising_minutes(scorer, &sel.effects, k)?;
+        if !keeps_its_law(scorer, config, &errors, &sel.errors, rising) {
             let drift = sel.effects[k];
             let text =
                 format!("{} replaces {} (a static deviation, not significantly worse)", row.label(), drift.label());

@@ -299,8 +299,33 @@ impl<'a> Scorer<'a> {
             let (_, jac) = residuals_and_jacobian(self.robot, &model, &start.theta, self.data, rows, &self.terms)?;
             start.prior = Some(prior(&model, &jac, lambda));
         }
-        let f = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
-        Ok((model, f))
+        let mut best = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
+        // An exponential drift's time constant from more than one start: a fast warm-up (τ of a few
+        // minutes) lies across a ridge from the default start, where the fit settles in the slower law's
+        // minimum. The lowest training cost wins (the held-out poses play no part).
+        let taus = model.time_constants();
+        if !taus.is_empty() {
+            for tau in self.tau_starts() {
+                let mut other = start.clone();
+                for &c in &taus {
+                    other.theta[c] = tau;
+                }
+                let f = fit_from(self.robot, &model, self.data, rows, &self.terms, &other)?;
+                if f.ssr < best.ssr {
+                    best = f;
+                }
+            }
+        }
+        Ok((model, best))
+    }
+
+    /// The other starting time constants of an exponential drift's fit ([`Scorer::fit_shrunk`]), beside
+    /// the model's own: a twenty-fourth and a sixth of the session's span (7.5 and 30 minutes over a
+    /// 180-minute warm-up), so that a law rising over the first minutes, or over the first hour, is
+    /// started near it.
+    fn tau_starts(&self) -> Vec<f64> {
+        let span = self.data.time_span();
+        [span / 24.0, span / 6.0].into_iter().filter(|t| t.is_finite() && *t > 0.0).collect()
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.

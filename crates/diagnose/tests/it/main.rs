@@ -19,4 +19,5 @@ mod temperature;
 mod tracker;
 mod transfer;
 mod wam;
+mod warmups;
 mod weights;
