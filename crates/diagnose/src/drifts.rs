@@ -9,7 +9,7 @@
 //! ([`keeps_its_law`]). A drift over before the poses begin (τ of a tenth of a minute) rises within one
 //! block of time, where the gate cannot show anything: it still becomes the static deviation it is.
 
-use thermokin_identify::{DriftShape, Effect};
+use thermokin_identify::{DriftShape, Effect, Model};
 
 use crate::config::Config;
 use crate::error::DiagnoseError;
@@ -29,13 +29,19 @@ pub(crate) fn rising_minutes(
     if !matches!(effects.get(k), Some(Effect::ThermalDrift(_, DriftShape::Exponential))) {
         return Ok(None);
     }
+    let (model, fit) = scorer.full_fit(effects)?;
+    Ok(rising_in_fit(scorer, &model, &fit.theta, k))
+}
+
+/// [`rising_minutes`] of the exponential drift at `k` of `model`, whose parameters fitted on all
+/// measurements are `theta`.
+pub(crate) fn rising_in_fit(scorer: &Scorer<'_>, model: &Model, theta: &[f64], k: usize) -> Option<(f64, f64)> {
     let times = scorer.data.measurements.iter().map(|m| m.time_min);
     let first = times.clone().fold(f64::INFINITY, f64::min);
     let last = times.fold(f64::NEG_INFINITY, f64::max);
-    let (model, fit) = scorer.full_fit(effects)?;
-    let tau = fit.theta[model.offsets()[k] + 6];
+    let tau = theta[model.offsets()[k] + 6];
     let end = first + RISING_TIME_CONSTANTS * tau;
-    Ok((tau.is_finite() && tau > 0.0 && end < last).then_some((first, end)))
+    (tau.is_finite() && tau > 0.0 && end < last).then_some((first, end))
 }
 
 /// Whether the model with the drift (held-out errors `with`, on the selection's folds) is significantly

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use thermokin_identify::{DriftShape, Effect, JointIndex};
 
 use crate::config::Config;
-use crate::drifts::{keeps_its_law, rising_minutes};
+use crate::drifts::{keeps_its_law, rising_in_fit};
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
@@ -45,10 +45,9 @@ pub(crate) fn forward(
             if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
                 break None;
             }
-            let mut not_forward = Vec::new();
-            match choose(scorer, config, sel, &results, &best, &mut pool, &mut resting, &mut not_forward)? {
+            match choose(scorer, config, sel, &results, &best, &mut pool, &mut resting)? {
                 Choice::Joins(c, b, theta) => break Some((*c, b, theta)),
-                Choice::OnlyNotForward => results.retain(|r| !not_forward.contains(&r.effect)),
+                Choice::OnlyNotForward(tried) => results.retain(|r| !tried.contains(&r.effect)),
                 Choice::None => break None,
             }
         };
@@ -72,25 +71,26 @@ fn refine_to_exponential(
     sel: &mut Selection,
     pool: &mut Vec<Effect>,
 ) -> Result<(), DiagnoseError> {
-    let k = sel.effects.len() - 1;
-    let Some(&Effect::ThermalDrift(j, DriftShape::Linear)) = sel.effects.last() else { return Ok(()) };
+    let Some((&linear, before)) = sel.effects.split_last() else { return Ok(()) };
+    let Effect::ThermalDrift(j, DriftShape::Linear) = linear else { return Ok(()) };
     let twin = Effect::ThermalDrift(j, DriftShape::Exponential);
     if !pool.contains(&twin) {
         return Ok(());
     }
+    let k = before.len();
     let mut swapped = sel.effects.clone();
     swapped[k] = twin;
     let (stats, errors) = scorer.heldout_errors(&swapped, &scorer.folds)?;
-    let rising = rising_minutes(scorer, &swapped, k)?;
+    // One fit on all data serves the minutes it rises in, its plausibility and the information criterion.
+    let (model, full) = scorer.full_fit(&swapped)?;
+    let rising = rising_in_fit(scorer, &model, &full.theta, k);
     if !keeps_its_law(scorer, config, &sel.errors, &errors, rising) {
         return Ok(());
     }
-    let (model, full) = scorer.full_fit(&swapped)?;
     let o = model.offsets()[k];
     if implausible(&scorer.scale, &full.theta[o..o + twin.len()], twin, &config.plausibility).is_some() {
         return Ok(());
     }
-    let linear = sel.effects[k];
     for s in sel.steps.iter_mut().filter(|s| s.effect == linear) {
         s.effect = twin;
     }
@@ -147,9 +147,8 @@ fn wake(
         return Ok(());
     }
     // A drift refused as over before the poses, where the model lacked its row: back once the row joined.
-    let (back, sized): (Vec<Effect>, Vec<Effect>) = resting.drain(..).partition(|&c| {
-        matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential)) && holds_static_row(&sel.effects, c)
-    });
+    let (back, sized): (Vec<Effect>, Vec<Effect>) =
+        resting.drain(..).partition(|&c| is_exponential(&c) && holds_static_row(&sel.effects, c));
     pool.extend(back);
     let values = crate::screen::linearised_values(scorer, &sel.effects, &sel.theta, &sized)?;
     let mut still = Vec::new();
@@ -239,7 +238,6 @@ fn choose(
     best: &Candidate,
     pool: &mut Vec<Effect>,
     resting: &mut Vec<Effect>,
-    not_forward: &mut Vec<Effect>,
 ) -> Result<Choice, DiagnoseError> {
     let gate = config.gate_standard_errors;
     let gain = sel.current.heldout_rms_mm - best.stats.heldout_rms_mm;
@@ -257,6 +255,7 @@ fn choose(
     });
     let mut forward_before: Option<f64> = None;
     let tried: Vec<Effect> = eligible.iter().map(|c| c.effect).collect();
+    let mut not_forward = Vec::new();
     for cand in eligible {
         let mut with = sel.effects.clone();
         with.push(cand.effect);
@@ -288,7 +287,7 @@ fn choose(
         return Ok(Choice::Joins(Box::new(cand.clone()), b, full.theta));
     }
     Ok(if !tried.is_empty() && tried.iter().all(|e| not_forward.contains(e)) {
-        Choice::OnlyNotForward
+        Choice::OnlyNotForward(tried)
     } else {
         Choice::None
     })
@@ -298,8 +297,8 @@ fn choose(
 enum Choice {
     /// This candidate joins, with its information criterion and its parameters fitted on all data.
     Joins(Box<Candidate>, f64, Vec<f64>),
-    /// Every candidate it tried was a drift whose forward-chained error rose (listed by `choose`).
-    OnlyNotForward,
+    /// Every candidate it tried (these) was a drift whose forward-chained error rose.
+    OnlyNotForward(Vec<Effect>),
     /// None joins.
     None,
 }

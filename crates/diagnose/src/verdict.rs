@@ -148,14 +148,12 @@ pub(crate) fn far_from_the_noise(config: &Config, lever_mm: Option<f64>, nested:
         .filter(|f| f.poses > 0)
         .map(|f| (f.fold, f.selected.heldout_rms_mm / floor, f.effects.as_slice()))
         .collect();
-    let far: Vec<f64> = folds.iter().map(|f| f.1).filter(|&r| r >= FAR_FROM_THE_NOISE).collect();
+    let mut far: Vec<f64> = folds.iter().map(|f| f.1).filter(|&r| r >= FAR_FROM_THE_NOISE).collect();
     if 2 * far.len() <= folds.len() {
         return None;
     }
-    let (lo, hi) = (far.iter().copied().fold(f64::INFINITY, f64::min), far.iter().copied().fold(0.0, f64::max));
-    let mut sorted = far.clone();
-    sorted.sort_by(f64::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    far.sort_by(f64::total_cmp);
+    let (lo, hi, median) = (far[0], far[far.len() - 1], far[far.len() / 2]);
     let (k, r, effects) = folds.iter().min_by(|a, b| a.1.total_cmp(&b.1))?;
     let better = config.at_the_noise(r * floor, lever_mm) == Some(true) || *r < 0.5 * median;
     let chose = if effects.is_empty() { "nothing".to_string() } else { effects.join(", ") };

@@ -90,6 +90,51 @@ pub fn error_mm_deg(values: [f64; 6]) -> thermokin_chain::ErrorParams {
     )
 }
 
+/// How a row grows over a test's 180-minute warm-up: `(1 − e^(−t/τ)) / (1 − e^(−180/τ))`, `t / 180`, or
+/// not at all (a static deviation, in force from the cold start) — the true robot's law, written here
+/// apart from the diagnosis's model.
+#[derive(Clone, Copy, Debug)]
+pub enum WarmUpLaw {
+    /// Rising with time constant `tau_min`, reaching the row at minute 180.
+    Exponential {
+        /// Minutes.
+        tau_min: f64,
+    },
+    /// Growing in proportion to time, the row at minute 180.
+    Linear,
+    /// The whole row from the start.
+    Static,
+}
+
+impl WarmUpLaw {
+    /// The share of the row in force at minute `t`.
+    pub fn at(self, t: f64) -> f64 {
+        match self {
+            WarmUpLaw::Exponential { tau_min } => (1.0 - (-t / tau_min).exp()) / (1.0 - (-180.0 / tau_min).exp()),
+            WarmUpLaw::Linear => t / 180.0,
+            WarmUpLaw::Static => 1.0,
+        }
+    }
+}
+
+/// A six-joint `chain` at minute `t` of a warm-up: joint 2's zero `offset_deg` off, its row and joint
+/// 3's each grown by its own law (the warm-up tests' true robots, built on the chain).
+pub fn warmed_up(
+    chain: &thermokin_chain::Chain,
+    offset_deg: f64,
+    row2: (thermokin_chain::ErrorParams, WarmUpLaw),
+    row3: (thermokin_chain::ErrorParams, WarmUpLaw),
+    t: f64,
+) -> thermokin_chain::Chain {
+    use thermokin_chain::ErrorParams;
+    let mut rows = vec![ErrorParams::ZERO; 6];
+    rows[1] = row2.0.scaled(row2.1.at(t));
+    rows[2] = row3.0.scaled(row3.1.at(t));
+    let mut zeros = vec![0.0; 6];
+    zeros[1] = offset_deg.to_radians();
+    chain.with_errors_and_zeros(ErrorParams::ZERO, &rows, ErrorParams::ZERO, &zeros).expect("a six-joint chain")
+}
+
 /// A standard normal sample (Box–Muller), from a seeded generator.
 pub fn gauss(rng: &mut rand_chacha::ChaCha8Rng) -> f64 {
     use rand::Rng;

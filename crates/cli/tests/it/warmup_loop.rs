@@ -15,7 +15,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_chain::{Dataset, Measurement};
-use thermokin_testdata::{error_mm_deg, gauss, random_q, workspace};
+use thermokin_testdata::{WarmUpLaw as Law, error_mm_deg, gauss, random_q, warmed_up, workspace};
 
 const ROBOT: &str = "configs/irb140.toml";
 /// Tracker noise per axis, mm.
@@ -178,18 +178,11 @@ fn run_loop(name: &str, truth: &Truth, seed: u64) -> Loop {
 #[test]
 fn a_warm_up_measured_on_day_1_is_compensated_on_day_2() {
     // Joint 2's zero off by 0.05°; joint 2's row drifting exponentially (τ = 40 min), joint 3's linearly.
-    let nominal = thermokin_io::read_robot(&workspace(ROBOT)).unwrap();
-    let chain = nominal.chain().clone();
-    let row2 = error_mm_deg([0.25, -0.1, 0.3, 0.01, 0.02, 0.005]);
-    let row3 = error_mm_deg([0.1, 0.05, -0.15, 0.008, 0.0, 0.006]);
-    let truth = move |t: f64| {
-        let mut rows = vec![ErrorParams::ZERO; 6];
-        rows[1] = row2.scaled((1.0 - (-t / 40.0).exp()) / (1.0 - (-180.0f64 / 40.0).exp()));
-        rows[2] = row3.scaled(t / 180.0);
-        let mut zeros = vec![0.0; 6];
-        zeros[1] = 0.05f64.to_radians();
-        chain.with_errors_and_zeros(ErrorParams::ZERO, &rows, ErrorParams::ZERO, &zeros).unwrap()
-    };
+    let truth = warm_up(
+        0.05,
+        ([0.25, -0.1, 0.3, 0.01, 0.02, 0.005], Law::Exponential { tau_min: 40.0 }),
+        ([0.1, 0.05, -0.15, 0.008, 0.0, 0.006], Law::Linear),
+    );
     closes(&run_loop("time", &truth, 2201));
 }
 
@@ -218,37 +211,11 @@ fn closes(l: &Loop) {
     assert!(l.rms <= 0.02 && l.max <= 0.05, "{:.4} mm RMS, {:.4} mm max\n{}", l.rms, l.max, l.exported);
 }
 
-/// How a row grows over the warm-up: `(1 − e^(−t/τ)) / (1 − e^(−180/τ))`, `t / 180`, or not at all
-/// (a static deviation, in force from the cold start).
-#[derive(Clone, Copy)]
-enum Law {
-    Exponential { tau_min: f64 },
-    Linear,
-    Static,
-}
-
-impl Law {
-    fn at(self, t: f64) -> f64 {
-        match self {
-            Law::Exponential { tau_min } => (1.0 - (-t / tau_min).exp()) / (1.0 - (-180.0 / tau_min).exp()),
-            Law::Linear => t / 180.0,
-            Law::Static => 1.0,
-        }
-    }
-}
-
 /// The IRB 140 with joint 2's zero `offset_deg` off, its rows 2 and 3 (mm, °) growing by their laws.
 fn warm_up(offset_deg: f64, row2: ([f64; 6], Law), row3: ([f64; 6], Law)) -> impl Fn(f64) -> Chain {
     let chain = thermokin_io::read_robot(&workspace(ROBOT)).unwrap().chain().clone();
-    let (r2, r3) = (error_mm_deg(row2.0), error_mm_deg(row3.0));
-    move |t: f64| {
-        let mut rows = vec![ErrorParams::ZERO; 6];
-        rows[1] = r2.scaled(row2.1.at(t));
-        rows[2] = r3.scaled(row3.1.at(t));
-        let mut zeros = vec![0.0; 6];
-        zeros[1] = offset_deg.to_radians();
-        chain.with_errors_and_zeros(ErrorParams::ZERO, &rows, ErrorParams::ZERO, &zeros).unwrap()
-    }
+    let (r2, r3) = ((error_mm_deg(row2.0), row2.1), (error_mm_deg(row3.0), row3.1));
+    move |t: f64| warmed_up(&chain, offset_deg, r2, r3, t)
 }
 
 /// Issue #58's family: a slow rise (τ = 90 min) beside a linear row; two rises of different time

@@ -11,9 +11,9 @@
 use nalgebra::Vector3;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use thermokin_chain::{Chain, Dataset, ErrorParams, Measurement, OperatingState};
+use thermokin_chain::{Chain, Dataset, Measurement, OperatingState};
 use thermokin_diagnose::{Config, Validation, diagnose};
-use thermokin_testdata::{error_mm_deg, gauss, random_q, workspace};
+use thermokin_testdata::{WarmUpLaw, error_mm_deg, gauss, random_q, warmed_up, workspace};
 
 /// The warm-up of draw `seed`: joint 2's row (up to 0.3 mm, 0.02°) rising with τ = 40 min, joint 3's
 /// (up to 0.15 mm, 0.01°) linearly, joint 2's zero 0.05° off.
@@ -24,12 +24,7 @@ fn truth(chain: &Chain, seed: u64) -> impl Fn(f64) -> Chain {
     let row3 = error_mm_deg([r(0.15), r(0.15), r(0.15), r(0.01), r(0.01), r(0.01)]);
     let chain = chain.clone();
     move |t: f64| {
-        let mut rows = vec![ErrorParams::ZERO; 6];
-        rows[1] = row2.scaled((1.0 - (-t / 40.0).exp()) / (1.0 - (-180.0f64 / 40.0).exp()));
-        rows[2] = row3.scaled(t / 180.0);
-        let mut zeros = vec![0.0; 6];
-        zeros[1] = 0.05f64.to_radians();
-        chain.with_errors_and_zeros(ErrorParams::ZERO, &rows, ErrorParams::ZERO, &zeros).unwrap()
+        warmed_up(&chain, 0.05, (row2, WarmUpLaw::Exponential { tau_min: 40.0 }), (row3, WarmUpLaw::Linear), t)
     }
 }
 
