@@ -300,11 +300,14 @@ impl<'a> Scorer<'a> {
             start.prior = Some(prior(&model, &jac, lambda));
         }
         let mut best = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
-        // An exponential drift's time constant from more than one start: a fast warm-up (τ of a few
-        // minutes) lies across a ridge from the default start, where the fit settles in the slower law's
-        // minimum. The lowest training cost wins (the held-out poses play no part).
+        // Two or more exponential drifts started at one time constant: their laws begin alike and the
+        // fit may settle with both near one of them (a warm-up whose rows rise over 20 and 60 minutes,
+        // `warmup_loop.rs`). They are fitted again from the other starts too, and the lowest training
+        // cost wins (the held-out poses play no part). One drift's time constant is found from the
+        // default start (in the rate `1/τ` its cost is nearly quadratic) and is not refitted: a week of
+        // poses scores such a candidate every round.
         let taus = model.time_constants();
-        if !taus.is_empty() {
+        if taus.len() >= 2 {
             for tau in self.tau_starts() {
                 let mut other = start.clone();
                 for &c in &taus {
@@ -319,10 +322,9 @@ impl<'a> Scorer<'a> {
         Ok((model, best))
     }
 
-    /// The other starting time constants of an exponential drift's fit ([`Scorer::fit_shrunk`]), beside
-    /// the model's own: a twenty-fourth and a sixth of the session's span (7.5 and 30 minutes over a
-    /// 180-minute warm-up), so that a law rising over the first minutes, or over the first hour, is
-    /// started near it.
+    /// The other starting time constants of a fit with several exponential drifts
+    /// ([`Scorer::fit_shrunk`]), beside the model's own: a twenty-fourth and a sixth of the session's
+    /// span (7.5 and 30 minutes over a 180-minute warm-up).
     fn tau_starts(&self) -> Vec<f64> {
         let span = self.data.time_span();
         [span / 24.0, span / 6.0].into_iter().filter(|t| t.is_finite() && *t > 0.0).collect()
