@@ -19,9 +19,14 @@ def test_the_readme_commands_are_the_ci_commands(root):
     section = python_section(root)
     commands = re.findall(r"```sh\n(.*?)```", section, re.S)[0]
     lines = [l.split("#")[0].strip() for l in commands.strip().splitlines()]
-    assert lines == ['pip install "./python[test]"', "python -m pytest python/tests"]
+    assert lines == [
+        "cargo xtask wheel",
+        'pip install "$(ls target/wheels/thermokin-*.whl)[test]"',
+        "python -m pytest python/tests",
+    ]
     ci = (root / ".ci" / "run").read_text()
-    assert '"$venv/bin/pip" install "./python[test]"' in ci
+    assert "cargo xtask wheel" in ci
+    assert '"$venv/bin/pip" install "$(ls target/wheels/thermokin-*.whl)[test]"' in ci
     assert '"$venv/bin/python" -m pytest python/tests' in ci
 
 

@@ -31,6 +31,11 @@ Tasks:
                               one table (figures, time, memory, processor, date) to docs/real-data.md.
   measure BIN ARGS...         (used by bench --baseline and real-data) Run one command and print its CPU
                               seconds, wall seconds and peak memory as JSON.
+  wheel                       Build the Python package's one abi3 wheel into target/wheels/ (maturin,
+                              `pip install maturin`): it installs on any CPython >= 3.9 of this platform
+                              with no Rust toolchain.
+  package                     `cargo package` every workspace member not marked `publish = false` (the
+                              library crates), each verified by building it from its packaged sources.
   deps                        Check that dependencies point one way (the core never depends on I/O,
                               the CLI or file formats).
   tidy                        Check the unit boundary: no literal unit conversion (/ 1000.0, * 1000.0,
@@ -54,6 +59,8 @@ fn main() -> Result<()> {
         }
         Some("measure") => bench::measure_task(&args[1..]),
         Some("real-data") => real_data::real_data(),
+        Some("wheel") => wheel(),
+        Some("package") => package(),
         Some("deps") => deps(),
         Some("tidy") => tidy(),
         Some("-h" | "--help") | None => {
@@ -62,6 +69,49 @@ fn main() -> Result<()> {
         }
         Some(other) => bail!("unknown task `{other}`\n\n{HELP}"),
     }
+}
+
+/// The Python package's abi3 wheel, built by maturin into `target/wheels/` (emptied first, so that the
+/// one wheel there is this build's).
+fn wheel() -> Result<()> {
+    let out = Path::new("target/wheels");
+    if out.exists() {
+        std::fs::remove_dir_all(out).with_context(|| format!("emptying {}", out.display()))?;
+    }
+    let mut maturin = Command::new(std::env::var("MATURIN").unwrap_or_else(|_| "maturin".into()));
+    maturin.args(["build", "--release", "--manifest-path", "python/Cargo.toml", "--out"]).arg(out);
+    run(&mut maturin).context("building the wheel needs maturin on PATH (pip install maturin)")?;
+    for entry in std::fs::read_dir(out)? {
+        println!("{}", entry?.path().display());
+    }
+    Ok(())
+}
+
+/// The workspace's members marked `publish = false` (`cargo metadata` lists them with no registry).
+fn unpublished() -> Result<Vec<String>> {
+    let out = cargo().args(["metadata", "--no-deps", "--format-version", "1", "--locked"]).output()?;
+    if !out.status.success() {
+        bail!("cargo metadata failed: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let metadata: serde_json::Value = serde_json::from_slice(&out.stdout)?;
+    let packages = metadata["packages"].as_array().context("cargo metadata lists no packages")?;
+    let mut names: Vec<String> = packages
+        .iter()
+        .filter(|p| p["publish"].as_array().is_some_and(Vec::is_empty))
+        .filter_map(|p| p["name"].as_str().map(String::from))
+        .collect();
+    names.sort();
+    Ok(names)
+}
+
+/// `cargo package --workspace`, the members marked `publish = false` excluded.
+fn package() -> Result<()> {
+    let mut cmd = cargo();
+    cmd.args(["package", "--workspace", "--locked"]);
+    for name in unpublished()? {
+        cmd.args(["--exclude", &name]);
+    }
+    run(&mut cmd)
 }
 
 pub(crate) fn workspace_root() -> PathBuf {
@@ -786,6 +836,28 @@ mod tests {
         );
     }
 
+    /// Issue #62: every crate under `crates/` has a README that its crate root includes as its
+    /// documentation (so that the README's example runs as a doctest).
+    #[test]
+    fn every_crate_documents_itself_with_its_readme() {
+        let root = super::workspace_root();
+        let mut crates = 0;
+        for entry in std::fs::read_dir(root.join("crates")).unwrap() {
+            let dir = entry.unwrap().path();
+            assert!(dir.join("README.md").is_file(), "{} has no README.md", dir.display());
+            let lib = dir.join("src/lib.rs");
+            let root_file = if lib.exists() { lib } else { dir.join("src/main.rs") };
+            let text = std::fs::read_to_string(&root_file).unwrap();
+            assert!(
+                text.starts_with("#![doc = include_str!(\"../README.md\")]"),
+                "{} does not include its README as documentation",
+                root_file.display()
+            );
+            crates += 1;
+        }
+        assert!(crates >= 14, "{crates}");
+    }
+
     #[test]
     fn no_dangling_notes_reference_and_every_source_file_opens_with_a_doc_comment() {
         let root = super::workspace_root();
@@ -806,7 +878,9 @@ mod tests {
                     );
                     let is_source = path.components().any(|c| c.as_os_str() == "src");
                     if is_source {
-                        assert!(text.starts_with("//!"), "{} does not open with a `//!` doc comment", path.display());
+                        // A crate root opens with its README (its crate documentation), then its own `//!` lines.
+                        let own = text.strip_prefix("#![doc = include_str!(\"../README.md\")]\n").unwrap_or(&text);
+                        assert!(own.starts_with("//!"), "{} does not open with a `//!` doc comment", path.display());
                     }
                     checked += 1;
                 }

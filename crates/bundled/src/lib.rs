@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-bundled`: the files the README's and the guide's commands name — the bundled robots, the
 //! paper's tables, the authors' files, the public URDFs, the real UR10 (series B and C), WAM and Rokae sets — built into the
 //! binary that links this crate, so that an installed `thermokin` runs them from any directory. A front

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-chain`: the kinematic core — DH, modified DH and the same-orientation extended table of
 //! the paper (sections 2.2 and 3), forward kinematics and the geometric Jacobian.
 //!

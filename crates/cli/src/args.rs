@@ -144,7 +144,7 @@ pub struct RobotArgs {
     /// URDF tip link (default: the single leaf).
     #[arg(long, value_name = "LINK")]
     pub tip: Option<String>,
-    /// A tool behind the robot file's tool frame (the URDF's --tip link, a TOML's [tool]): the TCP in that
+    /// A tool behind the robot file's tool frame (the URDF's --tip link, a TOML's `[tool]`): the TCP in that
     /// frame, x,y,z (mm) and the orientation in the --orientation convention (or a JSON pose); all zeros
     /// is the file's own tool.
     #[arg(long, value_name = "X,Y,Z,A,B,C", allow_hyphen_values = true)]

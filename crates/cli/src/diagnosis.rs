@@ -87,15 +87,27 @@ fn next_poses(a: &DiagnoseArgs, report: &Report) -> Option<(String, String)> {
     if refused.is_empty() {
         return None;
     }
-    let tip = a.robot.tip.as_deref().map(|t| format!(" --tip {t}")).unwrap_or_default();
+    let tip = a.robot.tip.as_deref().map(|t| format!(" --tip {}", shell_word(t))).unwrap_or_default();
     let command = format!(
-        "thermokin plan --robot {}{tip} --frame {} --tool {} --candidates <the poses you can reach>.csv --measured {} --poses 20 --out next.csv",
-        a.robot.robot.display(),
+        "thermokin plan --robot {}{tip} --frame {} --tool {} --measured {} --poses 20 --out next.csv",
+        shell_word(&a.robot.robot.display().to_string()),
         a.frame,
         a.tool,
-        a.measurements.display(),
+        shell_word(&a.measurements.display().to_string()),
     );
     Some((command, refused.join(", ")))
+}
+
+/// `word` as a POSIX shell reads it back as one word: as it is where every character is one no shell
+/// splits or interprets, else in single quotes (a quote inside written `'\''`) — so that a printed
+/// command pastes as printed, whatever a folder is called (`a b<c>`).
+fn shell_word(word: &str) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./:=@%+,".contains(c);
+    if !word.is_empty() && word.chars().all(plain) {
+        word.to_string()
+    } else {
+        format!("'{}'", word.replace('\'', "'\\''"))
+    }
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
@@ -165,7 +177,9 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     say!("{}", report.text().to_string().trim_end());
     let next = next_poses(&a, &report);
     if let Some((command, pins)) = &next {
-        say!("\nnext poses: `{command}` plans the poses that pin down {pins} (docs/planner.md)");
+        say!(
+            "\nnext poses: `{command}` plans the poses that pin down {pins}, sampled within the joint limits — add --candidates FILE with the poses you can reach (docs/planner.md)"
+        );
     }
     if let Some(p) = &a.html {
         let context = thermokin_report::PageContext {

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! The `thermokin` command line: forward and inverse kinematics, thermal compensation runs, the
 //! sim-to-real diagnosis, and the reproduction of the paper's case studies. It parses, calls the
 //! libraries and prints: every default, rule and refusal is a library's.

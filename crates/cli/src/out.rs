@@ -1,4 +1,4 @@
-//! Standard output of a command's results: every line through [`line`], which turns a closed pipe (`… |
+//! Standard output of a command's results: every line through [`line()`], which turns a closed pipe (`… |
 //! head -1`) into [`exit::CLOSED_PIPE`] — the command ends quietly — instead of `println!`'s panic.
 
 use std::io::Write;

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-compensate`: the paper's compensation procedure end to end (section 4, Figure 13).
 //!
 //! For every programmed target, inverse kinematics on the *deformed* model gives the joint angles that

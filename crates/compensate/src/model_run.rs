@@ -302,7 +302,7 @@ pub fn commanded_on_model(
 /// inverted, [`RobotModel::commanded_for`]), with the reached pose measured again through the whole
 /// model, independently of the IK: `solution.q` becomes the commanded joints and its errors the
 /// re-measured ones; a solve that converged on the chain but whose joints cannot be inverted, or whose
-/// re-measured pose misses the tolerances (`params`, with [`REMEASURE_SLACK_MM`] of slack), is
+/// re-measured pose misses the tolerances (`params`, with `REMEASURE_SLACK_MM` (1e-9 mm) of slack), is
 /// `Unverified`. Returns the reached pose.
 pub fn command_solution(
     model: &RobotModel,

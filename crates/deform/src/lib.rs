@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-deform`: the error-parameter model of the paper — deviation tables (six parameters per row,
 //! section 3, Tables 6–11), how they grow with operating time (section 4: static, linear to the 180-minute
 //! stabilization, exponential, cubic, temperature-driven), and how a table deforms a chain.

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-diagnose`: the sim-to-real diagnosis — where the model and the measured robot disagree,
 //! which unmodelled effect causes it, and how far the gap shrinks once that effect is added, always
 //! judged on held-out data.

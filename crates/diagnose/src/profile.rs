@@ -97,7 +97,7 @@ pub struct PhaseCost {
     pub outer_fold_seconds: f64,
 }
 
-/// Where a diagnosis spent its time ([module documentation](self)).
+/// Where a diagnosis spent its time.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct Profile {
     /// Every phase, in the order they run.

@@ -13,7 +13,7 @@ pub const LINEAR_DRIFT_REFERENCE_MIN: f64 = 180.0;
 /// linear drift over any warm-up a user measures.
 const MAX_TAU_MIN: f64 = 1e4;
 /// The time constants an exponential drift is evaluated and fitted in, minutes: from a thousandth of a
-/// minute (a step) to [`MAX_TAU_MIN`].
+/// minute (a step) to `MAX_TAU_MIN`.
 pub const TAU_RANGE_MIN: (f64, f64) = (1e-3, MAX_TAU_MIN);
 /// Initial time constant of an exponential drift, minutes.
 pub(crate) const INITIAL_TAU_MIN: f64 = 60.0;
@@ -30,7 +30,7 @@ pub enum DriftShape {
     /// trading a huge amplitude against a huge τ.
     Exponential,
     /// The law of [`TimeProfile::Temperature`]: `δ · (T(t) − T(0))` per kelvin of the joint's own logged
-    /// temperature rise when a column names the joint ([`sensor_joint`]), of the mean rise otherwise.
+    /// temperature rise when a column names the joint (`sensor_joint`), of the mean rise otherwise.
     Temperature,
 }
 

@@ -78,7 +78,7 @@ const R_BLOCK_ROWS: usize = 128;
 /// resolved to ~1e-14, so that `1 − cos²` is known to ~1e-13 against the threshold's 1e-12):
 /// - a column within [`DEPENDENT`] of one earlier kept column is dependent whatever else is accepted
 ///   (its distance from any span holding that column is smaller still);
-/// - when the other columns' Gram matrix has a Cholesky factor with `‖L⁻¹‖_F ≤` [`WELL_CONDITIONED`],
+/// - when the other columns' Gram matrix has a Cholesky factor with `‖L⁻¹‖_F ≤` `WELL_CONDITIONED`,
 ///   the smallest singular value of their `A` is at least ~1e-3: every one of them is at least that far
 ///   from the span of the others, and the Gram's rounding (≤ m·1e-16 ≈ 1e-12 on its entries) cannot
 ///   bring any near [`DEPENDENT`]. All are identifiable and no factorisation is needed.

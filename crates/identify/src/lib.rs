@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-identify`: identification of a robot's errors from measured poses — the layer the
 //! diagnosis and the measurement planner share.
 //!

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-ik`: inverse kinematics on any chain (nominal or deformed) — damped least squares /
 //! Levenberg–Marquardt with adaptive damping, the Jacobian and its linear solve in faer on the
 //! allocation-free path, joint limits, random restarts, and a deterministic parallel batch API.

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-io`: every file format at the edge of thermokin — robot TOML, deviation tables (the
 //! authors' CSV and TOML), targets CSV, temperature logs, the authors' results files — and atomic writes.
 //!

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-paper`: the paper's case studies as values, compared with the authors' own files.
 //!
 //! This crate holds what is specific to reproducing *the paper* rather than to compensating a user's

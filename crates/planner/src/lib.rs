@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-planner`: which poses to measure. From candidate poses (the user's taught, collision-free
 //! ones, or sampled within the joint limits and a workspace box), it chooses the poses that make the
 //! parameters the diagnosis considers identifiable and precise — D-optimal on the same model and

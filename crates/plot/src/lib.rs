@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-plot`: SVG plots of compensation runs and diagnoses, drawn into memory (plotters' SVG
 //! backend, no system dependency); the front end writes them.
 

@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-report`: a diagnosis and a measurement plan as one self-contained HTML page — the verdict
 //! and the held-out figures first, then where the gap lies, drawn as inline SVG from the report's own
 //! numbers. Nothing on the page is fetched: no script, no font, no style sheet from elsewhere; it opens

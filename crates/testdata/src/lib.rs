@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! Test support: where the workspace and its fixtures are, Table 9's IRB 140 built in code, and what the
 //! simulated trackers of several crates' tests share (seeded Gaussian noise, poses inside the limits, a
 //! bench's peak memory).

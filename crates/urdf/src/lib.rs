@@ -1,3 +1,4 @@
+#![doc = include_str!("../README.md")]
 //! `thermokin-urdf`: URDF import of a serial chain into the same-orientation extended table, and URDF
 //! export of any chain — deformed or identified — whose FK equals the chain's.
 //!

@@ -404,6 +404,32 @@ fn simulate_static(file: &str, effect: &str, poses: &str, extra: &[&str]) -> Pat
     m
 }
 
+/// Issue #62: the next-poses command pastes into bash as printed, whatever the measurements' folder is
+/// called — here `a b<c>` (a space, and a `<` bash would read as a redirection) and a quote in the name.
+#[test]
+fn the_next_poses_command_pastes_into_bash_as_printed() {
+    let folder = tmp("a b<c>");
+    std::fs::create_dir_all(&folder).unwrap();
+    let m = folder.join("it's.csv");
+    std::fs::copy(simulate_static("quoted.csv", "joint_offset:2=0.05", "120", &[]), &m).unwrap();
+    let o = thermokin(&["diagnose", "--robot", ROBOT, "--measurements", m.to_str().unwrap(), "--quiet"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let hint = out.lines().find(|l| l.starts_with("next poses: `thermokin plan ")).expect("the next-poses hint");
+    let command = hint.split('`').nth(1).unwrap();
+    // Pasted into bash, from another directory, with `thermokin` on PATH.
+    let bin = std::path::Path::new(env!("CARGO_BIN_EXE_thermokin")).parent().unwrap();
+    let path = format!("{}:{}", bin.display(), std::env::var("PATH").unwrap_or_default());
+    let elsewhere = tmp("pasted");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    let pasted = Command::new("bash").args(["-c", command]).env("PATH", path).current_dir(&elsewhere).output().unwrap();
+    assert!(pasted.status.success(), "{command}\n{}", stderr(&pasted));
+    let plan = std::fs::read_to_string(elsewhere.join("next.csv")).unwrap();
+    assert_eq!(plan.lines().count(), 21, "20 poses and the header:\n{plan}");
+    // The plan read the measured file (its poses counted as measured), not another.
+    assert!(stdout(&pasted).contains("120"), "{}", stdout(&pasted));
+}
+
 #[test]
 fn simulate_then_diagnose() {
     let m = simulate_static("sim.csv", "joint_offset:2=0.05", "120", &[]);
@@ -449,7 +475,7 @@ fn simulate_then_diagnose() {
     assert!(v["identifiability"]["observability"]["condition_number"].as_f64().unwrap() >= 1.0);
     assert!(plots.join("residuals.svg").exists() && plots.join("heldout-per-effect.svg").exists());
     // Effects refused for what the poses cover come with the command that plans the next poses — a
-    // command that runs (here with the measured poses themselves as the candidates).
+    // command that runs (here with the measured poses themselves as the candidates, added).
     let coverage = v["identifiability"]["not_identifiable"].as_array().unwrap().iter().any(|r| {
         let remedy = r["remedy"].as_str().unwrap();
         remedy.starts_with("measure joint") || remedy.starts_with("measure poses")
@@ -457,7 +483,7 @@ fn simulate_then_diagnose() {
     assert!(coverage, "the simulated set refuses nothing for coverage: the check below would not run");
     let out = stdout(&o);
     let hint = out.lines().find(|l| l.starts_with("next poses: `thermokin plan ")).expect("the next-poses hint");
-    let command = hint.split('`').nth(1).unwrap().replace("<the poses you can reach>.csv", m.to_str().unwrap());
+    let command = format!("{} --candidates {}", hint.split('`').nth(1).unwrap(), m.to_str().unwrap());
     let next = tmp("next.csv");
     let args: Vec<String> = command
         .split_whitespace()
@@ -833,11 +859,11 @@ fn readme_commands() -> Vec<Vec<String>> {
         .collect()
 }
 
-/// The figures the README states about its command block, recomputed: the exported warm-up's lines, the
-/// minute-60 program's errors, the canonical reading's distance from Table 16.
+/// The figures `docs/cli.md` states about the README's command block, recomputed: the exported warm-up's
+/// lines, the minute-60 program's errors, the canonical reading's distance from Table 16.
 fn readme_figures_are_the_commands(dir: &Path, commands: &[Vec<String>], printed: &[String]) {
-    let readme = std::fs::read_to_string(workspace("README.md")).unwrap();
-    let excerpt = readme.split("```toml\n").nth(1).unwrap().split("```").next().unwrap();
+    let reference = std::fs::read_to_string(workspace("docs/cli.md")).unwrap();
+    let excerpt = reference.split("```toml\n").nth(1).unwrap().split("```").next().unwrap();
     let warm = std::fs::read_to_string(dir.join("warm.toml")).unwrap();
     for line in excerpt.lines().map(|l| l.split('#').next().unwrap().trim()).filter(|l| l.contains('=')) {
         assert!(warm.lines().any(|w| w.trim() == line), "README's `{line}` is not in the exported warm.toml:\n{warm}");
