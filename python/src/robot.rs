@@ -31,10 +31,10 @@ impl PyRobot {
         self.model.robot().chain()
     }
 
-    /// Writes the robot: URDF when the path ends in `.urdf` (what URDF cannot hold named in its header),
-    /// the complete TOML otherwise; atomically. `save` and a report's `export`.
+    /// Writes the robot: URDF when the path ends in `.urdf`, a UR kinematics YAML for `.yaml`/`.yml` (what
+    /// either cannot hold named in its header), the complete TOML otherwise; atomically. `save` and a report's `export`.
     pub fn save_to(&self, path: &std::path::Path) -> PyResult<()> {
-        let (text, _) = thermokin_io::robot_file_text(&self.model, path);
+        let (text, _) = thermokin_io::robot_file_text(&self.model, path).map_err(io)?;
         thermokin_io::write_atomic(path, text.as_bytes()).map_err(io)
     }
 

@@ -119,14 +119,16 @@ pub enum UrdfCommand {
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
     },
-    /// Export a robot, optionally deformed by a deviation table, as URDF whose FK equals the model's.
+    /// Export a robot, optionally deformed by a deviation table, as URDF whose FK equals the model's — or,
+    /// for six revolute joints and a FILE ending in .yaml, as Universal Robots' kinematics YAML (the
+    /// kinematics_params of Universal_Robots_ROS2_Description; the tool point behind tool0 named in its header).
     #[command(
-        after_help = "Example:\n  thermokin urdf export --robot configs/irb140.toml --deformation fixtures/paper/deformations-measured.toml -o deformed.urdf"
+        after_help = "Examples:\n  thermokin urdf export --robot configs/irb140.toml --deformation fixtures/paper/deformations-measured.toml -o deformed.urdf\n  thermokin urdf export --robot calibrated-ur10.toml -o ur10_calibration.yaml"
     )]
     Export {
         #[command(flatten)]
         robot: Box<RobotArgs>,
-        /// Output URDF (written atomically).
+        /// Output URDF, or UR kinematics YAML for .yaml/.yml (written atomically).
         #[arg(short, long, value_name = "FILE")]
         out: PathBuf,
     },
@@ -422,8 +424,8 @@ pub struct DiagnoseArgs {
     /// the base row, so that FK gives the measurement frame), tool point, base frame, joint offsets, link
     /// deviations, gear ratios, cyclic errors, gravity compliance (with the --payload measured with) and
     /// each drifting row with its law — as a robot TOML that fk, ik and compensate accept (--time,
-    /// --temperature, --payload give the state). A FILE ending in .urdf holds the geometry and zeros only
-    /// and names in its header what it cannot hold. Refused when the chosen model does not beat the
+    /// --temperature, --payload give the state). A FILE ending in .urdf (or .yaml: a UR kinematics YAML)
+    /// holds the geometry and zeros only and names in its header what it cannot hold. Refused when the chosen model does not beat the
     /// nominal one on data it never saw, unless --force-export.
     #[arg(long, value_name = "FILE")]
     pub export: Option<PathBuf>,

@@ -160,11 +160,19 @@ fn urdf(c: UrdfCommand) -> Result<u8, Failure> {
             let loaded = load(&robot)?;
             let model = working_model(&robot, &loaded)?;
             // The geometry in force in the flags' state (a drifting robot at --time, --temperature).
-            let (xml, beyond) = thermokin_io::urdf_in_state(&model, &loaded.state).map_err(Failure::input)?;
+            // A UR kinematics YAML by its extension, URDF otherwise.
+            let (text, beyond, format) = if thermokin_io::is_ur_yaml(&out) {
+                let (t, b) =
+                    thermokin_io::ur_kinematics_in_state(&model, &loaded.state, &out).map_err(Failure::input)?;
+                (t, b, "UR kinematics YAML")
+            } else {
+                let (t, b) = thermokin_io::urdf_in_state(&model, &loaded.state).map_err(Failure::input)?;
+                (t, b, "URDF")
+            };
             for line in &beyond {
-                eprintln!("note: not in the URDF (kept in the TOML): {line}");
+                eprintln!("note: not in the {format} (kept in the TOML): {line}");
             }
-            crate::out::save(&out, xml)?;
+            crate::out::save(&out, text)?;
             say!("{}: {} joints → {}", model.robot().name(), model.robot().chain().dof(), out.display());
         }
     }

@@ -63,7 +63,7 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
     let payload = a.robot.payload.as_deref().map(crate::input::parse_payload).transpose().map_err(Failure::input)?;
     let source = a.measurements.display().to_string();
     let model = report.export_model(robot, payload, &source).map_err(Failure::internal)?;
-    let (text, beyond) = thermokin_io::robot_file_text(&model, path);
+    let (text, beyond) = thermokin_io::robot_file_text(&model, path).map_err(Failure::input)?;
     crate::out::save(path, text)?;
     let carried: Vec<String> = report.effects.iter().chain(&report.completed).map(|e| e.label.clone()).collect();
     say!(
@@ -72,7 +72,8 @@ fn export(a: &DiagnoseArgs, path: &Path, robot: &Robot, report: &Report) -> Resu
         if carried.is_empty() { "the frames only".to_string() } else { carried.join(", ") }
     );
     if !beyond.is_empty() {
-        say!("  URDF cannot hold (named in the file's header; write .toml for the complete record):");
+        let format = if thermokin_io::is_ur_yaml(path) { "A UR kinematics YAML" } else { "URDF" };
+        say!("  {format} cannot hold (named in the file's header; write .toml for the complete record):");
         for line in &beyond {
             say!("    {line}");
         }

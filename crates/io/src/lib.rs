@@ -34,8 +34,9 @@ pub use notation::{
 };
 pub use paper::{PaperResultRow, parse_paper_results, read_paper_results};
 pub use robot::{
-    RobotOptions, parse_robot_model_toml, parse_robot_toml, read_robot, read_robot_model, read_robot_model_with,
-    read_robot_with, robot_file_text, robot_model_to_toml, robot_to_toml, urdf_in_state,
+    RobotOptions, is_ur_yaml, parse_robot_model_toml, parse_robot_toml, read_robot, read_robot_model,
+    read_robot_model_with, read_robot_with, robot_file_text, robot_model_to_toml, robot_to_toml,
+    ur_kinematics_in_state, urdf_in_state,
 };
 pub use targets::{
     DEFAULT_ORIENTATION_DEG, TargetReader, TargetRows, parse_target_rows, parse_targets, read_target_rows,

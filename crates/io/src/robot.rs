@@ -741,16 +741,49 @@ pub fn robot_to_toml(robot: &Robot) -> String {
     robot_model_to_toml(&RobotModel::new(robot.clone()))
 }
 
-/// A robot written as the file named `path` holds it: URDF when the path ends in `.urdf` (geometry and
-/// zeros, what it cannot hold named in its header, and returned), the project's TOML otherwise (the
-/// complete record). The one rule every front end's export and save follows.
-pub fn robot_file_text(model: &RobotModel, path: &Path) -> (String, Vec<String>) {
-    if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
+/// A robot written as the file named `path` holds it: URDF when the path ends in `.urdf`, Universal
+/// Robots' kinematics YAML when it ends in `.yaml` or `.yml` (geometry and zeros; what the file cannot
+/// hold named in its header, and returned), the project's TOML otherwise (the complete record). The one
+/// rule every front end's export and save follows. A YAML of a robot that is not six revolute joints is
+/// refused.
+pub fn robot_file_text(model: &RobotModel, path: &Path) -> Result<(String, Vec<String>), IoError> {
+    if is_ur_yaml(path) {
+        ur_kinematics_text(model, model.robot(), path)
+    } else if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("urdf")) {
         let beyond = model.beyond_urdf();
-        (thermokin_urdf::export_robot_noting(model.robot(), &beyond), beyond)
+        Ok((thermokin_urdf::export_robot_noting(model.robot(), &beyond), beyond))
     } else {
-        (robot_model_to_toml(model), Vec::new())
+        Ok((robot_model_to_toml(model), Vec::new()))
     }
+}
+
+/// Whether `path` names a UR kinematics YAML (`.yaml`, `.yml`).
+pub fn is_ur_yaml(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("yaml") || e.eq_ignore_ascii_case("yml"))
+}
+
+/// `working` (the geometry of `model` in some state) as a UR kinematics YAML, with what it cannot hold.
+fn ur_kinematics_text(model: &RobotModel, working: &Robot, path: &Path) -> Result<(String, Vec<String>), IoError> {
+    let beyond = model.beyond_urdf();
+    let text = thermokin_urdf::export_ur_kinematics_noting(working, &beyond)
+        .map_err(|e| IoError::input(path, None, "robot", e.to_string()))?;
+    Ok((text, beyond))
+}
+
+/// The robot as a UR kinematics YAML with the geometry in force at `state` (as [`urdf_in_state`]), written
+/// for `path`, and what it cannot hold.
+pub fn ur_kinematics_in_state(
+    model: &RobotModel,
+    state: &thermokin_chain::OperatingState,
+    path: &Path,
+) -> Result<(String, Vec<String>), IoError> {
+    let chain = if *state == thermokin_chain::OperatingState::default() {
+        model.robot().chain().clone()
+    } else {
+        model.chain_at(state).map_err(|e| IoError::input(path, None, "state", e.to_string()))?
+    };
+    let working = model.robot().with_chain(chain).map_err(|e| IoError::input(path, None, "robot", e.to_string()))?;
+    ur_kinematics_text(model, &working, path)
 }
 
 /// The robot as URDF with the geometry in force at `state` (a drifting robot at its time and sensor

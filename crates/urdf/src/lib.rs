@@ -7,6 +7,8 @@
 //! and radians become millimetres (and radians inside the library) here, at this boundary. The reader
 //! knows nothing about kinematics beyond building the table.
 
+mod ur;
+
 use std::collections::{HashMap, HashSet};
 
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -76,6 +78,7 @@ pub struct ImportedRobot {
 }
 
 use thermokin_chain::units::{MM_PER_M, metres, millimetres};
+pub use ur::{UrKinematics, base_link_from_inertia, export_ur_kinematics_noting};
 
 fn pose_mm(p: &urdf_rs::Pose) -> Isometry3<f64> {
     let [x, y, z] = p.xyz.0;

@@ -95,3 +95,90 @@ fn the_readme_and_the_docs_quote_the_real_data_table() {
         }
     }
 }
+
+/// Issue #62: the real UR10's diagnosis (series C) exported, then written as Universal Robots' kinematics
+/// YAML: the description's chain built here from the YAML's numbers alone — `base_link` turned π about z
+/// to `base_link_inertia`, each origin `x y z` and URDF `roll pitch yaw` then a turn about z by the joint
+/// value, `tool0` = `wrist_3_link` — and the tool point the header names, put the tool where the TOML
+/// export's geometry does at every pose of series B, to 1e-6 mm; the compliance the YAML cannot hold is
+/// named.
+#[test]
+fn the_ur10_export_as_ur_kinematics_yaml_is_the_toml_geometry() {
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+    let dir = std::env::temp_dir().join(format!("thermokin-ur-yaml-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (toml, yaml) = (dir.join("ur10-c.toml"), dir.join("ur10-c.yaml"));
+    let run = |args: &[&str]| {
+        let o = thermokin(args);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    };
+    run(&[
+        "diagnose",
+        "--robot",
+        "fixtures/urdf/ur10.urdf",
+        "--tip",
+        "tool0",
+        "--frame",
+        "tracker",
+        "--tool",
+        "unknown",
+        "--measurements",
+        "fixtures/real/ur10-ipa/series_C.csv",
+        "--noise",
+        "0.01",
+        "--quiet",
+        "--export",
+        toml.to_str().unwrap(),
+    ]);
+    run(&["urdf", "export", "--robot", toml.to_str().unwrap(), "-o", yaml.to_str().unwrap()]);
+    let text = std::fs::read_to_string(&yaml).unwrap();
+    assert!(text.contains("gravity compliance"), "the compliance named as left out:\n{text}");
+    // The six origins, in the file's order.
+    let mut values: Vec<f64> = Vec::new();
+    for line in text.lines().filter(|l| !l.trim_start().starts_with('#')) {
+        let Some((key, v)) = line.trim().split_once(": ") else { continue };
+        if ["x", "y", "z", "roll", "pitch", "yaw"].contains(&key) {
+            values.push(v.parse().unwrap());
+        }
+    }
+    assert_eq!(values.len(), 36, "{text}");
+    let origin = |v: &[f64]| {
+        Isometry3::from_parts(
+            Translation3::new(v[0] * 1000.0, v[1] * 1000.0, v[2] * 1000.0),
+            UnitQuaternion::from_euler_angles(v[3], v[4], v[5]),
+        )
+    };
+    // The tool point behind tool0, as the header names it (mm, degrees).
+    let tcp_line = text.lines().find(|l| l.contains("the tool point behind tool0")).expect("the TCP named");
+    let numbers: Vec<f64> = tcp_line
+        .split('=')
+        .skip(1)
+        .flat_map(|part| part.split_whitespace().filter_map(|w| w.trim_end_matches(',').parse::<f64>().ok()).take(3))
+        .collect();
+    assert_eq!(numbers.len(), 6, "{tcp_line}");
+    let tcp = Isometry3::from_parts(
+        Translation3::new(numbers[0], numbers[1], numbers[2]),
+        UnitQuaternion::from_euler_angles(numbers[3].to_radians(), numbers[4].to_radians(), numbers[5].to_radians()),
+    );
+    let model = thermokin_io::read_robot_model(&toml).unwrap();
+    let chain = model.robot().chain();
+    let kinds: Vec<_> = chain.joints().iter().map(|j| j.kind).collect();
+    let b =
+        thermokin_io::read_measurements(&thermokin_testdata::workspace("fixtures/real/ur10-ipa/series_B.csv"), &kinds)
+            .unwrap();
+    let mut worst = 0.0f64;
+    for m in &b.measurements {
+        let mut pose = Isometry3::from_parts(
+            Translation3::identity(),
+            UnitQuaternion::from_euler_angles(0.0, 0.0, std::f64::consts::PI),
+        );
+        for (k, q) in m.q.iter().enumerate() {
+            pose = pose * origin(&values[6 * k..6 * k + 6]) * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), *q);
+        }
+        let through_yaml = (pose * tcp).translation.vector;
+        let toml_geometry = chain.tool_pose(&m.q).unwrap().translation.vector;
+        worst = worst.max((through_yaml - toml_geometry).norm());
+    }
+    eprintln!("UR kinematics YAML vs the TOML export's geometry over {} poses of series B: {worst:.2e} mm", b.len());
+    assert!(worst <= 1e-6, "{worst} mm");
+}
