@@ -104,10 +104,24 @@ fn unpublished() -> Result<Vec<String>> {
     Ok(names)
 }
 
-/// `cargo package --workspace`, the members marked `publish = false` excluded.
+/// `cargo package --workspace`, the members marked `publish = false` excluded. Verified in a target
+/// directory of its own (`target/package-verify`), whose builds of our own crates are removed first: a
+/// packaged crate is a registry crate to cargo, fingerprinted by name and version, not by content, so a
+/// build of an earlier `0.1.0` would otherwise be taken for this one's.
 fn package() -> Result<()> {
+    let verify = Path::new("target/package-verify");
+    for dir in ["debug/deps", "debug/.fingerprint", "debug/build"] {
+        let Ok(entries) = std::fs::read_dir(verify.join(dir)) else { continue };
+        for entry in entries {
+            let path = entry?.path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            if name.starts_with("thermokin") || name.starts_with("libthermokin") {
+                if path.is_dir() { std::fs::remove_dir_all(&path)? } else { std::fs::remove_file(&path)? }
+            }
+        }
+    }
     let mut cmd = cargo();
-    cmd.args(["package", "--workspace", "--locked"]);
+    cmd.args(["package", "--workspace", "--locked", "--target-dir"]).arg(verify);
     for name in unpublished()? {
         cmd.args(["--exclude", &name]);
     }
