@@ -16,6 +16,24 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// The real UR10's series C diagnosed as docs/real-data.md runs it (tracker frame, unknown probe, its
+/// noise stated): the arguments tests extend with a hold-out file, an export or a page.
+pub const UR10_SERIES_C: [&str; 13] = [
+    "diagnose",
+    "--robot",
+    "fixtures/urdf/ur10.urdf",
+    "--tip",
+    "tool0",
+    "--frame",
+    "tracker",
+    "--tool",
+    "unknown",
+    "--measurements",
+    "fixtures/real/ur10-ipa/series_C.csv",
+    "--noise",
+    "0.01",
+];
+
 pub fn tmp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("thermokin-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use crate::cli::{stderr, thermokin, tmp};
+use crate::cli::{UR10_SERIES_C, stderr, thermokin, tmp};
 
 /// The system's Chromium, if there is one.
 fn chromium() -> Option<PathBuf> {
@@ -187,23 +187,8 @@ const HELDOUT: [&str; 8] = [
 
 #[test]
 fn the_ur10_page_shows_the_reports_figures_in_a_browser() {
-    let args = [
-        "diagnose",
-        "--robot",
-        "fixtures/urdf/ur10.urdf",
-        "--tip",
-        "tool0",
-        "--frame",
-        "tracker",
-        "--tool",
-        "unknown",
-        "--measurements",
-        "fixtures/real/ur10-ipa/series_C.csv",
-        "--holdout",
-        "fixtures/real/ur10-ipa/series_B.csv",
-        "--noise",
-        "0.01",
-    ];
+    let mut args = UR10_SERIES_C.to_vec();
+    args.extend(["--holdout", "fixtures/real/ur10-ipa/series_B.csv"]);
     diagnose_page("ur10", &args, &HELDOUT);
 }
 

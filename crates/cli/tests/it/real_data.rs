@@ -1,7 +1,7 @@
 //! The real-data table (`docs/real-data.md`, written by `cargo xtask real-data`) kept true: its commands
 //! rerun here give its figures, and the README and the docs quote them as they are (issue #50).
 
-use crate::cli::{stderr, thermokin, tmp};
+use crate::cli::{UR10_SERIES_C, stderr, thermokin, tmp};
 
 /// One row of the table: the set, its poses, and the `nominal → chosen` figures of each protocol.
 #[derive(Debug)]
@@ -112,24 +112,9 @@ fn the_ur10_export_as_ur_kinematics_yaml_is_the_toml_geometry() {
         let o = thermokin(args);
         assert!(o.status.success(), "{args:?}: {}", stderr(&o));
     };
-    run(&[
-        "diagnose",
-        "--robot",
-        "fixtures/urdf/ur10.urdf",
-        "--tip",
-        "tool0",
-        "--frame",
-        "tracker",
-        "--tool",
-        "unknown",
-        "--measurements",
-        "fixtures/real/ur10-ipa/series_C.csv",
-        "--noise",
-        "0.01",
-        "--quiet",
-        "--export",
-        toml.to_str().unwrap(),
-    ]);
+    let mut diagnose = UR10_SERIES_C.to_vec();
+    diagnose.extend(["--quiet", "--export", toml.to_str().unwrap()]);
+    run(&diagnose);
     run(&["urdf", "export", "--robot", toml.to_str().unwrap(), "-o", yaml.to_str().unwrap()]);
     let text = std::fs::read_to_string(&yaml).unwrap();
     assert!(text.contains("gravity compliance"), "the compliance named as left out:\n{text}");
