@@ -182,14 +182,16 @@ impl Dataset {
         if lo.is_finite() { hi - lo } else { 0.0 }
     }
 
-    /// The order the poses were measured in, when the set carries one: by time when it spans time (ties
-    /// in file order), else by file line when `by` says the file lists them as measured; `None` otherwise.
+    /// The order the poses were measured in, when the set carries one: by time when it spans time, else
+    /// by file line when `by` says the file lists them as measured; `None` otherwise. Poses of one time
+    /// are in file order where `by` says the file is the order, else in the set's order (a file's lines
+    /// are no order unless said: the diagnosis puts such a set in an order of its own poses first).
     pub fn measuring_order(&self, by: MeasuringOrder) -> Option<Vec<usize>> {
         let mut idx: Vec<usize> = (0..self.len()).collect();
         if self.time_span() > 0.0 {
             let t = |i: usize| self.measurements[i].time_min;
-            let line = |i: usize| self.line_of(i).unwrap_or(i);
-            idx.sort_by(|&a, &b| t(a).total_cmp(&t(b)).then(line(a).cmp(&line(b))));
+            let line = |i: usize| if by == MeasuringOrder::File { self.line_of(i).unwrap_or(i) } else { i };
+            idx.sort_by(|&a, &b| t(a).total_cmp(&t(b)).then(line(a).cmp(&line(b))).then(a.cmp(&b)));
             return Some(idx);
         }
         if by != MeasuringOrder::File {

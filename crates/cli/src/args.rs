@@ -384,9 +384,11 @@ pub struct DiagnoseArgs {
     /// arm, elastic joints — on the file's masses or, without them, its loads lumped from the data.
     #[arg(long, value_parser = choice(thermokin_identify::Lateral::CHOICES), default_value_t = Config::default().lateral)]
     pub lateral: thermokin_identify::Lateral,
-    /// Where the order the poses were measured in comes from, for a gearbox's backlash (an offset by the
-    /// direction each joint last moved in): the time_min column, or also the file's lines when the file
+    /// Where the order the poses were measured in comes from, for what only that order shows — a
+    /// gearbox's backlash (an offset by the direction each joint last moved in), a step of the
+    /// measurement frame (a knocked tracker): the time_min column, or also the file's lines when the file
     /// lists the poses as they were measured (`file`; a time column still decides where there is one).
+    /// Without either the rows have no order: the same poses in any row order give the same diagnosis.
     #[arg(long, value_parser = choice(thermokin_chain::MeasuringOrder::CHOICES), default_value_t = Config::default().order)]
     pub order: thermokin_chain::MeasuringOrder,
     /// A Gaussian prior toward the nominal robot on the chosen model, as strong as cross-validation

@@ -157,9 +157,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
         let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
         crate::input::warn_ignored(&a.measurements, &unread);
-        for s in &data.sensor_names {
-            eprintln!("note: {}: column `{s}` read as a sensor (a joint row may follow it)", a.measurements.display());
-        }
+        say_sensors(&a.measurements, &data);
     }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
@@ -240,4 +238,16 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     }
     say!("{} poses over {} min, noise {} mm → {}", a.poses, a.minutes, a.noise, a.out.display());
     Ok(exit::OK)
+}
+
+/// The sensor columns of `data` (read from `path`) said on stderr: each read as a sensor, or not and why
+/// ([`thermokin_diagnose::not_sensors`]).
+fn say_sensors(path: &std::path::Path, data: &thermokin_chain::Dataset) {
+    let not_sensors = thermokin_diagnose::not_sensors(data);
+    for s in data.sensor_names.iter().filter(|s| !not_sensors.iter().any(|(n, _)| n == *s)) {
+        eprintln!("note: {}: column `{s}` read as a sensor (a joint row may follow it)", path.display());
+    }
+    for (s, why) in &not_sensors {
+        eprintln!("note: {}: column `{s}` is not read as a sensor: {why}", path.display());
+    }
 }

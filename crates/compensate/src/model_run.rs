@@ -69,8 +69,9 @@ pub fn compensate_model(
 }
 
 /// For a model with a backlash, each state's [`OperatingState::approach`] — where its target gives none —
-/// from the program's moves: `path` the joint values in the order they are reached, from `start` (whose
-/// own directions are `start_approach`, or unknown).
+/// from the program's moves: `path` the joint values of each target, reached from `start` (whose own
+/// directions are `start_approach`, or unknown) in the order of the targets' times where every target
+/// has one and they span time (targets of one time in file order), else in the program's order.
 fn with_approach_along(
     model: &RobotModel,
     states: &mut [OperatingState],
@@ -81,13 +82,21 @@ fn with_approach_along(
     if !model.has_backlash() {
         return;
     }
+    let mut order: Vec<usize> = (0..states.len().min(path.len())).collect();
+    let times: Option<Vec<f64>> = order.iter().map(|&k| states[k].time_min).collect();
+    if let Some(t) = times
+        && t.iter().any(|&v| v != t[0])
+    {
+        order.sort_by(|&a, &b| t[a].total_cmp(&t[b]).then(a.cmp(&b)));
+    }
     let mut last: Vec<thermokin_chain::Approach> = if start_approach.len() == start.len() {
         start_approach.to_vec()
     } else {
         vec![thermokin_chain::Approach::Unknown; start.len()]
     };
     let mut from = start;
-    for (state, &to) in states.iter_mut().zip(path) {
+    for k in order {
+        let (state, to) = (&mut states[k], path[k]);
         thermokin_chain::Approach::advance(&mut last, from, to);
         if state.approach.is_empty() || state.approach.len() != last.len() {
             state.approach.clone_from(&last);

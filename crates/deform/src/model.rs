@@ -632,7 +632,10 @@ impl RobotModel {
         if state.time_min.is_some() && !time && !with_table {
             return refuse(StateError::TimeWithoutDrift);
         }
-        if let Some((unknown, _)) = state.temperatures_c.iter().find(|(n, _)| !sensors.contains(n)) {
+        // A sensor that is not a temperature is named as its file names it (`acc_col_x`); the command
+        // line and targets files give every reading with the `temp_` prefix: either spelling reads it.
+        let reads = |given: &str| sensors.iter().any(|s| given == s || given.strip_prefix("temp_") == Some(s.as_str()));
+        if let Some((unknown, _)) = state.temperatures_c.iter().find(|(n, _)| !reads(n)) {
             return refuse(StateError::UnknownSensor { name: unknown.clone(), known: sensors });
         }
         let joints = self.robot.chain().dof();

@@ -1,5 +1,6 @@
 //! Flagged poses that gather are not gross errors: before the screen ([`crate::outliers`]) calls a pose a
-//! gross error, it asks whether the flagged poses cluster — in consecutive lines, in a span of time, in one
+//! gross error, it asks whether the flagged poses cluster — in a span of time (or of consecutive lines
+//! where the user says the file lists the poses as measured), in one
 //! part of a joint's range (a column's top extensions), in one range of a sensor column, or in one
 //! neighbourhood of arm configurations. A tracker's beam breaks fall anywhere; a tracker bumped at one
 //! pose, a compliance that grows at one end of a joint's range, a column that tilts at its top extension
@@ -9,7 +10,7 @@
 //! departure, wherever the pose lies, is a motion of one joint alone — a play read without the order it
 //! was approached in — which no tracker glitch's direction follows.
 //!
-//! **The test: a scan statistic with a Bonferroni bound.** Along each ordering of the poses (lines, time,
+//! **The test: a scan statistic with a Bonferroni bound.** Along each ordering of the poses (time or lines,
 //! each joint's value, each sensor column), the flagged poses sit at ranks `r₁ < … < r_K` among the `N`
 //! poses. For every pair of flagged ranks `r_a ≤ r_b` the interval between them holds `n = r_b − r_a + 1`
 //! poses, `k = b − a + 1` of them flagged; were the `K` flags independent of where a pose lies (each pose
@@ -26,7 +27,7 @@
 //! listed, as before. On the real UR10 series C with 1 % of its poses displaced at random by 2–10 mm, no
 //! block is called and every displaced pose stays a gross error (tested).
 
-use thermokin_chain::{Dataset, Robot, units};
+use thermokin_chain::{Dataset, MeasuringOrder, Robot, units};
 
 use crate::config::Config;
 use crate::folds::configuration_clusters;
@@ -47,18 +48,19 @@ struct Ordering {
     values: Vec<f64>,
 }
 
-/// The orderings the scan looks along: lines (file order), time when it is not the file order, each
-/// joint's value, each sensor column that varies.
-fn orderings(robot: &Robot, data: &Dataset) -> Vec<Ordering> {
+/// The orderings the scan looks along: the order of measuring where the poses have one — their times,
+/// or their lines where the user says the file lists them as measured (`by`; a file's lines are no order
+/// otherwise) — each joint's value, each sensor column that varies.
+fn orderings(robot: &Robot, data: &Dataset, by: MeasuringOrder) -> Vec<Ordering> {
     let n = data.len();
-    let mut out = vec![Ordering {
-        along: Along::Lines,
-        values: (0..n).map(|i| data.line_of(i).unwrap_or(i + 1) as f64).collect(),
-    }];
-    let times: Vec<f64> = data.measurements.iter().map(|m| m.time_min).collect();
-    let in_file_order = times.windows(2).all(|w| w[0] <= w[1]);
-    if data.time_span() > 0.0 && !in_file_order {
-        out.push(Ordering { along: Along::Time, values: times });
+    let mut out = Vec::new();
+    if data.time_span() > 0.0 {
+        out.push(Ordering { along: Along::Time, values: data.measurements.iter().map(|m| m.time_min).collect() });
+    } else if by == MeasuringOrder::File {
+        out.push(Ordering {
+            along: Along::Lines,
+            values: (0..n).map(|i| data.line_of(i).unwrap_or(i + 1) as f64).collect(),
+        });
     }
     for (j, joint) in robot.chain().joints().iter().enumerate() {
         let values = data.measurements.iter().map(|m| units::joint_value_out(joint.kind, m.q[j])).collect();
@@ -178,7 +180,7 @@ pub(crate) fn blocks(
     residual_mm: &[f64],
     config: &Config,
 ) -> (Vec<Cluster>, Vec<usize>) {
-    let orderings = orderings(robot, data);
+    let orderings = orderings(robot, data, config.order);
     let ln_fact = ln_factorials(data.len());
     let mut left = flagged.to_vec();
     let mut found = Vec::new();

@@ -63,10 +63,12 @@ pub struct Config {
     /// Which joints' lateral compliance is a candidate ([`thermokin_identify::Lateral`]): a column's by
     /// default, every joint's bearing when the user says the joints are elastic.
     pub lateral: thermokin_identify::Lateral,
-    /// Where the order the poses were measured in comes from, for a backlash (the direction each joint
-    /// last moved in): their times, or also the file's lines when it lists them as measured
-    /// ([`thermokin_chain::MeasuringOrder`]). A step of the measurement frame is scanned in the file's
-    /// lines either way: a knocked tracker moves a block of them.
+    /// Where the order the poses were measured in comes from, for what only that order shows — a
+    /// backlash (the direction each joint last moved in), a step of the measurement frame, flagged poses
+    /// gathered in one stretch of the session: their times, or also the file's lines when the user says
+    /// the file lists them as measured ([`thermokin_chain::MeasuringOrder`]). Without either the poses
+    /// have no order, and the diagnosis is the same whatever the order of its rows
+    /// (`crate::canonical`).
     #[serde(serialize_with = "by_name")]
     pub order: thermokin_chain::MeasuringOrder,
 }

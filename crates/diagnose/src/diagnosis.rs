@@ -4,6 +4,7 @@
 
 use thermokin_chain::{Dataset, MeasuringOrder, Robot};
 
+use crate::canonical::to_given_order;
 use crate::config::{Config, Masses, Validation};
 use crate::error::DiagnoseError;
 use crate::outliers::screen;
@@ -116,7 +117,14 @@ fn checked_holdout<'h>(
     by: MeasuringOrder,
 ) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
     check_joint_counts(robot, data, holdout)?;
-    Ok(holdout.map(|h| ordered(with_sensors_of(h, data), by)))
+    if let Some(missing) = holdout.and_then(|h| data.sensor_names.iter().find(|n| !h.sensor_names.contains(n))) {
+        return Err(DiagnoseError::HoldoutLacksSensor { sensor: missing.clone() });
+    }
+    // In the poses' own order too (the registration refitted on it sums in that order).
+    Ok(holdout.map(|h| {
+        let h = crate::canonical::in_canonical_order(h, by).0;
+        ordered(std::borrow::Cow::Owned(with_sensors_of(&h, data).into_owned()), by)
+    }))
 }
 
 /// The stages a progress display counts: the selection on all data, each outer fold, the hold-out set.
@@ -129,7 +137,7 @@ fn stages(data: &Dataset, holdout: bool, config: &Config) -> usize {
 }
 
 /// `holdout` with its sensor columns in `data`'s order, by name (an effect follows a column by its place
-/// in the training set); a column it lacks reads 0.
+/// in the training set); one it lacks was refused before ([`checked_holdout`]).
 fn with_sensors_of<'h>(holdout: &'h Dataset, data: &Dataset) -> std::borrow::Cow<'h, Dataset> {
     if holdout.sensor_names == data.sensor_names {
         return std::borrow::Cow::Borrowed(holdout);
@@ -223,6 +231,23 @@ fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r,
     })
 }
 
+/// The measurements as the diagnosis reads them: in the poses' own order (the same poses in any row
+/// order give the same report: [`crate::canonical`], with that order to return the report to the given
+/// one), without the columns that are no sensors ([`crate::sensors`], with the sentences that say so),
+/// each pose's approach direction from its measuring order.
+type Prepared<'d> = (std::borrow::Cow<'d, Dataset>, Option<Vec<usize>>, Vec<String>);
+fn prepared<'d>(data: &'d Dataset, config: &Config) -> Prepared<'d> {
+    let (data, perm) = crate::canonical::in_canonical_order(data, config.order);
+    let (data, not_sensors) = match data {
+        std::borrow::Cow::Borrowed(d) => crate::sensors::only_sensors(d),
+        std::borrow::Cow::Owned(d) => {
+            let (kept, said) = crate::sensors::only_sensors(&d);
+            (std::borrow::Cow::Owned(kept.into_owned()), said)
+        }
+    };
+    (ordered(data, config.order), perm, not_sensors)
+}
+
 /// The diagnosis, its phases on all measurements timed into `main`, those of the outer folds into `outer`.
 fn run(
     robot: &Robot,
@@ -235,7 +260,8 @@ fn run(
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let robot = &*trusted(robot, config)?;
-    let data = &*ordered(std::borrow::Cow::Borrowed(data), config.order);
+    let (data, perm, not_sensors) = prepared(data, config);
+    let data = &*data;
     let total = stages(data, holdout.is_some(), config);
     let mut done = 0;
     let mut tell = |stage: String| {
@@ -281,11 +307,8 @@ fn run(
     // A transfer the poses cannot show is said first.
     let mut all_warnings: Vec<String> =
         fell_back.into_iter().chain(said_first(config, &tables, nested.as_ref())).collect();
-    all_warnings.extend(tables.warnings.iter().cloned());
-    all_warnings.extend(warnings(robot, data, config, &tables));
-    all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
-    all_warnings.extend(steps_between_configurations(robot, data, &tables.effects));
-    all_warnings.extend(tables.reports.iter().filter(|e| e.effect == "backlash").map(backlash_warning));
+    all_warnings.extend(not_sensors);
+    all_warnings.extend(said_of_the_effects(robot, data, config, &tables));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
@@ -298,7 +321,7 @@ fn run(
         all_warnings.push(c.sentence(screen.threshold_mm));
     }
     main.add(Phase::Report, report_started.elapsed().as_secs_f64());
-    Ok(Report {
+    let report = Report {
         outliers: screened.outliers,
         outlier_screen: screen,
         nominal: tables.nominal,
@@ -322,7 +345,19 @@ fn run(
         warnings: all_warnings,
         verdict,
         poses,
-    })
+    };
+    Ok(to_given_order(perm.as_deref(), &screened.kept, report))
+}
+
+/// What the report says of the chosen effects and the data: the tables' warnings, the data's, each step
+/// of the frame and each backlash found.
+fn said_of_the_effects(robot: &Robot, data: &Dataset, config: &Config, tables: &crate::tables::Tables) -> Vec<String> {
+    let mut said: Vec<String> = tables.warnings.clone();
+    said.extend(warnings(robot, data, config, tables));
+    said.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
+    said.extend(steps_between_configurations(robot, data, &tables.effects));
+    said.extend(tables.reports.iter().filter(|e| e.effect == "backlash").map(backlash_warning));
+    said
 }
 
 /// The model of `tables` fitted on all of the scorer's data and the nominal one, scored on `holdout` in

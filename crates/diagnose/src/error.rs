@@ -64,4 +64,13 @@ pub enum DiagnoseError {
         /// Joints of the robot.
         expected: usize,
     },
+    /// The hold-out set lacks a sensor column the measurements carry: a model following it could only be
+    /// scored there at a reading assumed, never at the one the robot had.
+    #[error(
+        "the hold-out set has no column `{sensor}`, which the measurements carry as a sensor (a joint row may follow it): give its readings at the hold-out poses, or leave the column out of the measurements"
+    )]
+    HoldoutLacksSensor {
+        /// The sensor column's name.
+        sensor: String,
+    },
 }

@@ -13,6 +13,7 @@
 //! ([`Report::text`]).
 
 mod backward;
+mod canonical;
 mod clusters;
 mod completion;
 mod config;
@@ -36,6 +37,7 @@ mod scoring;
 mod screen;
 mod select;
 mod selection;
+mod sensors;
 mod shrinkage;
 mod simulate;
 mod stats;
@@ -58,6 +60,7 @@ pub use report::{
     OuterFold, Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report,
     ScaleSource, ScreenCompliance, ScreenModel, Skipped, TableRow,
 };
+pub use sensors::not_sensors;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::FALSE_ALARM;
 pub use stats::Stats;

@@ -61,7 +61,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
     let (catalogue, eligible, mut selection) = clock.time(Phase::Eligibility, || {
         let mut catalogue = setup.candidates(scorer.robot, data)?;
         // What only the order of measuring shows: a step of the measurement frame.
-        catalogue.extend(frame_steps(scorer, &always)?);
+        catalogue.extend(frame_steps(scorer, &always, config.order)?);
         let (eligible, refused) = check(scorer, &always, &catalogue, &config.eligibility)?;
         let (nominal, nominal_errors) = scorer.heldout_errors(&always, &scorer.folds)?;
         let (_, nominal_fit) = scorer.full_fit(&always)?;

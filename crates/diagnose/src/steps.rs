@@ -1,7 +1,10 @@
 //! A step of the measurement frame — a tracker knocked mid-session, its stand settling, the robot's base
-//! moved — found where the measurements have an order: their times, or their lines in the file (the order
-//! of measuring). The step becomes a candidate like any effect ([`Effect::FrameStep`]): fitted as the
-//! frame after it, scored on the folds, kept only where it gains held out.
+//! moved — found where the measurements have an order: their times, or their lines in the file where the
+//! user says the file lists them as measured (`--order file`; a file's lines alone are no order). The step
+//! becomes a candidate like any effect ([`Effect::FrameStep`]): fitted as the frame after it, scored on
+//! the folds, kept only where it gains held out. A boundary between blocks of configurations measured one
+//! after the other (a column's heights, a joint's range: the poses before and after it apart in some
+//! joint's range) is never a candidate: a step there and an error of those configurations fit alike.
 //!
 //! **The scan.** A flexible static model — the blocks always estimated, every joint row, every loaded
 //! joint's compliance — is fitted to the selection's measurements; whatever of the robot's geometry the
@@ -27,7 +30,7 @@
 //! found is a candidate; whether it is a cause is then the selection's question, held out.
 
 use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
-use thermokin_chain::Dataset;
+use thermokin_chain::{Dataset, MeasuringOrder};
 use thermokin_identify::{Effect, JointIndex, StepAt, residuals};
 
 use crate::error::DiagnoseError;
@@ -41,9 +44,11 @@ pub const MIN_SIDE: usize = 12;
 const FIT_POSES: usize = 2000;
 
 /// The order the measurements were taken in, when they carry one: by time when they span time, else by
-/// file line. The poses in that order, and per place `k` where a step before its pose is put (`None` where
-/// the pose before it shares its time: no step between them).
-fn order(data: &Dataset) -> Option<(Vec<usize>, Vec<Option<StepAt>>)> {
+/// file line where the user says the file lists them as measured (`by`): a file's lines alone are no
+/// order — a block of configurations (a column height, a joint's range) measured together is not a
+/// moved tracker. The poses in that order, and per place `k` where a step before its pose is put (`None`
+/// where the pose before it shares its time: no step between them).
+fn order(data: &Dataset, by: MeasuringOrder) -> Option<(Vec<usize>, Vec<Option<StepAt>>)> {
     let n = data.len();
     let mut idx: Vec<usize> = (0..n).collect();
     if data.time_span() > 0.0 {
@@ -59,6 +64,9 @@ fn order(data: &Dataset) -> Option<(Vec<usize>, Vec<Option<StepAt>>)> {
             .collect();
         return Some((idx, at));
     }
+    if by != MeasuringOrder::File {
+        return None;
+    }
     let lines: Option<Vec<usize>> = (0..n).map(|i| data.line_of(i)).collect();
     let lines = lines?;
     idx.sort_by_key(|&i| lines[i]);
@@ -69,13 +77,17 @@ fn order(data: &Dataset) -> Option<(Vec<usize>, Vec<Option<StepAt>>)> {
 /// The steps of the measurement frame in the scorer's data that noise alone would not give, found one
 /// after another (binary segmentation): the candidates [`Effect::FrameStep`], in the order of measuring
 /// (none without an order, or with too few poses).
-pub(crate) fn frame_steps(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Vec<Effect>, DiagnoseError> {
+pub(crate) fn frame_steps(
+    scorer: &Scorer<'_>,
+    always: &[Effect],
+    by: MeasuringOrder,
+) -> Result<Vec<Effect>, DiagnoseError> {
     let data = scorer.data;
     let n = data.len();
     if n < 2 * MIN_SIDE {
         return Ok(Vec::new());
     }
-    let Some((order, at)) = order(data) else { return Ok(Vec::new()) };
+    let Some((order, at)) = order(data, by) else { return Ok(Vec::new()) };
     let robot = scorer.robot;
     let mut flexible = always.to_vec();
     let loaded = thermokin_identify::max_gravity_torques(robot);
@@ -114,7 +126,10 @@ pub(crate) fn frame_steps(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Vec<
         let stretches = stretches(&cuts, n);
         let best = stretches
             .iter()
-            .filter_map(|&(lo, hi)| best_split(&poses[lo..hi], &at[lo..hi]).map(|(g, k, splits)| (g, lo + k, splits)))
+            .filter_map(|&(lo, hi)| {
+                let open = splittable(data, &order[lo..hi], &at[lo..hi]);
+                best_split(&poses[lo..hi], &open).map(|(g, k, splits)| (g, lo + k, splits))
+            })
             .max_by(|a, b| a.0.total_cmp(&b.0));
         let Some((gain, k, splits)) = best else { break };
         let mut with = cuts.clone();
@@ -130,6 +145,35 @@ pub(crate) fn frame_steps(scorer: &Scorer<'_>, always: &[Effect]) -> Result<Vec<
         cuts = with;
     }
     Ok(cuts.into_iter().filter_map(|k| at[k].map(Effect::FrameStep)).collect())
+}
+
+/// Per place of a stretch of the order of measuring (`rows`, with where a step before each would be put:
+/// `at`), where a step may be put: not between two poses of one time, and not where the poses before and
+/// after it are apart in some joint's range (all of one side below all of the other). There the session
+/// measured one block of configurations and then another — a column's heights, a joint's range — and a
+/// step of the frame and an error of those configurations fit alike: such a boundary is never said to
+/// be a moved tracker (what those configurations do is the selection's question, by their effects).
+fn splittable(data: &Dataset, rows: &[usize], at: &[Option<StepAt>]) -> Vec<Option<StepAt>> {
+    let n = rows.len();
+    let dof = data.measurements.first().map_or(0, |m| m.q.len());
+    let q = |k: usize, j: usize| data.measurements[rows[k]].q[j];
+    let mut open: Vec<Option<StepAt>> = at.to_vec();
+    for j in 0..dof {
+        // The range of joint j over the poses before place k, and over those from k on.
+        let mut before = vec![(f64::INFINITY, f64::NEG_INFINITY); n + 1];
+        for k in 0..n {
+            before[k + 1] = (before[k].0.min(q(k, j)), before[k].1.max(q(k, j)));
+        }
+        let mut after = (f64::INFINITY, f64::NEG_INFINITY);
+        for k in (1..n).rev() {
+            after = (after.0.min(q(k, j)), after.1.max(q(k, j)));
+            let (lo_b, hi_b) = before[k];
+            if hi_b < after.0 || after.1 < lo_b {
+                open[k] = None;
+            }
+        }
+    }
+    open
 }
 
 /// One pose of the scan, in the order of measuring: its residual under the flexible static model, its

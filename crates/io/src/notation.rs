@@ -172,34 +172,25 @@ impl PoseRow {
     ) -> Result<Vec<PoseRow>, crate::IoError> {
         let kinds: Vec<_> = model.robot().chain().joints().iter().map(|j| j.kind).collect();
         let rows = crate::read_joint_rows(path, &kinds, crate::JointUnits::Degrees)?;
-        // A backlash follows each joint's last move: the rows are the robot's moves in order, the first
-        // row's direction the flags' (none given: that row asks for it).
-        let mut last: Option<(Vec<f64>, Vec<thermokin_chain::Approach>)> = None;
-        Ok(rows
+        let mut read: Vec<ReadRow> = rows
             .into_iter()
             .map(|row| {
-                let pose = row.values.map_err(|e| e.to_string()).and_then(|(q, state)| {
-                    let mut state =
-                        if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
-                    if model.has_backlash() {
-                        if let Some((from, approach)) = &last {
-                            state.approach.clone_from(approach);
-                            thermokin_chain::Approach::advance(&mut state.approach, from, &q);
-                        } else {
-                            state.approach.clone_from(&flags.approach);
-                        }
-                        let known = if state.approach.len() == q.len() {
-                            state.approach.clone()
-                        } else {
-                            vec![thermokin_chain::Approach::Unknown; q.len()]
-                        };
-                        last = Some((q.clone(), known));
-                    }
-                    model.tool_pose(&q, &state).map_err(|e| e.to_string())
+                let values = row.values.map_err(|e| e.to_string()).map(|(q, state)| {
+                    let state = if state == thermokin_chain::OperatingState::default() { flags.clone() } else { state };
+                    (q, state)
                 });
-                match pose {
-                    Ok(p) => PoseRow { line: row.line, pose: Some(PoseOut::of(&p)), error: None },
-                    Err(e) => PoseRow { line: row.line, pose: None, error: Some(e) },
+                (row.line, values)
+            })
+            .collect();
+        if model.has_backlash() {
+            with_approach_in_measuring_order(&mut read, flags);
+        }
+        Ok(read
+            .into_iter()
+            .map(|(line, values)| {
+                match values.and_then(|(q, state)| model.tool_pose(&q, &state).map_err(|e| e.to_string())) {
+                    Ok(p) => PoseRow { line, pose: Some(PoseOut::of(&p)), error: None },
+                    Err(e) => PoseRow { line, pose: None, error: Some(e) },
                 }
             })
             .collect())
@@ -217,6 +208,43 @@ impl PoseRow {
             }
             (None, e) => format!("{},,,,,,,{}", self.line, csv_cell(e.as_deref().unwrap_or(""))),
         }
+    }
+}
+
+/// A joints file's row as `fk --joints-file` reads it: its line, and its joint values and state or why it
+/// has none.
+type ReadRow = (usize, Result<(Vec<f64>, thermokin_chain::OperatingState), String>);
+
+/// Each readable row's [`thermokin_chain::OperatingState::approach`] — the direction each joint last
+/// moved in, what a backlash follows — along the robot's moves: in the order of the rows' `time_min`
+/// where every readable row has one and they span time (rows of one time in file order), else in the
+/// file's order (a joints file lists the moves as the robot makes them). The first move starts from the
+/// flags' directions (none given: unknown).
+fn with_approach_in_measuring_order(rows: &mut [ReadRow], flags: &thermokin_chain::OperatingState) {
+    let readable: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].1.is_ok()).collect();
+    let time = |k: usize| rows[k].1.as_ref().ok().and_then(|(_, s)| s.time_min);
+    let times: Option<Vec<f64>> = readable.iter().map(|&k| time(k)).collect();
+    let mut order = readable.clone();
+    if let Some(t) = times
+        && t.iter().any(|&v| v != t[0])
+    {
+        order.sort_by(|&a, &b| time(a).unwrap_or(0.0).total_cmp(&time(b).unwrap_or(0.0)).then(a.cmp(&b)));
+    }
+    let mut last: Option<(Vec<f64>, Vec<thermokin_chain::Approach>)> = None;
+    for k in order {
+        let Ok((q, state)) = &mut rows[k].1 else { continue };
+        if let Some((from, approach)) = &last {
+            state.approach.clone_from(approach);
+            thermokin_chain::Approach::advance(&mut state.approach, from, q);
+        } else {
+            state.approach.clone_from(&flags.approach);
+        }
+        let known = if state.approach.len() == q.len() {
+            state.approach.clone()
+        } else {
+            vec![thermokin_chain::Approach::Unknown; q.len()]
+        };
+        last = Some((q.clone(), known));
     }
 }
 

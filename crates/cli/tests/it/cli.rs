@@ -1277,6 +1277,24 @@ fn a_robot_with_backlash_follows_the_order_of_its_moves() {
     // The joints file holds 12 decimals of a degree (1e-12° moves a point 1 m away by 2e-11 mm).
     assert!(worst < 1e-6, "{worst:e} mm");
     assert_eq!(stdout(&o).lines().count(), program.len() + 1);
+    // The same moves in a file whose time_min column orders them, its rows written last first: each
+    // row's direction is that of the move in time (issue #59: taken from the lines, 0.48 mm off).
+    let timed = tmp("backlash-q-timed.csv");
+    let body: Vec<String> = body.iter().enumerate().rev().map(|(k, row)| format!("{row},{}", k as f64)).collect();
+    std::fs::write(&timed, format!("q1,q2,q3,q4,q5,q6,time_min\n{}\n", body.join("\n"))).unwrap();
+    let o = thermokin(&[
+        "fk",
+        "--robot",
+        &robot,
+        "--joints-file",
+        &timed.display().to_string(),
+        "--approach",
+        &first.join(","),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let backwards: Vec<_> = program.iter().rev().cloned().collect();
+    let worst = farthest_from_targets(&stdout(&o), &backwards);
+    assert!(worst < 1e-6, "rows out of time order: {worst:e} mm");
 }
 
 /// A lift under the IRB 140 with a bent guide and a long rack, through the command line: `simulate` with

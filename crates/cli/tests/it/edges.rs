@@ -192,4 +192,43 @@ fn a_column_the_diagnosis_does_not_read_is_said() {
     assert!(stderr(&o).contains("column `acc_col_x` read as a sensor"), "{}", stderr(&o));
     // The columns it reads are not named.
     assert!(!stderr(&o).contains("column `q1`") && !stderr(&o).contains("column `x`"), "{}", stderr(&o));
+    // A hold-out file without the sensor column is refused, naming it (issue #59: scored at a reading of
+    // 0 without a word).
+    let plain = tmp("without-sensor.csv");
+    std::fs::write(&plain, &text).unwrap();
+    let o = thermokin(&[
+        "diagnose",
+        "--robot",
+        "configs/irb140.toml",
+        "--measurements",
+        m.to_str().unwrap(),
+        "--holdout",
+        plain.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("no column `acc_col_x`"), "{}", stderr(&o));
+    // A copy of joint 2's angle (in radians, offset) and a constant column are no sensors: said, not read.
+    let mut lines: Vec<String> = Vec::new();
+    let mut q2 = None;
+    for line in text.lines() {
+        if line.starts_with('#') {
+            lines.push(line.to_string());
+        } else if q2.is_none() {
+            q2 = line.split(',').position(|c| c.trim() == "q2");
+            lines.push(format!("{line},q2_rad,station"));
+        } else {
+            let v: f64 = line.split(',').nth(q2.unwrap()).unwrap().trim().parse().unwrap();
+            lines.push(format!("{line},{},7", v.to_radians() + 0.5));
+        }
+    }
+    std::fs::write(&m, lines.join("\n") + "\n").unwrap();
+    let o = thermokin(&["diagnose", "--robot", "configs/irb140.toml", "--measurements", m.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("column `q2_rad` is not read as a sensor: it repeats joint 2's value"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(stderr(&o).contains("column `station` is not read as a sensor: it does not change"), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("`q2_rad` read as a sensor"), "{}", stderr(&o));
 }

@@ -64,7 +64,16 @@ fn compliance_found_without(masses: Masses) {
     for joint in [2, 3] {
         assert!(chosen.contains(&format!("joint_compliance[{joint}] (no masses)").as_str()), "{chosen:?}");
     }
-    assert!(chosen.iter().all(|e| e.starts_with("joint_compliance") || e.starts_with("link_deviation")), "{chosen:?}");
+    // Nothing but the compliances and rows — or a gear ratio of a compliant joint: the truth sags under
+    // the file's masses, the diagnosis is told to lump the loads, and a term linear in the joint's angle
+    // takes up what a lumped load's torque misses over that joint's range (with the poses in their own
+    // order, issue #59, joint 2's is chosen; the hold-out below shows it at the noise).
+    assert!(
+        chosen.iter().all(|e| e.starts_with("joint_compliance")
+            || e.starts_with("link_deviation")
+            || e.strip_prefix("joint_scale").is_some_and(|j| ["[2]", "[3]"].contains(&j))),
+        "{chosen:?}"
+    );
     assert!(report.outliers.is_empty(), "{:?}", report.outliers);
     let noise_rms = crate::tracker::NOISE_MM * 3f64.sqrt();
     let holdout = report.holdout.as_ref().unwrap();

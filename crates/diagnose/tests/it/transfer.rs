@@ -70,9 +70,13 @@ fn ur10_series_c_transfers_to_series_b() {
     eprintln!("B in the training frame: {same_frame:.4} mm mean");
     assert!(same_frame <= 0.771, "B in the training frame: {same_frame:.4} mm mean");
     assert!(same_frame < 0.647, "B in the training frame, the goal: {same_frame:.4} mm mean");
-    let scale3 = report.identifiability.not_identifiable.iter().find(|r| r.effect == "joint_scale[3]").unwrap();
-    assert!(scale3.reason.ends_with("it does not hold beyond the poses it was fitted on"), "{}", scale3.reason);
-    assert!(scale3.reason.contains("joint 2's poses"), "{}", scale3.reason);
+    // Joint 3's gear ratio is not exported: where the selection offers it, it is refused for what it
+    // costs beyond the poses it was fitted on.
+    assert!(!labels.contains(&"joint_scale[3]"), "{labels:?}");
+    if let Some(scale3) = report.identifiability.not_identifiable.iter().find(|r| r.effect == "joint_scale[3]") {
+        assert!(scale3.reason.ends_with("it does not hold beyond the poses it was fitted on"), "{}", scale3.reason);
+        assert!(scale3.reason.contains("joint 2's poses"), "{}", scale3.reason);
+    }
     assert!(n.worse_than_nominal.is_empty(), "outer folds worse than nominal: {:?}", n.worse_than_nominal);
     assert!(report.honest_end.is_none(), "{:?}", report.honest_end);
     // Every reported parameter is identified: one standard deviation under 1 mm or 1° (a final refit that

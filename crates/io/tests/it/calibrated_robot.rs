@@ -246,3 +246,29 @@ fn a_columns_lumped_lateral_compliance_is_written_and_read_back() {
     assert!((a.translation.vector - b.translation.vector).norm() < 1e-9);
     assert!((a.translation.vector - model.robot().chain().tool_pose(&q).unwrap().translation.vector).norm() > 0.01);
 }
+
+/// A row driven by a sensor that is not a temperature (an accelerometer's column, exported as its file
+/// names it: `acc_col_x`) takes its reading under either spelling — the exported name, or the `temp_`
+/// prefix the command line's `--temperature NAME=V` and a targets file's columns add (issue #59: every
+/// spelling was refused as a sensor no row follows, so the guide's own command failed) — and the reading
+/// moves the tool by the row's gain; a sensor the robot does not follow is still refused.
+#[test]
+fn a_sensor_row_takes_its_reading_as_exported_and_as_the_command_line_gives_it() {
+    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
+    let text = format!(
+        "{text}\n[[drift]]\nrow = 2\nerror = [0, 0, 0, 0, 0.5, 0]\nper_kelvin = {{ sensors = [\"acc_col_x\"], reference_c = [0.1] }}\n"
+    );
+    let model = parse_robot_model_toml("sensor.toml".as_ref(), &text).unwrap();
+    let q = [0.3, -0.4, 0.2, 0.1, 0.5, -0.2];
+    let reading = |name: &str, v: f64| OperatingState { temperatures_c: vec![(name.into(), v)], ..Default::default() };
+    let at = |name: &str, v: f64| {
+        model.check_state(&reading(name, v), false, false).unwrap();
+        model.tool_pose(&q, &reading(name, v)).unwrap().translation.vector
+    };
+    let (exported, prefixed) = (at("acc_col_x", 1.1), at(&thermokin_io::sensor_name("acc_col_x"), 1.1));
+    assert!((exported - prefixed).norm() < 1e-12, "{exported} vs {prefixed}");
+    // One unit of the reading above its reference tilts joint 2's row by 0.5°: the tool moves.
+    assert!((at("acc_col_x", 1.1) - at("acc_col_x", 0.1)).norm() > 1.0);
+    let e = model.check_state(&reading("temp_other", 1.0), false, false).unwrap_err().to_string();
+    assert!(e.contains("temp_other") && e.contains("acc_col_x"), "{e}");
+}
