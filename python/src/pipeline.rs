@@ -392,9 +392,11 @@ impl PyReport {
 /// was fitted on, or `"off"`), `masses` (`"from-file"`, or `"ignore"`: every gravity compliance's loads lumped
 /// and identified from the data), `order` (`"time"`, or `"file"`: the rows are in the order measured —
 /// what a backlash follows), `lateral` (`"slides"`, or `"joints"`: every joint's bearing may tilt under the
-/// gravity moment across its axis, its loads lumped without masses). Runs without the GIL.
+/// gravity moment across its axis, its loads lumped without masses), `accelerometers` (`{"acc_top": 1}`:
+/// each sensor's link, 0 the base — its columns `NAME_x`, `NAME_y`, `NAME_z` of a measurements file read
+/// as the link's tilt, as `--accelerometer NAME=LINK`). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None, accelerometers=None))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per setting.
 pub fn diagnose(
     py: Python<'_>,
@@ -417,6 +419,7 @@ pub fn diagnose(
     masses: Option<&str>,
     order: Option<&str>,
     lateral: Option<&str>,
+    accelerometers: Option<HashMap<String, usize>>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -451,6 +454,15 @@ pub fn diagnose(
         masses: choice("masses", masses, defaults.masses)?,
         order: choice("order", order, defaults.order)?,
         lateral: choice("lateral", lateral, defaults.lateral)?,
+        accelerometers: {
+            let mut a: Vec<thermokin_diagnose::Accelerometer> = accelerometers
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(name, link)| thermokin_diagnose::Accelerometer { name, link })
+                .collect();
+            a.sort_by(|x, y| x.name.cmp(&y.name));
+            a
+        },
         ..defaults
     };
     config.validate().map_err(setting_error)?;

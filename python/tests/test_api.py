@@ -186,6 +186,16 @@ def test_diagnose_takes_arrays_as_it_takes_a_measurement_set(irb140):
         thermokin.diagnose(irb140, data, data.xyz)
 
 
+def test_an_accelerometer_is_declared_by_its_link_and_its_columns_are_required(irb140):
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=60, minutes=0)
+    # The arrays carry no accelerometer columns: the declaration names the ones it needs.
+    with pytest.raises(InputError, match="acc_top_x"):
+        thermokin.diagnose(irb140, data, accelerometers={"acc_top": 0})
+    # A link that a revolute joint below turns is refused, naming the joint.
+    with pytest.raises(InputError, match="joint 1 below link 2"):
+        thermokin.diagnose(irb140, data, accelerometers={"acc_top": 2})
+
+
 def test_gross_errors_are_listed_by_line_and_left_out_unless_kept(irb140, tmp_path):
     data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=120, minutes=0)
     xyz = data.xyz.copy()

@@ -43,6 +43,30 @@ pub struct Dataset {
     /// (what a gearbox's backlash follows), from the measuring order ([`Dataset::with_approach`]); empty
     /// when the set has no order.
     pub approach: Vec<Vec<Approach>>,
+    /// The accelerometers (or inclinometers) declared on the robot's links, each read as the tilt of its
+    /// link: sensor columns of [`Dataset::sensor_names`] hold, per pose, the small rotation (radians, in
+    /// the sensor's axes) its reading shows against its reference direction ([`TiltSensor::tilt`]), and
+    /// the declared sensor's below it on the chain. Empty when none is declared.
+    pub tilt_sensors: Vec<TiltSensor>,
+}
+
+/// An accelerometer or inclinometer declared on a link ([`Dataset::tilt_sensors`]): its name, the link
+/// (0: the robot's base, `k`: the link joint `k` moves), and the first of its tilt columns among the
+/// set's sensor columns: its own tilt's `x`, `y`, `z`, then, with a sensor below it, that sensor's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TiltSensor {
+    /// The sensor's name (its raw columns are `NAME_x`, `NAME_y`, `NAME_z`).
+    pub name: String,
+    /// The link it sits on: 0 the base, `k` the link joint `k` moves.
+    pub link: usize,
+    /// The first of its tilt columns in [`Dataset::sensor_names`].
+    pub column: usize,
+    /// Its reference direction, the unit vector of its readings the tilt is measured from (the training
+    /// session's mean), in its own axes.
+    pub reference: [f64; 3],
+    /// The declared sensor below it on the chain, whose tilt (already turning everything above it) is
+    /// taken from its own — what its link turns beyond — if any: that sensor's name.
+    pub below: Option<String>,
 }
 
 /// The direction a joint last moved in before a pose: the flank of its gears that carries it (what a
@@ -99,6 +123,22 @@ impl Approach {
     }
 }
 
+impl TiltSensor {
+    /// The small rotation of the sensor (radians, in its own axes) that its `reading` shows against its
+    /// unit `reference` direction (any unit proportional to g: only the direction counts): turned by `ω`,
+    /// the sensor sees gravity turned by `−ω`, `û ≈ r̂ − ω × r̂`, so `ω = û × r̂` (its part across gravity:
+    /// a turn about the vertical leaves gravity where it was). Its size is the sine of the angle, the
+    /// angle itself to a part in 10⁴ below 1°. `None` for a reading of no length or not finite.
+    pub fn tilt(reading: [f64; 3], reference: [f64; 3]) -> Option<Vector3<f64>> {
+        let u = Vector3::from(reading);
+        let n = u.norm();
+        if !(n.is_finite() && n > 0.0) {
+            return None;
+        }
+        Some((u / n).cross(&Vector3::from(reference)))
+    }
+}
+
 /// Where the order the poses were measured in comes from, for what follows the direction of motion (a
 /// backlash: [`Dataset::with_approach`]).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -149,6 +189,7 @@ impl Dataset {
             } else {
                 Vec::new()
             },
+            tilt_sensors: self.tilt_sensors.clone(),
         }
     }
 
@@ -234,6 +275,16 @@ impl Dataset {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_tilt_is_the_sensors_turn() {
+        // A sensor reading +z (up) at rest, turned by 0.01 rad about x: it sees up at Rᵀ·z.
+        let turn = nalgebra::Rotation3::from_scaled_axis(Vector3::new(0.01, -0.004, 0.0));
+        let reading = turn.inverse() * Vector3::new(0.0, 0.0, 9.81);
+        let tilt = TiltSensor::tilt(reading.into(), [0.0, 0.0, 1.0]).expect("a reading of length 9.81");
+        assert!((tilt - Vector3::new(0.01, -0.004, 0.0)).norm() < 1e-6, "{tilt}");
+        assert!(TiltSensor::tilt([0.0; 3], [0.0, 0.0, 1.0]).is_none());
+    }
 
     fn pose(time_min: f64, q: [f64; 2]) -> Measurement {
         Measurement {

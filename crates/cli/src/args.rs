@@ -391,6 +391,13 @@ pub struct DiagnoseArgs {
     /// Without either the rows have no order: the same poses in any row order give the same diagnosis.
     #[arg(long, value_parser = choice(thermokin_chain::MeasuringOrder::CHOICES), default_value_t = Config::default().order)]
     pub order: thermokin_chain::MeasuringOrder,
+    /// An accelerometer or inclinometer on a link, NAME=LINK (LINK 0 the robot's base, k the link joint k
+    /// moves; repeat for each): its columns NAME_x, NAME_y, NAME_z (any unit proportional to g) are read
+    /// as the link's tilt from their mean direction — the row of the joint the link carries turned by it,
+    /// no gain fitted — and a second sensor higher on the chain as what bends between them. The exported
+    /// robot takes the readings at run time: fk --temperature NAME_x=..,NAME_y=..,NAME_z=..
+    #[arg(long = "accelerometer", value_name = "NAME=LINK", value_parser = accelerometer)]
+    pub accelerometers: Vec<thermokin_diagnose::Accelerometer>,
     /// A Gaussian prior toward the nominal robot on the chosen model, as strong as cross-validation
     /// asks and kept only where it passes the gate (few poses: the weakly seen directions pulled back),
     /// or the least-squares fit as it is.
@@ -568,4 +575,21 @@ pub struct ReproduceArgs {
 /// errors.
 pub fn parse_list(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
     thermokin_io::parse_list(s).map_err(|m| anyhow::anyhow!("--{flag}: {m}"))
+}
+
+/// `--accelerometer NAME=LINK`.
+fn accelerometer(text: &str) -> Result<thermokin_diagnose::Accelerometer, String> {
+    let (name, link) =
+        text.split_once('=').ok_or_else(|| format!("`{text}`: give NAME=LINK, e.g. acc_top=1 (0 is the base)"))?;
+    let name = name.trim();
+    if name.is_empty() || name.contains(',') {
+        return Err(format!("`{text}`: the sensor's name (its columns are NAME_x, NAME_y, NAME_z) is missing"));
+    }
+    let link = link.trim().parse::<usize>().map_err(|_| {
+        format!(
+            "`{text}`: LINK is a link number — 0 the robot's base, k the link joint k moves — not `{}`",
+            link.trim()
+        )
+    })?;
+    Ok(thermokin_diagnose::Accelerometer { name: name.to_string(), link })
 }

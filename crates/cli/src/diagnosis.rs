@@ -123,6 +123,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         masses: a.masses,
         lateral: a.lateral,
         order: a.order,
+        accelerometers: a.accelerometers.clone(),
         shrinkage: a.shrinkage,
         extrapolation: a.extrapolation,
         noise_mm: a.noise,
@@ -157,7 +158,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
         let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
         crate::input::warn_ignored(&a.measurements, &unread);
-        say_sensors(&a.measurements, &data);
+        say_sensors(&a.measurements, &data, &a.accelerometers);
     }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
@@ -242,12 +243,27 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
 
 /// The sensor columns of `data` (read from `path`) said on stderr: each read as a sensor, or not and why
 /// ([`thermokin_diagnose::not_sensors`]).
-fn say_sensors(path: &std::path::Path, data: &thermokin_chain::Dataset) {
+fn say_sensors(
+    path: &std::path::Path,
+    data: &thermokin_chain::Dataset,
+    declared: &[thermokin_diagnose::Accelerometer],
+) {
+    let of = |s: &str| declared.iter().find(|a| ["x", "y", "z"].iter().any(|c| format!("{}_{c}", a.name) == s));
+    for s in &data.sensor_names {
+        if let Some(a) = of(s) {
+            eprintln!(
+                "note: {}: column `{s}` read as accelerometer {}'s tilt (link {})",
+                path.display(),
+                a.name,
+                a.link
+            );
+        }
+    }
     let not_sensors = thermokin_diagnose::not_sensors(data);
-    for s in data.sensor_names.iter().filter(|s| !not_sensors.iter().any(|(n, _)| n == *s)) {
+    for s in data.sensor_names.iter().filter(|s| of(s).is_none() && !not_sensors.iter().any(|(n, _)| n == *s)) {
         eprintln!("note: {}: column `{s}` read as a sensor (a joint row may follow it)", path.display());
     }
-    for (s, why) in &not_sensors {
+    for (s, why) in not_sensors.iter().filter(|(s, _)| of(s).is_none()) {
         eprintln!("note: {}: column `{s}` is not read as a sensor: {why}", path.display());
     }
 }

@@ -233,6 +233,43 @@ pub enum DriftLaw {
         /// `(sensor name, reference temperature °C)`.
         sensors: Vec<(String, f64)>,
     },
+    /// The row turns with the tilt an accelerometer measures ([`thermokin_chain::TiltSensor::tilt`]): the
+    /// factor is component `component` (0 x, 1 y, 2 z, the sensor's axes) of the tilt its reading
+    /// (columns `NAME_x`, `NAME_y`, `NAME_z`, any unit proportional to g) shows against `reference` —
+    /// radians, no gain: the row's deviation is how that component turns it.
+    Tilt {
+        /// The sensor's name.
+        sensor: String,
+        /// Which component of its tilt: 0, 1, 2.
+        component: usize,
+        /// Its reference direction (unit), in its axes.
+        reference: [f64; 3],
+    },
+}
+
+/// The tilt of accelerometer `name` in `state` from `reference` (its readings `NAME_x`, `NAME_y`,
+/// `NAME_z`, or with the `temp_` prefix the command line adds).
+fn measured_tilt(
+    state: &OperatingState,
+    name: &str,
+    reference: [f64; 3],
+    row: Row,
+) -> Result<Vector3<f64>, DeformError> {
+    let mut reading = [0.0; 3];
+    for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+        let column = format!("{name}_{axis}");
+        reading[k] =
+            state.temperature(&column).or_else(|| state.temperature(&format!("temp_{column}"))).ok_or_else(|| {
+                DeformError::MissingState {
+                    needed: format!("the reading of accelerometer `{name}` (`{name}_x`, `{name}_y`, `{name}_z`)"),
+                    why: format!("{} turns with the tilt it measures", row_name(row)),
+                }
+            })?;
+    }
+    thermokin_chain::TiltSensor::tilt(reading, reference).ok_or_else(|| DeformError::MissingState {
+        needed: format!("a finite, non-zero reading of accelerometer `{name}`"),
+        why: format!("got {reading:?}"),
+    })
 }
 
 impl DriftLaw {
@@ -252,6 +289,10 @@ impl DriftLaw {
             DriftLaw::PerKelvin { sensors } => {
                 let names: Vec<&str> = sensors.iter().map(|(n, _)| n.as_str()).collect();
                 format!("per kelvin of {}", names.join(" + "))
+            }
+            DriftLaw::Tilt { sensor, component, .. } => {
+                let axis = ["x", "y", "z"].get(*component).copied().unwrap_or("?");
+                format!("with the tilt accelerometer {sensor} measures about its {axis}")
             }
         }
     }
@@ -297,6 +338,9 @@ impl DriftLaw {
                     rise += now - reference;
                 }
                 Ok(rise / sensors.len() as f64)
+            }
+            DriftLaw::Tilt { sensor, component, reference } => {
+                Ok(measured_tilt(state, sensor, *reference, row)?.get(*component).copied().unwrap_or(0.0))
             }
         }
     }
@@ -478,6 +522,17 @@ impl RobotModel {
                     });
                 }
                 DriftLaw::Time(p) => p.validate(dof)?,
+                DriftLaw::Tilt { sensor, component, reference } => {
+                    if sensor.is_empty() || *component > 2 || (Vector3::from(*reference).norm() - 1.0).abs() > 1e-6 {
+                        return Err(DeformError::BadProfile {
+                            field: "tilt",
+                            message: format!(
+                                "{}: a tilt law names its sensor, a component 0–2 and unit reference directions",
+                                row_name(d.row)
+                            ),
+                        });
+                    }
+                }
                 DriftLaw::PerKelvin { sensors } => {
                     if sensors.is_empty() || sensors.iter().any(|(n, t)| n.is_empty() || !t.is_finite()) {
                         return Err(DeformError::BadProfile {
@@ -653,11 +708,15 @@ impl RobotModel {
         let time = self.drift.iter().any(|d| matches!(&d.law, DriftLaw::Time(p) if *p != TimeProfile::Static));
         let mut sensors: Vec<String> = Vec::new();
         for d in &self.drift {
-            if let DriftLaw::PerKelvin { sensors: s } = &d.law {
-                for (n, _) in s {
-                    if !sensors.contains(n) {
-                        sensors.push(n.clone());
-                    }
+            let mut names: Vec<String> = Vec::new();
+            match &d.law {
+                DriftLaw::PerKelvin { sensors: s } => names.extend(s.iter().map(|(n, _)| n.clone())),
+                DriftLaw::Tilt { sensor, .. } => names.extend(["x", "y", "z"].map(|a| format!("{sensor}_{a}"))),
+                DriftLaw::Time(_) => {}
+            }
+            for n in names {
+                if !sensors.contains(&n) {
+                    sensors.push(n);
                 }
             }
         }

@@ -71,6 +71,20 @@ pub struct Config {
     /// (`crate::canonical`).
     #[serde(serialize_with = "by_name")]
     pub order: thermokin_chain::MeasuringOrder,
+    /// The accelerometers (or inclinometers) on the robot's links, each read as the tilt of its link
+    /// ([`Accelerometer`]); empty: every sensor column is a free driver of rows.
+    pub accelerometers: Vec<Accelerometer>,
+}
+
+/// An accelerometer or inclinometer declared on a link (`--accelerometer NAME=LINK`): its columns
+/// `NAME_x`, `NAME_y`, `NAME_z` (any unit proportional to g) measure the link's tilt — read as a
+/// rotation with its physical gain (`crate::tilts`), not as a driver whose gain is fitted.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Accelerometer {
+    /// The sensor's name: its columns are `NAME_x`, `NAME_y`, `NAME_z`.
+    pub name: String,
+    /// The link it sits on: 0 the robot's base, `k` the link joint `k` moves.
+    pub link: usize,
 }
 
 /// A setting serialized by its name (a type of a crate without serde).
@@ -335,6 +349,7 @@ impl Default for Config {
             masses: Masses::default(),
             lateral: thermokin_identify::Lateral::default(),
             order: thermokin_chain::MeasuringOrder::default(),
+            accelerometers: Vec::new(),
         }
     }
 }

@@ -114,9 +114,18 @@ fn checked_holdout<'h>(
     robot: &Robot,
     data: &Dataset,
     holdout: Option<&'h Dataset>,
-    by: MeasuringOrder,
+    config: &Config,
 ) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
+    let by = config.order;
     check_joint_counts(robot, data, holdout)?;
+    // Its accelerometers read from the training session's reference directions.
+    let tilted = match holdout {
+        Some(h) if !config.accelerometers.is_empty() => {
+            Some(crate::tilts::with_tilts(robot, h, &config.accelerometers, Some(&data.tilt_sensors))?)
+        }
+        _ => None,
+    };
+    let holdout: Option<&Dataset> = tilted.as_ref().or(holdout);
     if let Some(missing) = holdout.and_then(|h| data.sensor_names.iter().find(|n| !h.sensor_names.contains(n))) {
         return Err(DiagnoseError::HoldoutLacksSensor { sensor: missing.clone() });
     }
@@ -235,9 +244,15 @@ fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r,
 /// order give the same report: [`crate::canonical`], with that order to return the report to the given
 /// one), without the columns that are no sensors ([`crate::sensors`], with the sentences that say so),
 /// each pose's approach direction from its measuring order.
+/// Each declared accelerometer's raw columns are its link's tilt first ([`crate::tilts`]).
 type Prepared<'d> = (std::borrow::Cow<'d, Dataset>, Option<Vec<usize>>, Vec<String>);
-fn prepared<'d>(data: &'d Dataset, config: &Config) -> Prepared<'d> {
+fn prepared<'d>(robot: &Robot, data: &'d Dataset, config: &Config) -> Result<Prepared<'d>, DiagnoseError> {
     let (data, perm) = crate::canonical::in_canonical_order(data, config.order);
+    let data = if config.accelerometers.is_empty() {
+        data
+    } else {
+        std::borrow::Cow::Owned(crate::tilts::with_tilts(robot, &data, &config.accelerometers, None)?)
+    };
     let (data, not_sensors) = match data {
         std::borrow::Cow::Borrowed(d) => crate::sensors::only_sensors(d),
         std::borrow::Cow::Owned(d) => {
@@ -245,7 +260,7 @@ fn prepared<'d>(data: &'d Dataset, config: &Config) -> Prepared<'d> {
             (std::borrow::Cow::Owned(kept.into_owned()), said)
         }
     };
-    (ordered(data, config.order), perm, not_sensors)
+    Ok((ordered(data, config.order), perm, not_sensors))
 }
 
 /// The diagnosis, its phases on all measurements timed into `main`, those of the outer folds into `outer`.
@@ -260,7 +275,7 @@ fn run(
 ) -> Result<Report, DiagnoseError> {
     config.validate()?;
     let robot = &*trusted(robot, config)?;
-    let (data, perm, not_sensors) = prepared(data, config);
+    let (data, perm, not_sensors) = prepared(robot, data, config)?;
     let data = &*data;
     let total = stages(data, holdout.is_some(), config);
     let mut done = 0;
@@ -268,7 +283,7 @@ fn run(
         done += 1;
         progress(Progress { done, total, stage });
     };
-    let holdout = checked_holdout(robot, data, holdout, config.order)?;
+    let holdout = checked_holdout(robot, data, holdout, config)?;
     // Gross errors first: everything after works on the measurements the screen keeps.
     let screened = main.time(Phase::Screen, || screen(robot, data, config))?;
     let kept_data;
@@ -292,7 +307,8 @@ fn run(
     };
     let fell_back = judged_beside_the_folds(&scorer, config, &mut selected.selection, nested.as_ref())?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
-    let holdout = match holdout.as_deref() {
+    let holdout_data = holdout;
+    let holdout = match holdout_data.as_deref() {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
@@ -308,7 +324,7 @@ fn run(
     let mut all_warnings: Vec<String> =
         fell_back.into_iter().chain(said_first(config, &tables, nested.as_ref())).collect();
     all_warnings.extend(not_sensors);
-    all_warnings.extend(said_of_the_effects(robot, data, config, &tables));
+    all_warnings.extend(said_of_the_effects(robot, data, holdout_data.as_deref(), config, &tables));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
@@ -349,10 +365,48 @@ fn run(
     Ok(to_given_order(perm.as_deref(), &screened.kept, report))
 }
 
-/// What the report says of the chosen effects and the data: the tables' warnings, the data's, each step
-/// of the frame and each backlash found.
-fn said_of_the_effects(robot: &Robot, data: &Dataset, config: &Config, tables: &crate::tables::Tables) -> Vec<String> {
+/// For each chosen row a sensor column drives ([`thermokin_identify::Effect::SensorDrift`]), the sentence
+/// the report gives where the hold-out set's readings of it reach beyond the range the row was fitted on
+/// by more than a tenth of that range: its gain is extrapolated there, and the hold-out figure carries
+/// whatever that does.
+fn drivers_beyond_their_range(
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    effects: &[thermokin_identify::Effect],
+) -> Vec<String> {
+    let Some(h) = holdout else { return Vec::new() };
+    let column = |d: &Dataset, k: usize| crate::stats::span(d.sensor_values.iter().filter_map(|r| r.get(k).copied()));
+    let mut said = Vec::new();
+    let mut seen = Vec::new();
+    for e in effects {
+        let thermokin_identify::Effect::SensorDrift(_, sensor) = e else { continue };
+        if seen.contains(&sensor.index()) {
+            continue;
+        }
+        seen.push(sensor.index());
+        let ((lo, hi), (h_lo, h_hi)) = (column(data, sensor.index()), column(h, sensor.index()));
+        let margin = 0.1 * (hi - lo);
+        if h_lo < lo - margin || h_hi > hi + margin {
+            said.push(format!(
+                "the hold-out readings of `{}` ({h_lo:.4} … {h_hi:.4}) reach beyond the range the rows it drives were fitted on ({lo:.4} … {hi:.4}): their gains are extrapolated there — measure the training session over the readings the robot will see, or declare the sensor for what it measures (--accelerometer NAME=LINK for a tilt)",
+                sensor.name()
+            ));
+        }
+    }
+    said
+}
+
+/// What the report says of the chosen effects and the data: the tables' warnings, the drivers the hold-out
+/// set reads beyond their range, the data's, each step of the frame and each backlash found.
+fn said_of_the_effects(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+    tables: &crate::tables::Tables,
+) -> Vec<String> {
     let mut said: Vec<String> = tables.warnings.clone();
+    said.extend(drivers_beyond_their_range(data, holdout, &tables.effects));
     said.extend(warnings(robot, data, config, tables));
     said.extend(tables.reports.iter().filter(|e| e.effect == "frame_step").map(frame_step_warning));
     said.extend(steps_between_configurations(robot, data, &tables.effects));

@@ -73,4 +73,12 @@ pub enum DiagnoseError {
         /// The sensor column's name.
         sensor: String,
     },
+    /// A declared accelerometer that the data or the robot cannot read as a link's tilt.
+    #[error("accelerometer `{name}`: {reason}")]
+    Accelerometer {
+        /// Its name.
+        name: String,
+        /// Why, with what to do.
+        reason: String,
+    },
 }

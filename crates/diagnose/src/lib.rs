@@ -43,12 +43,13 @@ mod simulate;
 mod stats;
 mod steps;
 mod tables;
+mod tilts;
 mod validation;
 mod verdict;
 
 pub use config::{
-    Completion, Config, Eligibility, Extrapolation, FoldGrouping, Masses, Outliers, Plausibility, Screen, Shrinkage,
-    Validation,
+    Accelerometer, Completion, Config, Eligibility, Extrapolation, FoldGrouping, Masses, Outliers, Plausibility,
+    Screen, Shrinkage, Validation,
 };
 pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;

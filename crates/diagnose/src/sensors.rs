@@ -17,7 +17,11 @@ pub fn not_sensors(data: &Dataset) -> Vec<(String, String)> {
     if data.sensor_values.len() != data.len() || data.len() < 2 {
         return out;
     }
-    for (s, name) in data.sensor_names.iter().enumerate() {
+    // A declared accelerometer's tilt columns are its link's tilt, whatever they hold.
+    let tilt = |s: usize| {
+        data.tilt_sensors.iter().any(|t| (t.column..t.column + if t.below.is_some() { 6 } else { 3 }).contains(&s))
+    };
+    for (s, name) in data.sensor_names.iter().enumerate().filter(|(s, _)| !tilt(*s)) {
         let x = column(s);
         let (lo, hi) = crate::stats::span(x.iter().copied());
         if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
@@ -61,6 +65,9 @@ pub(crate) fn only_sensors(data: &Dataset) -> (std::borrow::Cow<'_, Dataset>, Ve
         (0..data.sensor_names.len()).filter(|&s| !dropped.iter().any(|(n, _)| *n == data.sensor_names[s])).collect();
     let mut kept = data.clone();
     kept.sensor_names = keep.iter().map(|&s| data.sensor_names[s].clone()).collect();
+    for t in &mut kept.tilt_sensors {
+        t.column = keep.iter().position(|&s| s == t.column).unwrap_or(t.column);
+    }
     kept.sensor_values = data.sensor_values.iter().map(|r| keep.iter().map(|&s| r[s]).collect()).collect();
     if kept.sensor_names.is_empty() {
         kept.sensor_values.clear();

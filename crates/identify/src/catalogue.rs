@@ -284,17 +284,34 @@ impl Setup {
         if !data.temperature_names.is_empty() {
             c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
         }
-        // A sensor column that varies may drive any row (a column's tilt, a base's, a load's bending).
-        for k in 0..data.sensor_names.len() {
-            let (lo, hi) = data
-                .sensor_values
-                .iter()
-                .filter_map(|v| v.get(k))
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
-            if let Some(sensor) = SensorId::of(data, k).filter(|_| hi > lo) {
-                c.extend(joints.iter().map(|&j| Effect::SensorDrift(j, sensor)));
-            }
-        }
+        c.extend(sensor_candidates(robot, data, &joints));
         Ok(c)
     }
+}
+
+/// The candidates of the set's sensor columns: a declared accelerometer's tilt turning the row of the
+/// joint its link carries, with no gain to fit (a sensor on the last link carries no joint's row: nothing
+/// of it); any other sensor column that varies driving any row (a column's tilt, a base's, a load's
+/// bending).
+fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex]) -> Vec<Effect> {
+    let mut c = Vec::new();
+    let columns = |t: &thermokin_chain::TiltSensor| if t.below.is_some() { 6 } else { 3 };
+    let declared = |k: usize| data.tilt_sensors.iter().any(|t| (t.column..t.column + columns(t)).contains(&k));
+    for t in &data.tilt_sensors {
+        let over = if t.below.is_some() { crate::effect::TiltOver::Below } else { crate::effect::TiltOver::Ground };
+        if let (Ok(j), Some(sensor)) = (JointIndex::of(robot, t.link), SensorId::of(data, t.column)) {
+            c.push(Effect::Tilt(j, sensor, over));
+        }
+    }
+    for k in (0..data.sensor_names.len()).filter(|&k| !declared(k)) {
+        let (lo, hi) = data
+            .sensor_values
+            .iter()
+            .filter_map(|v| v.get(k))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| (l.min(v), h.max(v)));
+        if let Some(sensor) = SensorId::of(data, k).filter(|_| hi > lo) {
+            c.extend(joints.iter().map(|&j| Effect::SensorDrift(j, sensor)));
+        }
+    }
+    c
 }

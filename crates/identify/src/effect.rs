@@ -224,10 +224,27 @@ pub enum Effect {
     /// A joint row's six error parameters following a sensor column linearly: `δ · s`, `s` the pose's
     /// reading (an accelerometer's tilt of a column, a load) — per unit of the reading (6).
     SensorDrift(JointIndex, SensorId),
+    /// The measured tilt of the link an accelerometer sits on ([`thermokin_chain::TiltSensor`]): joint
+    /// `j`'s row (the joint the link carries) turns by the tilt `ω` the three sensor columns from
+    /// `SensorId` on hold — radians, no gain fitted — turned about the link's z axis by the sensor's
+    /// mounting yaw `ψ`, about a pivot `r` (mm, from the row's origin: where the link rocks or bends
+    /// from): `Δθ = R_z(ψ) ω`, `Δp = r × Δθ`; `[ψ, r_x, r_y, r_z]` (4). Over a sensor below it on the
+    /// chain ([`TiltOver::Below`]), what it turns beyond that sensor's tilt (the next three columns),
+    /// seen at that sensor's own yaw `ψ_b`: `Δθ = R_z(ψ) ω − R_z(ψ_b) ω_b`; `[ψ, r_x, r_y, r_z, ψ_b]` (5).
+    Tilt(JointIndex, SensorId, TiltOver),
     /// A step of the measurement frame — the tracker knocked, its stand or the robot's base moved — at
     /// a point of the measuring order: the poses from there on are measured in the frame moved by a
     /// translation (3, mm) and a rotation `Rx·Ry·Rz` (3), applied in the measurement frame (6).
     FrameStep(StepAt),
+}
+
+/// What a measured tilt is taken over ([`Effect::Tilt`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum TiltOver {
+    /// The ground: no declared sensor below it on the chain.
+    Ground,
+    /// The declared sensor below it, whose tilt already turns everything above it.
+    Below,
 }
 
 /// What a lateral compliance without masses bends ([`Effect::LumpedLateralCompliance`]).
@@ -372,7 +389,8 @@ impl Effect {
             | Effect::Periodic(j)
             | Effect::Backlash(j)
             | Effect::ThermalDrift(j, _)
-            | Effect::SensorDrift(j, _) => Some(j),
+            | Effect::SensorDrift(j, _)
+            | Effect::Tilt(j, ..) => Some(j),
             Effect::Registration
             | Effect::ToolPoint
             | Effect::ToolRotation
@@ -411,6 +429,8 @@ impl Effect {
             | Effect::ComplianceCoupling(_)
             | Effect::JointScale(_)
             | Effect::Backlash(_) => 1,
+            Effect::Tilt(_, _, TiltOver::Ground) => 4,
+            Effect::Tilt(_, _, TiltOver::Below) => 5,
             Effect::Periodic(_) => 4,
             Effect::Straightness(_) => 5,
             Effect::LumpedCompliance(_, n)
@@ -444,6 +464,7 @@ impl Effect {
             Effect::ThermalDrift(..) => "thermal_drift",
             Effect::FrameStep(_) => "frame_step",
             Effect::SensorDrift(..) => "sensor_drift",
+            Effect::Tilt(..) => "tilt",
         }
     }
 
@@ -456,6 +477,11 @@ impl Effect {
             Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
+            Effect::Tilt(j, s, _) => {
+                // Its columns are `NAME.tilt_x`, …: the sensor's name.
+                let name = s.name();
+                return format!("tilt[{}] (measured by {})", j.number(), name.strip_suffix(".tilt_x").unwrap_or(name));
+            }
             _ => "",
         };
         match self.joint() {
@@ -506,6 +532,14 @@ impl Effect {
             }
             Effect::JointScale(_) => vec![format!("{prefix}.scale")],
             Effect::Backlash(_) => vec![format!("{prefix}.half_play_deg")],
+            Effect::Tilt(.., over) => {
+                let below: &[&str] = if *over == TiltOver::Below { &["below_mounting_yaw_deg"] } else { &[] };
+                ["mounting_yaw_deg", "pivot_x_mm", "pivot_y_mm", "pivot_z_mm"]
+                    .iter()
+                    .chain(below)
+                    .map(|n| format!("{prefix}.{n}"))
+                    .collect()
+            }
             Effect::Periodic(_) => {
                 ["sin1_deg", "cos1_deg", "sin2_deg", "cos2_deg"].iter().map(|n| format!("{prefix}.{n}")).collect()
             }
@@ -551,6 +585,7 @@ impl Effect {
                 | Effect::Backlash(_)
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
+                | Effect::Tilt(..)
                 | Effect::FrameStep(_)
         )
     }
@@ -580,6 +615,7 @@ impl Effect {
                 | Effect::ToolRotation,
                 _,
             ) => true,
+            (Effect::Tilt(..), k) => k == 0 || k == 4,
             // A column's third set, its foot's shift, is millimetres.
             (Effect::LumpedLateralCompliance(_, n, Support::Column), k) => k < 2 * (*n as usize) / 3,
             (Effect::LumpedLateralCompliance(..), _) => true,

@@ -229,6 +229,8 @@ impl Model {
                     deviation: six_at(theta, o),
                     law: DriftLaw::PerKelvin { sensors: vec![(sensor.name().to_string(), 0.0)] },
                 }),
+                // A measured tilt: one row per component of each sensor's tilt it reads.
+                Effect::Tilt(j, sensor, over) => drift.extend(tilt_rows(data, j, sensor, over, &theta[o..o + e.len()])),
                 _ => {}
             }
         }
@@ -299,6 +301,7 @@ impl Model {
                 | Effect::Backlash(_)
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
+                | Effect::Tilt(..)
                 | Effect::FrameStep(_) => {}
             }
         }
@@ -348,6 +351,7 @@ impl Model {
                 Effect::LinkDeviation(j)
                 | Effect::ThermalDrift(j, _)
                 | Effect::SensorDrift(j, _)
+                | Effect::Tilt(j, ..)
                 | Effect::LateralCompliance(j, _)
                 | Effect::LumpedLateralCompliance(j, ..)
                 | Effect::Straightness(j) => rows.joints[j.index()] = true,
@@ -376,4 +380,40 @@ pub struct StartFrames {
     pub registration: Isometry3<f64>,
     /// The tool point's start, added to the robot's tool translation (the last joint's frame), mm.
     pub tool_point_mm: Vector3<f64>,
+}
+
+/// The drift rows of a measured tilt ([`Effect::Tilt`], parameters `p`): one per component of its
+/// sensor's tilt, each turning the row the way that component does once turned by the mounting yaw, about
+/// the pivot — the reading taken by the sensor's name as `diagnose` declared it, its reference the
+/// training session's; over a sensor below it, that sensor's tilt (already turning everything above it)
+/// taken back the same way at the yaw this effect fitted for it.
+fn tilt_rows(
+    data: &Dataset,
+    j: crate::JointIndex,
+    sensor: crate::SensorId,
+    over: crate::TiltOver,
+    p: &[f64],
+) -> Vec<DriftRow> {
+    let Some(t) = data.tilt_sensors.iter().find(|t| t.column == sensor.index()) else { return Vec::new() };
+    let pivot = Vector3::new(p[1], p[2], p[3]);
+    let mut sources = vec![(t.name.clone(), t.reference, p[0], 1.0)];
+    if over == crate::TiltOver::Below
+        && let Some(b) = t.below.as_ref().and_then(|b| data.tilt_sensors.iter().find(|s| s.name == *b))
+    {
+        sources.push((b.name.clone(), b.reference, p[4], -1.0));
+    }
+    let mut rows = Vec::new();
+    for (name, reference, psi, sign) in sources {
+        for component in 0..3 {
+            let mut unit = [0.0; 3];
+            unit[component] = 1.0;
+            let turn = crate::predict::tilt_turn(&unit, 0, psi).0 * sign;
+            rows.push(DriftRow {
+                row: Row::Joint(j.index()),
+                deviation: ErrorParams { translation: pivot.cross(&turn), rotation: turn },
+                law: DriftLaw::Tilt { sensor: name.clone(), component, reference },
+            });
+        }
+    }
+    rows
 }

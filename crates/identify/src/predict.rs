@@ -22,6 +22,9 @@ pub struct ChainCache {
     /// Per measurement: each drift's factor and each drifting row's deviation.
     drift_scale: Vec<DriftFactor>,
     drift_rows: Vec<(usize, ErrorParams)>,
+    /// Per measurement: each measured tilt's turn, `∂turn/∂ψ` and `∂turn/∂ψ_b` ([`tilt_turn`]), by the
+    /// effect's place.
+    tilt_rates: Vec<(usize, [Vector3<f64>; 3])>,
     /// `(sin, cos)` of the joint values the chain sees.
     sin_cos: Vec<(f64, f64)>,
     /// For a model with a compliance: the static chain (no drift) and gravity's direction in its world
@@ -44,6 +47,62 @@ fn add_to_row(rows: &mut Vec<(usize, ErrorParams)>, j: usize, row: ErrorParams) 
     match rows.iter_mut().find(|(r, _)| *r == j) {
         Some((_, d)) => *d = d.add(&row),
         None => rows.push((j, row)),
+    }
+}
+
+/// The turn of a row by a measured tilt ([`Effect::Tilt`]): the three tilt columns from `column` of a
+/// pose's `sensors` (radians, the sensor's axes) turned about z by the mounting yaw `psi`, and its
+/// derivative in `psi`. A pose without the columns does not turn.
+pub(crate) fn tilt_turn(sensors: &[f64], column: usize, psi: f64) -> (Vector3<f64>, Vector3<f64>) {
+    let w = |c: usize| sensors.get(column + c).copied().unwrap_or(0.0);
+    let (x, y, z) = (w(0), w(1), w(2));
+    let (s, c) = psi.sin_cos();
+    (Vector3::new(c * x - s * y, s * x + c * y, z), Vector3::new(-s * x - c * y, c * x - s * y, 0.0))
+}
+
+/// A measured tilt's row at one pose ([`Effect::Tilt`], its parameters from `p[0]`): `(r × Δθ, Δθ)`, with
+/// `[Δθ, ∂Δθ/∂ψ, ∂Δθ/∂ψ_b]` (the last zero without a sensor below).
+fn tilt_row(
+    sensors: &[f64],
+    column: usize,
+    over: crate::effect::TiltOver,
+    p: &[f64],
+) -> (ErrorParams, [Vector3<f64>; 3]) {
+    let (mut turn, rate) = tilt_turn(sensors, column, p[0]);
+    let mut below_rate = Vector3::zeros();
+    if over == crate::effect::TiltOver::Below {
+        let (under, r) = tilt_turn(sensors, column + 3, p[4]);
+        turn -= under;
+        below_rate = -r;
+    }
+    let pivot = Vector3::new(p[1], p[2], p[3]);
+    (ErrorParams { translation: pivot.cross(&turn), rotation: turn }, [turn, rate, below_rate])
+}
+
+/// A measured tilt's Jacobian columns from `o`: its row (columns `row..row + 6` of the chain's `pj`)
+/// moves by `(r × Δθ, Δθ)` — `∂/∂ψ` through `Δθ`'s rate, `∂/∂r_k = (e_k × Δθ, 0)`, `∂/∂ψ_b` through the
+/// rate of the tilt below. `at`: `[Δθ, ∂Δθ/∂ψ, ∂Δθ/∂ψ_b]`.
+fn tilt_columns(
+    pj: &Matrix6xX<f64>,
+    row: usize,
+    o: usize,
+    over: crate::effect::TiltOver,
+    pivot: Vector3<f64>,
+    at: [Vector3<f64>; 3],
+    jac: &mut Matrix6xX<f64>,
+) {
+    let [turn, rate, below_rate] = at;
+    let moved = |dt: Vector3<f64>, dr: Vector3<f64>, r: usize| -> f64 {
+        (0..3).map(|c| pj[(r, row + c)] * dt[c] + pj[(r, row + 3 + c)] * dr[c]).sum()
+    };
+    for r in 0..6 {
+        jac[(r, o)] = moved(pivot.cross(&rate), rate, r);
+        for (a, axis) in [Vector3::x(), Vector3::y(), Vector3::z()].iter().enumerate() {
+            jac[(r, o + 1 + a)] = moved(axis.cross(&turn), Vector3::zeros(), r);
+        }
+        if over == crate::effect::TiltOver::Below {
+            jac[(r, o + 4)] = moved(pivot.cross(&below_rate), below_rate, r);
+        }
     }
 }
 
@@ -141,6 +200,7 @@ impl Model {
                     pj,
                     rows,
                     drift_scale: Vec::new(),
+                    tilt_rates: Vec::new(),
                     drift_rows: Vec::new(),
                     sin_cos: Vec::with_capacity(dof),
                     gravity,
@@ -189,6 +249,7 @@ impl Model {
         }
         let mut drift_rows = std::mem::take(&mut cached.drift_rows);
         cached.drift_scale.clear();
+        cached.tilt_rates.clear();
         drift_rows.clear();
         for (k, (e, &o)) in self.effects().iter().zip(self.offsets()).enumerate() {
             match *e {
@@ -222,6 +283,11 @@ impl Model {
                     let (j, s) = (j.index(), inputs.sensors.get(sensor.index()).copied().unwrap_or(0.0));
                     add_to_row(&mut drift_rows, j, six_at(theta, o).scaled(s));
                     cached.drift_scale.push(DriftFactor { effect: k, s, ds_dtau: 0.0 });
+                }
+                Effect::Tilt(j, sensor, over) => {
+                    let (row, at) = tilt_row(inputs.sensors, sensor.index(), over, &theta[o..]);
+                    cached.tilt_rates.push((k, at));
+                    add_to_row(&mut drift_rows, j.index(), row);
                 }
                 Effect::LumpedLateralCompliance(j, n, support) => {
                     let (j, n) = (j.index(), n as usize);
@@ -416,6 +482,13 @@ impl Model {
                 Effect::FrameStep(_) => {}
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) | Effect::LumpedLateralCompliance(j, ..) => {
                     bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
+                }
+                Effect::Tilt(j, _, over) => {
+                    let found = cached.tilt_rates.iter().find(|(e, ..)| *e == k);
+                    if let Some(&(_, at)) = found {
+                        let pivot = Vector3::new(theta[o + 1], theta[o + 2], theta[o + 3]);
+                        tilt_columns(pj, layout.joint(j.index()), o, over, pivot, at, jac);
+                    }
                 }
                 Effect::SensorDrift(j, _) => {
                     let none = DriftFactor { effect: k, s: 0.0, ds_dtau: 0.0 };

@@ -80,15 +80,27 @@ struct PerKelvinSpec {
     reference_c: Vec<f64>,
 }
 
+/// A row turning with a declared accelerometer's tilt (`DriftLaw::Tilt`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TiltSpec {
+    sensor: String,
+    /// `"x"`, `"y"` or `"z"`: the component of the sensor's tilt.
+    axis: String,
+    /// The sensor's reference direction (unit; its axes).
+    reference: [f64; 3],
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct DriftSpec {
     /// A joint number (1-based), `"base"` or `"tool"`.
     row: RowName,
-    /// mm and degrees: at the profile's factor 1, or per kelvin.
+    /// mm and degrees: at the profile's factor 1, per kelvin, or per radian of tilt.
     error: [f64; 6],
     profile: Option<TimeProfile>,
     per_kelvin: Option<PerKelvinSpec>,
+    tilt: Option<TiltSpec>,
 }
 
 #[derive(Deserialize)]
@@ -520,6 +532,17 @@ fn drift_row(path: &Path, line: Option<usize>, i: usize, spec: &DriftSpec, dof: 
         }
     };
     finite(path, line, &field("error"), &spec.error)?;
+    if let Some(t) = &spec.tilt {
+        if spec.profile.is_some() || spec.per_kelvin.is_some() {
+            return Err(IoError::input(path, line, field("tilt"), "give exactly one law: profile, per_kelvin or tilt"));
+        }
+        let component = ["x", "y", "z"].iter().position(|a| *a == t.axis).ok_or_else(|| {
+            IoError::input(path, line, field("tilt.axis"), format!("`{}`: give \"x\", \"y\" or \"z\"", t.axis))
+        })?;
+        finite(path, line, &field("tilt.reference"), &t.reference)?;
+        let law = DriftLaw::Tilt { sensor: t.sensor.clone(), component, reference: t.reference };
+        return Ok(DriftRow { row, deviation: units::error_params_in(spec.error), law });
+    }
     let law = match (&spec.profile, &spec.per_kelvin) {
         (Some(TimeProfile::Temperature { .. }), None) => {
             return Err(IoError::input(
@@ -872,6 +895,13 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
                 let names: Vec<String> = sensors.iter().map(|(n, _)| format!("{n:?}")).collect();
                 let refs: Vec<String> = sensors.iter().map(|(_, t)| num(*t)).collect();
                 format!("per_kelvin = {{ sensors = [{}], reference_c = [{}] }}", names.join(", "), refs.join(", "))
+            }
+            DriftLaw::Tilt { sensor, component, reference } => {
+                let axis = ["x", "y", "z"].get(*component).copied().unwrap_or("x");
+                format!(
+                    "# turns with the tilt accelerometer {sensor} measures (give {sensor}_x, {sensor}_y, {sensor}_z at run time); error per radian of tilt\ntilt = {{ sensor = {sensor:?}, axis = {axis:?}, reference = {} }}",
+                    fmt3(&Vector3::from(*reference))
+                )
             }
         };
         s.push_str(&format!(

@@ -1,6 +1,7 @@
 //! Integration tests of the `thermokin` binary: outputs, exit statuses, bad input, atomic writes.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail; case tables are tuples.
 
+mod accelerometers;
 mod bad_inputs;
 mod citizen;
 mod cli;

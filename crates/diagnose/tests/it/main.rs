@@ -16,6 +16,7 @@ mod sessions;
 mod shrinkage;
 mod six_d;
 mod temperature;
+mod tilts;
 mod tracker;
 mod transfer;
 mod wam;

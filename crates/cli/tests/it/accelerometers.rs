@@ -1,0 +1,91 @@
+//! Accelerometers declared on a lift's links, through the command line (issue #59): `diagnose
+//! --accelerometer NAME=LINK` reads their columns as the tilts they measure, `--export` writes a robot
+//! that `fk --temperature NAME_x=…` takes the readings of, and a declaration the data or the robot cannot
+//! carry is refused naming it.
+
+use nalgebra::Vector3;
+use thermokin_chain::Dataset;
+
+use crate::cli::{stderr, stdout, thermokin, tmp};
+
+/// `data` as a measurements file: `q1` in mm (the column), the arm's joints in degrees, the position and
+/// the accelerometers' columns.
+fn write(path: &std::path::Path, data: &Dataset) {
+    let mut text = String::from("q1,q2,q3,q4,q5,q6,q7,x,y,z");
+    for n in &data.sensor_names {
+        text.push_str(&format!(",{n}"));
+    }
+    text.push('\n');
+    for (m, s) in data.measurements.iter().zip(&data.sensor_values) {
+        let mut cells: Vec<String> = vec![format!("{}", m.q[0])];
+        cells.extend(m.q[1..].iter().map(|v| format!("{}", v.to_degrees())));
+        cells.extend(m.position_mm.iter().map(|v| format!("{v}")));
+        cells.extend(s.iter().map(|v| format!("{v}")));
+        text.push_str(&cells.join(","));
+        text.push('\n');
+    }
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn a_lifts_accelerometers_from_diagnose_to_fk() {
+    let robot_path = tmp("rocking-lift.toml");
+    std::fs::write(&robot_path, thermokin_testdata::lifted_irb140_toml("")).unwrap();
+    let robot = thermokin_io::read_robot(&robot_path).unwrap();
+    let train = thermokin_testdata::rocking_lift_session(robot.chain(), 300, 5911, Vector3::new(0.0004, -0.0003, 0.0));
+    let other = thermokin_testdata::rocking_lift_session(robot.chain(), 60, 5912, Vector3::new(-0.0005, 0.0006, 0.0));
+    let (m, h, out) = (tmp("rocking-train.csv"), tmp("rocking-other.csv"), tmp("rocking-cal.toml"));
+    write(&m, &train);
+    write(&h, &other);
+    let r = robot_path.to_str().unwrap();
+    let base = ["diagnose", "--robot", r, "--frame", "tracker", "--measurements", m.to_str().unwrap()];
+    let declared = ["--accelerometer", "acc_base=0", "--accelerometer", "acc_top=1"];
+    let mut args: Vec<&str> = base.to_vec();
+    args.extend(declared);
+    args.extend(["--holdout", h.to_str().unwrap(), "--export", out.to_str().unwrap(), "--noise", "0.005"]);
+    let o = thermokin(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("tilt[1] (measured by acc_base)"), "{}", stdout(&o));
+    assert!(stdout(&o).contains("tilt[2] (measured by acc_top)"), "{}", stdout(&o));
+    assert!(
+        stderr(&o).contains("column `acc_base_x` read as accelerometer acc_base's tilt (link 0)"),
+        "{}",
+        stderr(&o)
+    );
+    // The exported robot at the other session's first pose, given its readings as the guide says.
+    let (q, readings) = (&other.measurements[0].q, &other.sensor_values[0]);
+    let joints: Vec<String> =
+        std::iter::once(format!("{}", q[0])).chain(q[1..].iter().map(|v| format!("{}", v.to_degrees()))).collect();
+    let temperatures: Vec<String> = other.sensor_names.iter().zip(readings).map(|(n, v)| format!("{n}={v}")).collect();
+    let o = thermokin(&[
+        "fk",
+        "--robot",
+        out.to_str().unwrap(),
+        "--joints",
+        &joints.join(","),
+        "--temperature",
+        &temperatures.join(","),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let line = stdout(&o).lines().find(|l| l.starts_with("position_mm")).unwrap().to_string();
+    let p: Vec<f64> = line.split_whitespace().skip(1).map(|v| v.parse().unwrap()).collect();
+    let gap = (Vector3::new(p[0], p[1], p[2]) - other.measurements[0].position_mm).norm();
+    // Where the other session measured it, to its noise (5 µm per axis: four σ of the 3-D distance).
+    assert!(gap < 0.035, "{gap} mm");
+    // Without the readings, fk names what it needs.
+    let o = thermokin(&["fk", "--robot", out.to_str().unwrap(), "--joints", &joints.join(",")]);
+    assert!(!o.status.success() && stderr(&o).contains("acc_"), "{}", stderr(&o));
+    // Declarations the data or the robot cannot carry are refused, naming the sensor.
+    for (flag, says) in [
+        ("acc_top", "NAME=LINK"),
+        ("acc_top=top", "LINK is a link number"),
+        ("acc_top=3", "joint 2 below link 3 turns it"),
+        ("acc_side=1", "acc_side_x"),
+    ] {
+        let mut args: Vec<&str> = base.to_vec();
+        args.extend(["--accelerometer", flag]);
+        let o = thermokin(&args);
+        assert!(!o.status.success(), "{flag}");
+        assert!(stderr(&o).contains(says), "{flag}: {}", stderr(&o));
+    }
+}
