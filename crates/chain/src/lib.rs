@@ -31,7 +31,9 @@ pub use gravity_loads::{
     gravity_load_basis_into, gravity_load_basis_len, lateral_load_basis_into, lateral_load_basis_len,
 };
 pub use measurements::{Approach, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor};
-pub use robot::{JointRatings, LinkMass, OperatingState, Robot, Target, gravity_torques, gravity_torques_into};
+pub use robot::{
+    JointRatings, LinkMass, LinkSensor, OperatingState, Robot, Target, gravity_torques, gravity_torques_into,
+};
 pub use so3::{quaternion_wxyz, rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.
@@ -120,5 +122,17 @@ pub enum ChainError {
         joint: usize,
         /// What fails.
         reason: String,
+    },
+    /// An accelerometer declared on a link the robot does not have, or without a name.
+    #[error(
+        "accelerometer `{name}` on link {link}: the robot's links are 0 (its base) to {last} (the link joint {last} moves), and a sensor needs a name"
+    )]
+    BadSensor {
+        /// Its name.
+        name: String,
+        /// The link given.
+        link: usize,
+        /// The robot's last link (its joint count).
+        last: usize,
     },
 }

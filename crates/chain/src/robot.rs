@@ -66,13 +66,31 @@ pub struct Robot {
     chain: Chain,
     masses: Vec<Option<LinkMass>>,
     ratings: Vec<JointRatings>,
+    accelerometers: Vec<LinkSensor>,
+}
+
+/// An accelerometer or inclinometer on one of a robot's links, as its robot file declares it: measurement
+/// files then carry its columns `NAME_x`, `NAME_y`, `NAME_z`, which the diagnosis reads as the link's
+/// tilt.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LinkSensor {
+    /// Its name.
+    pub name: String,
+    /// The link it sits on: 0 the robot's base, `k` the link joint `k` moves.
+    pub link: usize,
 }
 
 impl Robot {
     /// A robot with no masses and no ratings known.
     pub fn new(name: impl Into<String>, chain: Chain) -> Self {
         let n = chain.dof();
-        Self { name: name.into(), chain, masses: vec![None; n], ratings: vec![JointRatings::default(); n] }
+        Self {
+            name: name.into(),
+            chain,
+            masses: vec![None; n],
+            ratings: vec![JointRatings::default(); n],
+            accelerometers: Vec::new(),
+        }
     }
 
     /// The same robot with these link masses (one per joint).
@@ -80,6 +98,22 @@ impl Robot {
         check_len("masses", self.chain.dof(), masses.len())?;
         self.masses = masses;
         Ok(self)
+    }
+
+    /// The same robot with these accelerometers on its links ([`LinkSensor`]): each named, on link 0 to
+    /// the joint count.
+    pub fn with_accelerometers(mut self, sensors: Vec<LinkSensor>) -> Result<Self, ChainError> {
+        let last = self.chain.dof();
+        if let Some(bad) = sensors.iter().find(|s| s.link > last || s.name.trim().is_empty()) {
+            return Err(ChainError::BadSensor { name: bad.name.clone(), link: bad.link, last });
+        }
+        self.accelerometers = sensors;
+        Ok(self)
+    }
+
+    /// The accelerometers its file declares on its links.
+    pub fn accelerometers(&self) -> &[LinkSensor] {
+        &self.accelerometers
     }
 
     /// The same robot with these joint ratings (one per joint).

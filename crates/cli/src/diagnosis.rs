@@ -158,7 +158,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
         let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
         crate::input::warn_ignored(&a.measurements, &unread);
-        say_sensors(&a.measurements, &data, &a.accelerometers);
+        say_sensors(&a.measurements, &data, &declared_accelerometers(&a.accelerometers, &loaded.robot));
     }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
@@ -266,4 +266,18 @@ fn say_sensors(
     for (s, why) in not_sensors.iter().filter(|(s, _)| of(s).is_none()) {
         eprintln!("note: {}: column `{s}` is not read as a sensor: {why}", path.display());
     }
+}
+
+/// The accelerometers a diagnosis reads as tilts: the flags', and the robot file's the flags do not name.
+fn declared_accelerometers(
+    flags: &[thermokin_diagnose::Accelerometer],
+    robot: &thermokin_chain::Robot,
+) -> Vec<thermokin_diagnose::Accelerometer> {
+    let mut declared = flags.to_vec();
+    for s in robot.accelerometers() {
+        if !declared.iter().any(|d| d.name == s.name) {
+            declared.push(thermokin_diagnose::Accelerometer { name: s.name.clone(), link: s.link });
+        }
+    }
+    declared
 }

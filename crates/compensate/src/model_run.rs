@@ -265,6 +265,12 @@ fn solve_bending(
 /// row): each target in its own state (its `time_min` / `temp_*` columns) or, where it gives none, in
 /// `flags`; a row that could not be read, or not solved, is a record with its error. `index` of each
 /// solve is its row's position, so that the results do not depend on threads.
+///
+/// On a model with a backlash whose directions neither the row nor the flags give, the rows are the
+/// robot's moves: solved first with the directions unknown (each play at its middle), then each row's
+/// directions taken from the moves between those solutions — in the order of the rows' times where
+/// they have them, else of the file (as `compensate` takes them; the first row's from nothing: unknown) —
+/// and the rows solved again in them.
 pub fn solve_rows(
     model: &RobotModel,
     rows: Vec<Result<Target, thermokin_io::IoError>>,
@@ -275,19 +281,66 @@ pub fn solve_rows(
     let chain = model.robot().chain();
     let mut ws = thermokin_ik::Workspace::new(chain.dof());
     let failure = |line, label, e: String| crate::SolutionRow { line, label, error: Some(e), ..Default::default() };
-    rows.into_iter()
-        .enumerate()
-        .map(|(k, row)| match row {
-            Err(e) => failure(None, String::new(), e.to_string()),
-            Ok(t) => {
-                let state = if t.state == OperatingState::default() { flags } else { &t.state };
-                match solve_on_model(model, state, &Goal::Pose(t.pose), seed, params, &mut ws, k as u64) {
-                    Ok(s) => crate::SolutionRow::solved(chain, t.line, t.label, &s),
-                    Err(e) => failure(t.line, t.label, e.to_string()),
+    let mut solve = |k: usize, t: &Target, state: &OperatingState| match solve_on_model(
+        model,
+        state,
+        &Goal::Pose(t.pose),
+        seed,
+        params,
+        &mut ws,
+        k as u64,
+    ) {
+        Ok(s) => (crate::SolutionRow::solved(chain, t.line, t.label.clone(), &s), Some(s.q)),
+        Err(e) => (failure(t.line, t.label.clone(), e.to_string()), None),
+    };
+    let chained = model.has_backlash();
+    let states: Vec<Option<OperatingState>> = rows
+        .iter()
+        .map(|r| {
+            r.as_ref().ok().map(|t| {
+                let mut state = if t.state == OperatingState::default() { flags.clone() } else { t.state.clone() };
+                if chained && state.approach.is_empty() {
+                    state.approach = vec![thermokin_chain::Approach::Unknown; chain.dof()];
                 }
-            }
+                state
+            })
         })
-        .collect()
+        .collect();
+    let given: Vec<bool> = states
+        .iter()
+        .map(|s| s.as_ref().is_some_and(|s| s.approach.iter().any(|a| *a != thermokin_chain::Approach::Unknown)))
+        .collect();
+    let mut out: Vec<(crate::SolutionRow, Option<Vec<f64>>)> = rows
+        .iter()
+        .zip(&states)
+        .enumerate()
+        .map(|(k, (row, state))| match (row, state) {
+            (Ok(t), Some(state)) => solve(k, t, state),
+            _ => (failure(None, String::new(), row.as_ref().err().map(ToString::to_string).unwrap_or_default()), None),
+        })
+        .collect();
+    if chained && given.iter().all(|g| !g) {
+        let solved: Vec<usize> = (0..out.len()).filter(|&k| out[k].1.is_some()).collect();
+        let mut moved: Vec<OperatingState> = solved
+            .iter()
+            .filter_map(|&k| states[k].clone())
+            .map(|s| OperatingState { approach: Vec::new(), ..s })
+            .collect();
+        let path: Vec<&[f64]> = solved.iter().filter_map(|&k| out[k].1.as_deref()).collect();
+        // The moves start at the first row measured: the earliest in time, or the file's first.
+        let first = (0..moved.len()).min_by(|&a, &b| {
+            let t = |i: usize| moved[i].time_min.unwrap_or(0.0);
+            t(a).total_cmp(&t(b)).then(a.cmp(&b))
+        });
+        let start = first.map(|i| path[i].to_vec()).unwrap_or_default();
+        with_approach_along(model, &mut moved, &start, &[], &path);
+        for (&k, state) in solved.iter().zip(moved) {
+            if let Ok(t) = &rows[k] {
+                out[k] = solve(k, t, &state);
+            }
+        }
+    }
+    out.into_iter().map(|(row, _)| row).collect()
 }
 
 /// A solution on the chain in force made the joints to command on `model`: [`command_solution`] when the

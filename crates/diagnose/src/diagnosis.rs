@@ -119,9 +119,10 @@ fn checked_holdout<'h>(
     let by = config.order;
     check_joint_counts(robot, data, holdout)?;
     // Its accelerometers read from the training session's reference directions.
+    let declared = crate::tilts::declared(robot, config);
     let tilted = match holdout {
-        Some(h) if !config.accelerometers.is_empty() => {
-            Some(crate::tilts::with_tilts(robot, h, &config.accelerometers, Some(&data.tilt_sensors))?)
+        Some(h) if !declared.is_empty() => {
+            Some(crate::tilts::with_tilts(robot, h, &declared, Some(&data.tilt_sensors))?)
         }
         _ => None,
     };
@@ -248,10 +249,11 @@ fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r,
 type Prepared<'d> = (std::borrow::Cow<'d, Dataset>, Option<Vec<usize>>, Vec<String>);
 fn prepared<'d>(robot: &Robot, data: &'d Dataset, config: &Config) -> Result<Prepared<'d>, DiagnoseError> {
     let (data, perm) = crate::canonical::in_canonical_order(data, config.order);
-    let data = if config.accelerometers.is_empty() {
+    let declared = crate::tilts::declared(robot, config);
+    let data = if declared.is_empty() {
         data
     } else {
-        std::borrow::Cow::Owned(crate::tilts::with_tilts(robot, &data, &config.accelerometers, None)?)
+        std::borrow::Cow::Owned(crate::tilts::with_tilts(robot, &data, &declared, None)?)
     };
     let (data, not_sensors) = match data {
         std::borrow::Cow::Borrowed(d) => crate::sensors::only_sensors(d),

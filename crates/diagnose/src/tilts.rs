@@ -19,6 +19,18 @@ use thermokin_chain::{Dataset, JointKind, Robot, TiltSensor};
 use crate::config::Accelerometer;
 use crate::error::DiagnoseError;
 
+/// The accelerometers the diagnosis reads as tilts: those `config` declares, and those the robot file
+/// declares on its links that `config` does not name (the command line's word over the file's).
+pub(crate) fn declared(robot: &Robot, config: &crate::Config) -> Vec<Accelerometer> {
+    let mut all = config.accelerometers.clone();
+    for s in robot.accelerometers() {
+        if !all.iter().any(|a| a.name == s.name) {
+            all.push(Accelerometer { name: s.name.clone(), link: s.link });
+        }
+    }
+    all
+}
+
 /// The three column names of sensor `name`'s raw readings.
 fn raw_columns(name: &str) -> [String; 3] {
     ["x", "y", "z"].map(|a| format!("{name}_{a}"))

@@ -662,3 +662,16 @@ impl JointBasis {
 pub(crate) fn six_at(theta: &[f64], o: usize) -> ErrorParams {
     ErrorParams::from_array([theta[o], theta[o + 1], theta[o + 2], theta[o + 3], theta[o + 4], theta[o + 5]])
 }
+
+/// The turn of a row by a measured tilt ([`Effect::Tilt`]): the three tilt columns from `column` of a
+/// pose's `sensors` (radians, the sensor's axes) turned about z by the mounting yaw `psi`, and its
+/// derivative in `psi`. A pose without the columns does not turn.
+pub(crate) fn tilt_turn(sensors: &[f64], column: usize, psi: f64) -> (nalgebra::Vector3<f64>, nalgebra::Vector3<f64>) {
+    let w = |c: usize| sensors.get(column + c).copied().unwrap_or(0.0);
+    let (x, y, z) = (w(0), w(1), w(2));
+    let (s, c) = psi.sin_cos();
+    (
+        nalgebra::Vector3::new(c * x - s * y, s * x + c * y, z),
+        nalgebra::Vector3::new(-s * x - c * y, c * x - s * y, 0.0),
+    )
+}

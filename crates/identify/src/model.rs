@@ -407,7 +407,7 @@ fn tilt_rows(
         for component in 0..3 {
             let mut unit = [0.0; 3];
             unit[component] = 1.0;
-            let turn = crate::predict::tilt_turn(&unit, 0, psi).0 * sign;
+            let turn = crate::effect::tilt_turn(&unit, 0, psi).0 * sign;
             rows.push(DriftRow {
                 row: Row::Joint(j.index()),
                 deviation: ErrorParams { translation: pivot.cross(&turn), rotation: turn },

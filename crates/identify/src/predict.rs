@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Matrix6xX, Unit, Vector3};
 use thermokin_chain::{Approach, Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
 
-use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at};
+use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at, tilt_turn};
 use crate::error::IdentifyError;
 use crate::model::Model;
 
@@ -48,16 +48,6 @@ fn add_to_row(rows: &mut Vec<(usize, ErrorParams)>, j: usize, row: ErrorParams) 
         Some((_, d)) => *d = d.add(&row),
         None => rows.push((j, row)),
     }
-}
-
-/// The turn of a row by a measured tilt ([`Effect::Tilt`]): the three tilt columns from `column` of a
-/// pose's `sensors` (radians, the sensor's axes) turned about z by the mounting yaw `psi`, and its
-/// derivative in `psi`. A pose without the columns does not turn.
-pub(crate) fn tilt_turn(sensors: &[f64], column: usize, psi: f64) -> (Vector3<f64>, Vector3<f64>) {
-    let w = |c: usize| sensors.get(column + c).copied().unwrap_or(0.0);
-    let (x, y, z) = (w(0), w(1), w(2));
-    let (s, c) = psi.sin_cos();
-    (Vector3::new(c * x - s * y, s * x + c * y, z), Vector3::new(-s * x - c * y, c * x - s * y, 0.0))
 }
 
 /// A measured tilt's row at one pose ([`Effect::Tilt`], its parameters from `p[0]`): `(r × Δθ, Δθ)`, with

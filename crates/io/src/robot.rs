@@ -56,6 +56,18 @@ struct RobotFile {
     /// Rows drifting with operating time or temperature.
     #[serde(default)]
     drift: Vec<Spanned<DriftSpec>>,
+    /// Accelerometers or inclinometers on the robot's links.
+    #[serde(default)]
+    accelerometer: Vec<Spanned<AccelerometerSpec>>,
+}
+
+/// `[[accelerometer]]`: a sensor on a link, its columns `NAME_x`, `NAME_y`, `NAME_z`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AccelerometerSpec {
+    name: String,
+    /// 0 the base, `k` the link joint `k` moves.
+    link: usize,
 }
 
 #[derive(Deserialize)]
@@ -257,6 +269,22 @@ pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoE
     };
     let described = |e: thermokin_chain::ChainError| IoError::input(path, None, "joint", e.to_string());
     let robot = Robot::new(name, chain).with_masses(masses).and_then(|r| r.with_ratings(ratings)).map_err(described)?;
+    let mut sensors = Vec::new();
+    for spanned in &file.accelerometer {
+        let spec = spanned.get_ref();
+        if sensors.iter().any(|s: &thermokin_chain::LinkSensor| s.name == spec.name) {
+            return Err(IoError::input(
+                path,
+                at(spanned.span()),
+                "accelerometer.name",
+                format!("`{}` declared twice", spec.name),
+            ));
+        }
+        sensors.push(thermokin_chain::LinkSensor { name: spec.name.clone(), link: spec.link });
+        let one = Robot::new("check", robot.chain().clone()).with_accelerometers(sensors[sensors.len() - 1..].to_vec());
+        one.map_err(|e| IoError::input(path, at(spanned.span()), "accelerometer", e.to_string()))?;
+    }
+    let robot = robot.with_accelerometers(sensors).map_err(described)?;
     corrections(path, text, &file, robot)
 }
 
@@ -907,6 +935,13 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
         s.push_str(&format!(
             "\n[[drift]]\nrow = {row}\nerror = {}\n{law}\n",
             fmt6(units::error_params_out(&d.deviation))
+        ));
+    }
+    for a in robot.accelerometers() {
+        s.push_str(&format!(
+            "\n# Columns {n}_x, {n}_y, {n}_z of a measurements file: the tilt of link {l} (0 the base).\n[[accelerometer]]\nname = {n:?}\nlink = {l}\n",
+            n = a.name,
+            l = a.link
         ));
     }
     s

@@ -1295,6 +1295,39 @@ fn a_robot_with_backlash_follows_the_order_of_its_moves() {
     let backwards: Vec<_> = program.iter().rev().cloned().collect();
     let worst = farthest_from_targets(&stdout(&o), &backwards);
     assert!(worst < 1e-6, "rows out of time order: {worst:e} mm");
+    // `ik --poses-file` chains the rows' directions as the robot moves through them: the targets in
+    // time order and written last-first with their times give each target the same joints.
+    let text = std::fs::read_to_string(workspace(targets)).unwrap();
+    let lines: Vec<&str> = text.lines().filter(|l| !l.starts_with('#')).collect();
+    let timed: Vec<String> = lines[1..].iter().enumerate().map(|(k, l)| format!("{l},{k}")).collect();
+    let forward = tmp("backlash-targets.csv");
+    std::fs::write(&forward, format!("{},time_min\n{}\n", lines[0], timed.join("\n"))).unwrap();
+    let reversed = tmp("backlash-targets-reversed.csv");
+    let back: Vec<String> = timed.iter().rev().cloned().collect();
+    std::fs::write(&reversed, format!("{},time_min\n{}\n", lines[0], back.join("\n"))).unwrap();
+    let joints_of = |path: &std::path::Path| -> std::collections::BTreeMap<String, String> {
+        let o =
+            thermokin(&["ik", "--robot", &robot, "--poses-file", path.to_str().unwrap(), "--seed", "0,20,20,0,-45,0"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let cells: Vec<&str> = l.split(',').collect();
+                (
+                    cells[1].to_string(),
+                    cells[2..8]
+                        .iter()
+                        .map(|c| format!("{:.6}", c.parse::<f64>().unwrap()))
+                        .collect::<Vec<_>>()
+                        .join(","),
+                )
+            })
+            .collect()
+    };
+    let (a, b) = (joints_of(&forward), joints_of(&reversed));
+    assert_eq!(a.len(), program.len());
+    assert_eq!(a, b);
 }
 
 /// A lift under the IRB 140 with a bent guide and a long rack, through the command line: `simulate` with

@@ -98,3 +98,33 @@ fn exported_robot_takes_the_readings(robot: &Robot, report: &thermokin_diagnose:
     let e = model.tool_pose(&other.measurements[0].q, &Default::default()).unwrap_err().to_string();
     assert!(e.contains("acc_base") || e.contains("acc_top"), "{e}");
 }
+
+/// Declared in the robot file (`[[accelerometer]]`, written back by the export) instead of on the command
+/// line: the same diagnosis. A link the robot does not have is refused at its line.
+#[test]
+fn accelerometers_declared_in_the_robot_file_are_the_flags() {
+    let text = thermokin_testdata::lifted_irb140_toml("");
+    let declared = format!(
+        "{text}\n[[accelerometer]]\nname = \"acc_base\"\nlink = 0\n\n[[accelerometer]]\nname = \"acc_top\"\nlink = 1\n"
+    );
+    let in_file = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &declared).unwrap();
+    assert_eq!(in_file.accelerometers().len(), 2);
+    let robot = lift();
+    let train = session(robot.chain(), 150, 5921, Vector3::new(0.0004, -0.0003, 0.0));
+    let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let flags = Config {
+        accelerometers: vec![
+            Accelerometer { name: "acc_base".into(), link: 0 },
+            Accelerometer { name: "acc_top".into(), link: 1 },
+        ],
+        ..base.clone()
+    };
+    let (a, b) = (diagnose(&robot, &train, None, &flags).unwrap(), diagnose(&in_file, &train, None, &base).unwrap());
+    assert_eq!(a.text().to_string(), b.text().to_string());
+    // The export keeps the declaration.
+    let export = thermokin_io::robot_model_to_toml(&b.export_model(&in_file, None, "lift").unwrap());
+    assert!(export.contains("[[accelerometer]]\nname = \"acc_top\"\nlink = 1"), "{export}");
+    let wrong = format!("{text}\n[[accelerometer]]\nname = \"acc_top\"\nlink = 9\n");
+    let e = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &wrong).unwrap_err().to_string();
+    assert!(e.contains("lift.toml") && e.contains("acc_top") && e.contains("link 9"), "{e}");
+}
