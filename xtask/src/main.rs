@@ -298,15 +298,69 @@ fn deps() -> Result<()> {
         let shown = dir.strip_prefix(&root).unwrap_or(&dir).display().to_string();
         bad.extend(circles.into_iter().map(|c| format!("{shown}: modules in a circle: {}", c.join(" → "))));
     }
+    let layers = documented_layers(&std::fs::read_to_string(root.join("ARCHITECTURE.md"))?, "diagnose-layers");
+    let breaches = layer_breaches(&root.join("crates/diagnose/src"), &layers)?;
+    bad.extend(breaches.into_iter().map(|b| format!("crates/diagnose: {b}")));
     if bad.is_empty() {
         println!(
-            "deps: dependency direction ok ({} crates checked; {modules} modules, none in a circle)",
-            ALLOWED.len()
+            "deps: dependency direction ok ({} crates checked; {modules} modules, none in a circle; the diagnosis's {} layers only look down)",
+            ALLOWED.len(),
+            layers.len()
         );
         Ok(())
     } else {
         bail!("dependency direction broken:\n  {}", bad.join("\n  "))
     }
+}
+
+/// The layers ARCHITECTURE.md lists between `<!-- {name}:begin -->` and `<!-- {name}:end -->`, bottom
+/// first: per numbered line, the backticked module names before its dash.
+fn documented_layers(text: &str, name: &str) -> Vec<Vec<String>> {
+    let (Some(start), Some(end)) =
+        (text.find(&format!("<!-- {name}:begin -->")), text.find(&format!("<!-- {name}:end -->")))
+    else {
+        return Vec::new();
+    };
+    text[start..end]
+        .lines()
+        .filter(|l| l.chars().next().is_some_and(|c| c.is_ascii_digit()))
+        .map(|l| l.split(" — ").next().unwrap_or("").split('`').skip(1).step_by(2).map(str::to_string).collect())
+        .collect()
+}
+
+/// Within one crate's flat `src/`, each reference of a module to one in a higher layer of `layers`
+/// (bottom first), and each module in no layer or in two — the roots (`lib.rs`, `main.rs`) excepted.
+fn layer_breaches(src: &Path, layers: &[Vec<String>]) -> Result<Vec<String>> {
+    let layer_of = |m: &str| layers.iter().position(|l| l.iter().any(|n| n == m));
+    let mut out = Vec::new();
+    for (k, layer) in layers.iter().enumerate() {
+        for m in layer {
+            if layers.iter().skip(k + 1).any(|l| l.contains(m)) {
+                out.push(format!("module `{m}` listed in two layers"));
+            }
+        }
+    }
+    let mut files: Vec<_> = std::fs::read_dir(src)?.filter_map(|e| e.ok().map(|e| e.path())).collect();
+    files.sort();
+    let stems: Vec<String> = files
+        .iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "rs"))
+        .filter_map(|p| p.file_stem().and_then(|s| s.to_str()).map(str::to_string))
+        .filter(|s| s != "lib" && s != "main")
+        .collect();
+    for m in &stems {
+        let Some(at) = layer_of(m) else {
+            out.push(format!("module `{m}` is in no layer of ARCHITECTURE.md's list"));
+            continue;
+        };
+        let text = std::fs::read_to_string(src.join(format!("{m}.rs")))?;
+        for r in crate_references(&text).into_iter().filter(|r| r != m && stems.contains(r)) {
+            if let Some(above) = layer_of(&r).filter(|&l| l > at) {
+                out.push(format!("`{m}` (layer {}) uses `{r}` (layer {}), which stands above it", at + 1, above + 1));
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// The modules `crate::NAME` names in one source file's text, tests (everything after `#[cfg(test)]`)
@@ -782,6 +836,30 @@ mod tests {
         // A library file with one: the check names it.
         let stray = "//! x\npub fn mm(m: f64) -> f64 {\n    m * 1000.0\n}\n";
         assert_eq!(super::stray_conversions(stray), vec![(3, "m * 1000.0".to_string())]);
+    }
+
+    /// A module that reaches up a layer, one in no layer and one in two are each named; the workspace's
+    /// own list is read from ARCHITECTURE.md and holds every module of the diagnosis.
+    #[test]
+    fn a_module_that_reaches_up_a_layer_is_named() {
+        let dir = std::env::temp_dir().join(format!("xtask-layers-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("low.rs"), "use crate::high::f;\n").unwrap();
+        std::fs::write(dir.join("high.rs"), "use crate::low::g;\n#[cfg(test)]\nmod t { use crate::top; }\n").unwrap();
+        std::fs::write(dir.join("stray.rs"), "").unwrap();
+        let text = "<!-- l:begin -->\n1. `low` — below\n2. `high`, `low` — above\n<!-- l:end -->";
+        let layers = super::documented_layers(text, "l");
+        assert_eq!(layers, vec![vec!["low".to_string()], vec!["high".to_string(), "low".to_string()]]);
+        let found = super::layer_breaches(&dir, &layers).unwrap();
+        assert!(found.iter().any(|b| b.contains("`low` (layer 1) uses `high` (layer 2)")), "{found:?}");
+        assert!(found.iter().any(|b| b.contains("`stray` is in no layer")), "{found:?}");
+        assert!(found.iter().any(|b| b.contains("`low` listed in two layers")), "{found:?}");
+        let root = super::workspace_root();
+        let ours = super::documented_layers(
+            &std::fs::read_to_string(root.join("ARCHITECTURE.md")).unwrap(),
+            "diagnose-layers",
+        );
+        assert_eq!(super::layer_breaches(&root.join("crates/diagnose/src"), &ours).unwrap(), Vec::<String>::new());
     }
 
     /// The rows of the ARCHITECTURE.md table between `<!-- {name}:begin -->` and `<!-- {name}:end -->`:

@@ -4,13 +4,16 @@
 //! judged on held-out data.
 //!
 //! The model of effects, its fit and identifiability are `thermokin-identify`'s. The diagnosis stacks,
-//! from the bottom: its settings ([`Config`]) and errors; the screen for gross errors, which decides the
-//! measurements everything above works on; folds and the held-out scoring of a model, with
-//! the gate that accepts a gain only beyond its own uncertainty; eligibility (what the data cannot pin
-//! down), plausibility and the screen; the selection's phases (forward, backward, parsimony, completion, shrinkage) and the
-//! tables of its choice; the validation of the whole procedure on data it never saw (nested, a hold-out
-//! set); the warnings and the verdict; [`diagnose`] assembling the [`Report`], which renders itself
-//! ([`Report::text`]).
+//! from the bottom (ARCHITECTURE.md lists the layers; `cargo xtask deps` checks that no module uses one
+//! above it): its settings ([`Config`]), errors and statistics; the report's types and the measurements
+//! as read (in their own order, their sensors and accelerometers); folds and physical sense; the fit and
+//! held-out scoring of a model, with the gate that accepts a gain only beyond its own uncertainty; what
+//! scoring judges — a drift's law, a step of the frame, eligibility, the selection's state, the
+//! linearised screen; the screen for gross errors, which decides the measurements everything above works
+//! on; the prior, the completion and the coupled pairs; the selection's phases (forward, backward,
+//! parsimony, extrapolation) and the tables of its choice; the validation of the whole procedure on data
+//! it never saw (nested, a hold-out set), the warnings and the verdict; [`diagnose`] assembling the
+//! [`Report`], which renders itself ([`Report::text`]).
 
 mod backward;
 mod canonical;
