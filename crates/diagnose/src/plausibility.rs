@@ -324,6 +324,14 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let words = ["its translation at the largest reading", "its rotation at the largest reading"];
             row_bound(v, most, lever_of(j), words, &over)
         }
+        // A measured tilt has no gain to run away; its pivot does: the shift it gives the row at the
+        // largest tilt of the data (its mounting yaw is any angle).
+        Effect::Tilt(_, sensor, _) => {
+            let reach = |c: usize| scale.sensor_reach.get(sensor.index() + c).copied().unwrap_or(0.0);
+            let most = reach(0).hypot(reach(1)).hypot(reach(2));
+            let pivot = v[1].hypot(v[2]).hypot(v[3]);
+            over("the distance of its pivot from the row", pivot, pivot * most, scale.extent_mm.max(1.0), "mm")
+        }
         // A knocked tracker or a moved base: bounded as a row's deviation at the arm's extent.
         Effect::FrameStep(_) => row_bound(v, 1.0, scale.extent_mm.max(1.0), ["its translation", "its rotation"], &over),
         Effect::ComplianceCoupling(j) => {
