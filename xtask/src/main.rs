@@ -109,6 +109,10 @@ fn unpublished() -> Result<Vec<String>> {
 /// packaged crate is a registry crate to cargo, fingerprinted by name and version, not by content, so a
 /// build of an earlier `0.1.0` would otherwise be taken for this one's.
 fn package() -> Result<()> {
+    // Cargo verifies each package against the others through a local registry it extracts into
+    // CARGO_HOME by name and version: an earlier 0.1.0's extracted sources would stand for today's (a
+    // type added to thermokin-chain missing when thermokin-deform verified). Ours go first.
+    forget_extracted_packages()?;
     let verify = Path::new("target/package-verify");
     for dir in ["debug/deps", "debug/.fingerprint", "debug/build"] {
         let Ok(entries) = std::fs::read_dir(verify.join(dir)) else { continue };
@@ -126,6 +130,28 @@ fn package() -> Result<()> {
         cmd.args(["--exclude", &name]);
     }
     run(&mut cmd)
+}
+
+/// Removes this workspace's packages (`thermokin-*`) from CARGO_HOME's extracted sources and cache of
+/// every registry — none of ours comes from crates.io, so only earlier verifications' copies are there.
+fn forget_extracted_packages() -> Result<()> {
+    let home = std::env::var_os("CARGO_HOME")
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cargo")));
+    let Some(home) = home else { return Ok(()) };
+    for kind in ["src", "cache"] {
+        let Ok(registries) = std::fs::read_dir(home.join("registry").join(kind)) else { continue };
+        for registry in registries {
+            let Ok(entries) = std::fs::read_dir(registry?.path()) else { continue };
+            for entry in entries {
+                let path = entry?.path();
+                if path.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("thermokin-")) {
+                    if path.is_dir() { std::fs::remove_dir_all(&path)? } else { std::fs::remove_file(&path)? }
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) fn workspace_root() -> PathBuf {

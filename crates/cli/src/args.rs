@@ -488,9 +488,10 @@ pub struct PlanArgs {
     /// joint's bearing too (poses that vary the moments across the joints).
     #[arg(long, value_parser = choice(thermokin_identify::Lateral::CHOICES), default_value_t = Params::default().lateral)]
     pub lateral: thermokin_identify::Lateral,
-    /// Unit of the candidates' and measured poses' revolute joint columns.
-    #[arg(long, value_parser = choice(JointUnits::CHOICES), default_value_t = JointUnits::default())]
-    pub joint_units: JointUnits,
+    /// Unit of the candidates' and measured poses' revolute joint columns (default: degrees, refused
+    /// where every value of ten or more rows stays within ±6.3°: radians, most likely).
+    #[arg(long, value_parser = choice(JointUnits::CHOICES))]
+    pub joint_units: Option<JointUnits>,
     /// Seed (sampled candidates, the random poses the plan is compared with).
     #[arg(long, default_value_t = Params::default().seed)]
     pub seed: u64,

@@ -4,7 +4,7 @@ use anyhow::anyhow;
 use thermokin_chain::Robot;
 use thermokin_compensate::poses_program;
 use thermokin_identify::Effect;
-use thermokin_io::read_configurations;
+use thermokin_io::read_configurations_checked;
 use thermokin_planner::{Candidates, Params, WorkspaceBox};
 
 use crate::args::{PlanArgs, parse_list};
@@ -14,7 +14,7 @@ use crate::{Failure, exit};
 /// The configurations of a joints file (radians), with their lines.
 fn configurations(path: &std::path::Path, robot: &Robot, a: &PlanArgs) -> Result<(Vec<Vec<f64>>, Vec<usize>), Failure> {
     let kinds: Vec<_> = robot.chain().joints().iter().map(|j| j.kind).collect();
-    read_configurations(path, &kinds, a.joint_units).map_err(Failure::input)
+    read_configurations_checked(path, &kinds, a.joint_units).map_err(crate::input::units_error)
 }
 
 pub fn plan(a: PlanArgs) -> Result<u8, Failure> {

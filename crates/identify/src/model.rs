@@ -23,6 +23,11 @@ pub struct Model {
     tool_start_mm: Vector3<f64>,
 }
 
+/// `|cos|` from which a fixed parameter's column is called equivalent to the accepted column it lies
+/// along: within 1.8° of it (a parameter at `|cos| = 0.59`, 54° off, is no one column's equivalent —
+/// issue #61).
+pub const EQUIVALENT_COS: f64 = 0.9995;
+
 impl Model {
     /// A model of `robot` with these effects (in parameter order).
     pub fn new(robot: &Robot, effects: Vec<Effect>) -> Result<Self, IdentifyError> {
@@ -107,7 +112,9 @@ impl Model {
         (column - self.offsets[k] < e.len()).then_some((e, column - self.offsets[k]))
     }
 
-    /// The columns [`identifiable`](crate::identifiable) fixed, named, each with its reason in words.
+    /// The columns [`identifiable`](crate::identifiable) fixed, named, each with its reason in words: one
+    /// along a single accepted column to within [`EQUIVALENT_COS`] is equivalent to it; one less aligned
+    /// is a combination of the accepted ones, named by the column it lies most along.
     pub fn fixed_parameters(&self, fixed: &[Dependence]) -> Vec<FixedParameter> {
         let names = self.parameter_names();
         fixed
@@ -119,7 +126,13 @@ impl Model {
                         "moves no measured point: a tool's rotation is identified from measured orientations (rx, ry, rz)".to_string()
                     }
                     DependsOn::Nothing => "no effect on the measurements".to_string(),
-                    DependsOn::Column { column, cos } => format!("equivalent to {} (|cos| = {cos:.3})", names[column]),
+                    DependsOn::Column { column, cos } if cos >= EQUIVALENT_COS => {
+                        format!("equivalent to {} (|cos| = {cos:.3})", names[column])
+                    }
+                    DependsOn::Column { column, cos } => format!(
+                        "a combination of the parameters already identified, mostly along {} (|cos| = {cos:.3})",
+                        names[column]
+                    ),
                     DependsOn::Combination => "a combination of the parameters already identified".to_string(),
                 };
                 FixedParameter { parameter: names[d.column].clone(), reason }

@@ -26,8 +26,8 @@ pub use deviation::{
 pub use load::{LoadError, LoadedRobot, RobotRequest};
 pub use measurements::{
     JointRow, JointUnits, MeasurementFormat, PositionUnits, UnitsUnclear, parse_measurements, parse_measurements_with,
-    read_configurations, read_joint_rows, read_measurements, read_measurements_joined, read_measurements_with,
-    settle_units, unread_columns, write_measurements,
+    read_configurations, read_configurations_checked, read_joint_rows, read_measurements, read_measurements_joined,
+    read_measurements_with, settle_units, unread_columns, write_measurements,
 };
 pub use notation::{
     PoseOut, PoseRow, csv_cell, outside_limits, parse_list, parse_payload, parse_pose, parse_temperatures,

@@ -615,6 +615,26 @@ pub fn read_configurations(
     Ok((joints, lines))
 }
 
+/// [`read_configurations`] with the unit of revolute joints stated, or `None`: degrees, refused as a
+/// measurement file is ([`UnitsUnclear::JointsLookLikeRadians`]) where every revolute value of ten or
+/// more rows stays within ±2π read as degrees.
+pub fn read_configurations_checked(
+    path: &Path,
+    kinds: &[JointKind],
+    units: Option<JointUnits>,
+) -> Result<(Vec<Vec<f64>>, Vec<usize>), IoError> {
+    let (joints, lines) = read_configurations(path, kinds, units.unwrap_or_default())?;
+    let revolute: Vec<usize> = (0..kinds.len()).filter(|&j| kinds[j] == JointKind::Revolute).collect();
+    if units.is_none() && joints.len() >= UNIT_EVIDENCE && !revolute.is_empty() {
+        let largest = joints.iter().flat_map(|q| revolute.iter().map(|&j| q[j].abs())).fold(0.0, f64::max);
+        if largest < crate::units::radians(std::f64::consts::TAU) {
+            let unclear = UnitsUnclear::JointsLookLikeRadians { largest_deg: crate::units::degrees(largest) };
+            return Err(IoError::UnitsUnclear { path: path.to_path_buf(), unclear });
+        }
+    }
+    Ok((joints, lines))
+}
+
 /// Writes a measurement set in the format [`read_measurements`] reads (degrees or mm per joint kind, mm).
 pub fn write_measurements(out: &mut impl std::io::Write, data: &Dataset, kinds: &[JointKind]) -> std::io::Result<()> {
     let n = data.measurements.first().map_or(0, |m| m.q.len());

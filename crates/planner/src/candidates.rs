@@ -27,11 +27,15 @@ pub struct Candidates {
     joints: Vec<Vec<f64>>,
     lines: Vec<usize>,
     from_file: bool,
+    /// The lines of the candidates set aside as exact copies of an earlier one.
+    copies: Vec<usize>,
 }
 
 impl Candidates {
     /// The user's candidates with their file lines (`lines` empty: numbered 1, 2, …). Every value must be
-    /// finite and within the joint limits.
+    /// finite and within the joint limits. A candidate that repeats an earlier one exactly is set aside
+    /// ([`Candidates::copies`]): one pose measured twice pins nothing down that it did not, and a plan
+    /// among copies would count them as other poses.
     pub fn new(robot: &Robot, joints: Vec<Vec<f64>>, lines: Vec<usize>) -> Result<Self, PlanError> {
         let from_file = !lines.is_empty();
         let lines = if from_file { lines } else { (1..=joints.len()).collect() };
@@ -48,7 +52,22 @@ impl Candidates {
                 return Err(PlanError::OutsideLimits { index: line, joint: j + 1 });
             }
         }
-        Ok(Self { joints, lines, from_file })
+        let mut seen: std::collections::HashSet<Vec<u64>> = std::collections::HashSet::new();
+        let (mut kept, mut kept_lines, mut copies) = (Vec::new(), Vec::new(), Vec::new());
+        for (q, line) in joints.into_iter().zip(lines) {
+            if seen.insert(q.iter().map(|v| (v + 0.0).to_bits()).collect()) {
+                kept.push(q);
+                kept_lines.push(line);
+            } else {
+                copies.push(line);
+            }
+        }
+        Ok(Self { joints: kept, lines: kept_lines, from_file, copies })
+    }
+
+    /// The lines (or 1-based indices) of the candidates set aside as exact copies of an earlier one.
+    pub fn copies(&self) -> &[usize] {
+        &self.copies
     }
 
     /// `count` configurations drawn uniformly within the joint limits (a revolution for a joint without),
@@ -79,7 +98,7 @@ impl Candidates {
             return Err(PlanError::EmptyBox { found: joints.len(), wanted: count, tried });
         }
         let lines = (1..=count).collect();
-        Ok(Self { joints, lines, from_file: false })
+        Ok(Self { joints, lines, from_file: false, copies: Vec::new() })
     }
 
     /// The configurations.

@@ -39,13 +39,15 @@ pub enum PlanError {
         /// 1-based joint.
         joint: usize,
     },
-    /// Fewer candidates than poses asked for.
-    #[error("{poses} poses asked for, but only {candidates} candidates")]
+    /// Fewer distinct candidates than poses asked for.
+    #[error("{poses} poses asked for, but only {candidates} {}", distinct(*.copies))]
     TooFewCandidates {
         /// Poses asked for.
         poses: usize,
-        /// Candidates available.
+        /// Distinct candidates available.
         candidates: usize,
+        /// Candidates set aside as copies.
+        copies: usize,
     },
     /// No pose asked for.
     #[error("a plan needs at least one pose (--poses)")]
@@ -67,6 +69,14 @@ pub enum PlanError {
         /// The effect's label.
         effect: String,
     },
+    /// An effect the direction of approach decides, which the poses alone do not show.
+    #[error(
+        "{effect} follows the direction each joint comes from, which the measuring order decides, not the poses: planned from configurations alone it moves nothing — measure some poses from both sides (approached rising and falling) in the session, with a time column or --order file, and plan without it"
+    )]
+    OrderDependent {
+        /// The effect's label.
+        effect: String,
+    },
     /// Sampling within the workspace box found too few configurations.
     #[error(
         "{found} of {wanted} sampled configurations put the tool inside the box after {tried} draws: is the box reachable?"
@@ -83,4 +93,13 @@ pub enum PlanError {
     /// non-finite Jacobian).
     #[error("the information matrix of the candidates could not be factorised (a non-finite Jacobian?)")]
     Singular,
+}
+
+/// How [`PlanError::TooFewCandidates`] names the candidates: plainly, or with the copies set aside.
+fn distinct(copies: usize) -> String {
+    if copies == 0 {
+        "candidates".into()
+    } else {
+        format!("distinct candidates ({copies} more repeat one of them exactly)")
+    }
 }

@@ -50,7 +50,8 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
         candidates::check(robot, q, "measured pose", i + 1)?;
     }
     if params.poses > candidates.len() {
-        return Err(PlanError::TooFewCandidates { poses: params.poses, candidates: candidates.len() });
+        let copies = candidates.copies().len();
+        return Err(PlanError::TooFewCandidates { poses: params.poses, candidates: candidates.len(), copies });
     }
     let design = Design::new(robot, candidates.joints(), measured, params)?;
     let selected = select::choose(&design, params.poses, params.criterion).ok_or(PlanError::Singular)?;
@@ -90,6 +91,7 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
     Ok(Plan {
         criterion: params.criterion,
         candidates: candidates.len(),
+        copies: candidates.copies().to_vec(),
         measured: measured.len(),
         noise_mm: params.noise_mm,
         effects: design.model.effects().iter().map(|e| e.label()).collect(),

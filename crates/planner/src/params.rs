@@ -105,6 +105,9 @@ impl Params {
         if let Some(e) = self.effects.iter().flatten().find(|e| e.is_time_dependent()) {
             return Err(PlanError::TimeDependent { effect: e.label() });
         }
+        if let Some(e) = self.effects.iter().flatten().find(|e| matches!(e, Effect::Backlash(_))) {
+            return Err(PlanError::OrderDependent { effect: e.label() });
+        }
         Ok(())
     }
 }

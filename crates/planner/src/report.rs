@@ -12,8 +12,10 @@ use crate::params::Criterion;
 pub struct Plan {
     /// What the poses optimise.
     pub criterion: Criterion,
-    /// Candidates the plan chose from.
+    /// Candidates the plan chose from (distinct).
     pub candidates: usize,
+    /// The lines (or indices) of the candidates set aside as exact copies of an earlier one.
+    pub copies: Vec<usize>,
     /// Poses already measured.
     pub measured: usize,
     /// The tracker noise the predictions are stated at, mm.
@@ -177,8 +179,17 @@ impl Plan {
             },
             self.effects.join(", ")
         );
+        if !self.copies.is_empty() {
+            let shown: Vec<String> = self.copies.iter().take(10).map(ToString::to_string).collect();
+            let more = if self.copies.len() > 10 { ", …" } else { "" };
+            out.push_str(&format!(
+                "{} candidates repeat an earlier one exactly and were set aside (lines {}{more}): a pose measured twice pins down nothing it did not\n",
+                self.copies.len(),
+                shown.join(", ")
+            ));
+        }
         out.push_str(&format!(
-            "Measuring order: {:.0} of largest-joint motion (as chosen: {:.0})\nCoverage: {}\n\n",
+            "Measuring order: {:.0}° of largest-joint motion, a slide's mm counted as degrees (as chosen: {:.0}°)\nCoverage: {}\n\n",
             self.motion.ordered,
             self.motion.as_chosen,
             self.coverage

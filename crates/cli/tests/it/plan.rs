@@ -81,3 +81,67 @@ fn plan_keeps_the_candidates_lines_and_values_and_writes_a_program() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("201 poses asked for, but only 200 candidates"), "{}", stderr(&o));
 }
+
+/// The planner's inputs as careful as the diagnosis's (issue #61): candidates in radians are refused
+/// (they were planned as degrees without a word), copies of one pose are set aside (100 copies were
+/// planned into 20 copies), a backlash is refused as what the poses alone cannot show (it was "planned
+/// for" and then said to have no effect), and the measuring order's motion carries its unit.
+#[test]
+fn the_planners_inputs_are_read_as_carefully_as_the_diagnosiss() {
+    let plan = |candidates: &std::path::Path, extra: &[&str]| {
+        let out = tmp("careful-plan.csv");
+        let mut args = vec![
+            "plan",
+            "--robot",
+            "configs/irb140.toml",
+            "--candidates",
+            candidates.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        thermokin(&args)
+    };
+    // Forty poses written in radians.
+    let radians = tmp("careful-radians.csv");
+    let rows: Vec<String> = (0..40)
+        .map(|k| {
+            let f = |j: usize, span: f64| span * ((((k * 7919 + j * 104_729) % 997) as f64 / 997.0) - 0.5);
+            format!("{},{},{},{},{},{}", f(1, 5.0), f(2, 2.5), f(3, 3.0) - 1.5, f(4, 5.0), f(5, 3.0), f(6, 8.0))
+        })
+        .collect();
+    std::fs::write(&radians, format!("q1,q2,q3,q4,q5,q6\n{}\n", rows.join("\n"))).unwrap();
+    let o = plan(&radians, &["--poses", "10"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("look like radians") && stderr(&o).contains("--joint-units rad"), "{}", stderr(&o));
+    let o = plan(&radians, &["--poses", "10", "--joint-units", "rad"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stdout(&o).contains("° of largest-joint motion"), "{}", stdout(&o));
+    // A hundred copies of one pose: one distinct candidate.
+    let copies = tmp("careful-copies.csv");
+    std::fs::write(&copies, format!("q1,q2,q3,q4,q5,q6\n{}", "10,20,30,40,50,60\n".repeat(100))).unwrap();
+    let o = plan(&copies, &["--poses", "20"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("only 1 distinct candidates (99 more repeat one of them exactly)"), "{}", stderr(&o));
+    // Copies among distinct poses are set aside and said, by line.
+    let mixed = tmp("careful-mixed.csv");
+    let degrees: Vec<String> = rows
+        .iter()
+        .map(|r| {
+            r.split(',').map(|v| format!("{}", v.parse::<f64>().unwrap().to_degrees())).collect::<Vec<_>>().join(",")
+        })
+        .collect();
+    std::fs::write(&mixed, format!("q1,q2,q3,q4,q5,q6\n{}\n{}\n{}\n", degrees.join("\n"), degrees[0], degrees[3]))
+        .unwrap();
+    let o = plan(&mixed, &["--poses", "10"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("2 candidates repeat an earlier one exactly and were set aside (lines 42, 43)"),
+        "{}",
+        stdout(&o)
+    );
+    // A backlash is the order's, not the poses'.
+    let o = plan(&mixed, &["--poses", "10", "--effect", "backlash:2"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("backlash[2] follows the direction each joint comes from"), "{}", stderr(&o));
+}
