@@ -85,7 +85,13 @@ pub(crate) fn with_tilts(
                 || {
                     refuse(
                         &a.name,
-                        format!("the measurements need its columns {}, {} and {}", columns[0], columns[1], columns[2]),
+                        format!(
+                            "{} need its columns {}, {} and {}",
+                            if references.is_some() { "the hold-out set's measurements" } else { "the measurements" },
+                            columns[0],
+                            columns[1],
+                            columns[2]
+                        ),
                     )
                 },
             )?;

@@ -39,7 +39,7 @@ pub use identifiability::{
     DEPENDENT, Dependence, DependsOn, FixedParameter, Identifiable, Observability, identifiable, observability,
     project_out,
 };
-pub use model::{Model, StartFrames};
+pub use model::{EQUIVALENT_COS, Model, StartFrames};
 pub use predict::{ChainCache, PoseInputs};
 pub use registration::{initial_frames, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
