@@ -236,6 +236,7 @@ def diagnose(
     masses: str | None = None,
     order: str | None = None,
     lateral: str | None = None,
+    accelerometers: dict[str, int] | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,
