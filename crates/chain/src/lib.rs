@@ -30,7 +30,7 @@ pub use factors::JointFactor;
 pub use gravity_loads::{
     gravity_load_basis_into, gravity_load_basis_len, lateral_load_basis_into, lateral_load_basis_len,
 };
-pub use measurements::{Approach, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor};
+pub use measurements::{Approach, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor, time_order};
 pub use robot::{
     JointRatings, LinkMass, LinkSensor, OperatingState, Robot, Target, gravity_torques, gravity_torques_into,
 };

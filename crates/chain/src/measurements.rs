@@ -163,6 +163,20 @@ crate::choices!(
     ]
 );
 
+/// The order of a sequence of moves (a program's targets, a joints file's rows) given each one's time:
+/// by time where every one has a time and they span time (ties in the given order), else the given
+/// order — what a backlash's directions are taken along where no measurement set orders them.
+pub fn time_order(times: &[Option<f64>]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..times.len()).collect();
+    let known: Option<Vec<f64>> = times.iter().copied().collect();
+    if let Some(t) = known
+        && t.iter().any(|&v| v != t[0])
+    {
+        order.sort_by(|&a, &b| t[a].total_cmp(&t[b]).then(a.cmp(&b)));
+    }
+    order
+}
+
 /// A joint move smaller than this (radians, mm) is not a move: what a controller repeats as the same
 /// commanded value after rounding.
 pub const STILL_MOVE: f64 = 1e-9;
@@ -191,6 +205,24 @@ impl Dataset {
             },
             tilt_sensors: self.tilt_sensors.clone(),
         }
+    }
+
+    /// The set without the sensor columns named in `names` (each pose's readings with them), its
+    /// [`Dataset::tilt_sensors`]' columns moved to their new places.
+    pub fn without_sensor_columns(&self, names: &[String]) -> Dataset {
+        let keep: Vec<usize> =
+            (0..self.sensor_names.len()).filter(|&k| !names.contains(&self.sensor_names[k])).collect();
+        let mut out = self.clone();
+        out.sensor_names = keep.iter().map(|&k| self.sensor_names[k].clone()).collect();
+        out.sensor_values = if out.sensor_names.is_empty() {
+            Vec::new()
+        } else {
+            self.sensor_values.iter().map(|r| keep.iter().filter_map(|&k| r.get(k).copied()).collect()).collect()
+        };
+        for t in &mut out.tilt_sensors {
+            t.column = keep.iter().position(|&k| k == t.column).unwrap_or(t.column);
+        }
+        out
     }
 
     /// The file line measurement `i` (0-based) was read from, when the set was read from a file.
@@ -275,6 +307,14 @@ impl Dataset {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn moves_follow_their_times_where_every_one_has_one() {
+        assert_eq!(time_order(&[Some(3.0), Some(1.0), Some(1.0), Some(2.0)]), [1, 2, 3, 0]);
+        // One without a time, or all at one time: the given order.
+        assert_eq!(time_order(&[Some(3.0), None, Some(1.0)]), [0, 1, 2]);
+        assert_eq!(time_order(&[Some(5.0), Some(5.0)]), [0, 1]);
+    }
 
     #[test]
     fn a_tilt_is_the_sensors_turn() {

@@ -158,7 +158,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         // No column ignored in silence (an accelerometer's, a load's): the diagnosis does not read it.
         let unread = thermokin_io::unread_columns(&a.measurements, &kinds, units).unwrap_or_default();
         crate::input::warn_ignored(&a.measurements, &unread);
-        say_sensors(&a.measurements, &data, &declared_accelerometers(&a.accelerometers, &loaded.robot));
+        say_sensors(&a.measurements, &data, &loaded.robot, &a.accelerometers);
     }
     let holdout = match &a.holdout {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
@@ -241,13 +241,16 @@ pub fn simulate(a: SimulateArgs) -> Result<u8, Failure> {
     Ok(exit::OK)
 }
 
-/// The sensor columns of `data` (read from `path`) said on stderr: each read as a sensor, or not and why
-/// ([`thermokin_diagnose::not_sensors`]).
+/// The sensor columns of `data` (read from `path`) said on stderr: each read as a declared accelerometer's
+/// tilt (`flags` and `robot`'s file: [`thermokin_diagnose::declared_accelerometers`]), as a sensor, or not
+/// and why ([`thermokin_diagnose::not_sensors`]).
 fn say_sensors(
     path: &std::path::Path,
     data: &thermokin_chain::Dataset,
-    declared: &[thermokin_diagnose::Accelerometer],
+    robot: &thermokin_chain::Robot,
+    flags: &[thermokin_diagnose::Accelerometer],
 ) {
+    let declared = thermokin_diagnose::declared_accelerometers(robot, flags);
     let of = |s: &str| declared.iter().find(|a| ["x", "y", "z"].iter().any(|c| format!("{}_{c}", a.name) == s));
     for s in &data.sensor_names {
         if let Some(a) = of(s) {
@@ -266,18 +269,4 @@ fn say_sensors(
     for (s, why) in not_sensors.iter().filter(|(s, _)| of(s).is_none()) {
         eprintln!("note: {}: column `{s}` is not read as a sensor: {why}", path.display());
     }
-}
-
-/// The accelerometers a diagnosis reads as tilts: the flags', and the robot file's the flags do not name.
-fn declared_accelerometers(
-    flags: &[thermokin_diagnose::Accelerometer],
-    robot: &thermokin_chain::Robot,
-) -> Vec<thermokin_diagnose::Accelerometer> {
-    let mut declared = flags.to_vec();
-    for s in robot.accelerometers() {
-        if !declared.iter().any(|d| d.name == s.name) {
-            declared.push(thermokin_diagnose::Accelerometer { name: s.name.clone(), link: s.link });
-        }
-    }
-    declared
 }

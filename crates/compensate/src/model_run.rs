@@ -82,13 +82,8 @@ fn with_approach_along(
     if !model.has_backlash() {
         return;
     }
-    let mut order: Vec<usize> = (0..states.len().min(path.len())).collect();
-    let times: Option<Vec<f64>> = order.iter().map(|&k| states[k].time_min).collect();
-    if let Some(t) = times
-        && t.iter().any(|&v| v != t[0])
-    {
-        order.sort_by(|&a, &b| t[a].total_cmp(&t[b]).then(a.cmp(&b)));
-    }
+    let times: Vec<Option<f64>> = states.iter().take(path.len()).map(|s| s.time_min).collect();
+    let order = thermokin_chain::time_order(&times);
     let mut last: Vec<thermokin_chain::Approach> = if start_approach.len() == start.len() {
         start_approach.to_vec()
     } else {
@@ -327,11 +322,9 @@ pub fn solve_rows(
             .map(|s| OperatingState { approach: Vec::new(), ..s })
             .collect();
         let path: Vec<&[f64]> = solved.iter().filter_map(|&k| out[k].1.as_deref()).collect();
-        // The moves start at the first row measured: the earliest in time, or the file's first.
-        let first = (0..moved.len()).min_by(|&a, &b| {
-            let t = |i: usize| moved[i].time_min.unwrap_or(0.0);
-            t(a).total_cmp(&t(b)).then(a.cmp(&b))
-        });
+        // The moves start at the first row measured: the first of their order.
+        let times: Vec<Option<f64>> = moved.iter().map(|s| s.time_min).collect();
+        let first = thermokin_chain::time_order(&times).first().copied();
         let start = first.map(|i| path[i].to_vec()).unwrap_or_default();
         with_approach_along(model, &mut moved, &start, &[], &path);
         for (&k, state) in solved.iter().zip(moved) {

@@ -37,9 +37,6 @@ pub(crate) fn canonical_order(data: &Dataset, by: MeasuringOrder) -> Vec<usize> 
 
 /// Two poses compared by what was measured: joint values, position, orientation, stated deviations.
 fn content(a: &Measurement, b: &Measurement) -> Ordering {
-    let floats = |x: &[f64], y: &[f64]| {
-        x.iter().zip(y).map(|(u, v)| u.total_cmp(v)).find(|o| o.is_ne()).unwrap_or(x.len().cmp(&y.len()))
-    };
     let quaternion = |m: &Measurement| m.orientation.map(|q| q.coords.as_slice().to_vec()).unwrap_or_default();
     let std = |m: &Measurement| m.position_std_mm.map(|s| s.as_slice().to_vec()).unwrap_or_default();
     floats(&a.q, &b.q)
@@ -52,11 +49,14 @@ fn content(a: &Measurement, b: &Measurement) -> Ordering {
 /// Two poses' sensor readings compared (a set without sensor columns: equal).
 fn readings(a: Option<&Vec<f64>>, b: Option<&Vec<f64>>) -> Ordering {
     match (a, b) {
-        (Some(x), Some(y)) => {
-            x.iter().zip(y).map(|(u, v)| u.total_cmp(v)).find(|o| o.is_ne()).unwrap_or(x.len().cmp(&y.len()))
-        }
+        (Some(x), Some(y)) => floats(x, y),
         _ => Ordering::Equal,
     }
+}
+
+/// Two lists of numbers in lexicographic total order (the shorter first where one begins the other).
+fn floats(x: &[f64], y: &[f64]) -> Ordering {
+    x.iter().zip(y).map(|(u, v)| u.total_cmp(v)).find(|o| o.is_ne()).unwrap_or(x.len().cmp(&y.len()))
 }
 
 /// `data` in its canonical order ([`canonical_order`]) with that order, or `data` itself where it is

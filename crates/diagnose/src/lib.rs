@@ -68,4 +68,5 @@ pub use sensors::not_sensors;
 pub use simulate::{HiddenEffect, SimulationConfig, simulate};
 pub use stats::FALSE_ALARM;
 pub use stats::Stats;
+pub use tilts::declared_accelerometers;
 pub use validation::{Transfer, evaluate};

@@ -61,17 +61,8 @@ pub(crate) fn only_sensors(data: &Dataset) -> (std::borrow::Cow<'_, Dataset>, Ve
     if dropped.is_empty() {
         return (std::borrow::Cow::Borrowed(data), Vec::new());
     }
-    let keep: Vec<usize> =
-        (0..data.sensor_names.len()).filter(|&s| !dropped.iter().any(|(n, _)| *n == data.sensor_names[s])).collect();
-    let mut kept = data.clone();
-    kept.sensor_names = keep.iter().map(|&s| data.sensor_names[s].clone()).collect();
-    for t in &mut kept.tilt_sensors {
-        t.column = keep.iter().position(|&s| s == t.column).unwrap_or(t.column);
-    }
-    kept.sensor_values = data.sensor_values.iter().map(|r| keep.iter().map(|&s| r[s]).collect()).collect();
-    if kept.sensor_names.is_empty() {
-        kept.sensor_values.clear();
-    }
+    let names: Vec<String> = dropped.iter().map(|(n, _)| n.clone()).collect();
+    let kept = data.without_sensor_columns(&names);
     let said =
         dropped.into_iter().map(|(name, why)| format!("column `{name}` is not read as a sensor: {why}")).collect();
     (std::borrow::Cow::Owned(kept), said)

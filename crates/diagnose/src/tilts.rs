@@ -22,7 +22,13 @@ use crate::error::DiagnoseError;
 /// The accelerometers the diagnosis reads as tilts: those `config` declares, and those the robot file
 /// declares on its links that `config` does not name (the command line's word over the file's).
 pub(crate) fn declared(robot: &Robot, config: &crate::Config) -> Vec<Accelerometer> {
-    let mut all = config.accelerometers.clone();
+    declared_accelerometers(robot, &config.accelerometers)
+}
+
+/// The accelerometers a diagnosis with these `flags` reads as tilts: the flags', and those `robot`'s file
+/// declares on its links that the flags do not name (what a front end says of the columns it reads).
+pub fn declared_accelerometers(robot: &Robot, flags: &[Accelerometer]) -> Vec<Accelerometer> {
+    let mut all = flags.to_vec();
     for s in robot.accelerometers() {
         if !all.iter().any(|a| a.name == s.name) {
             all.push(Accelerometer { name: s.name.clone(), link: s.link });
@@ -113,6 +119,7 @@ pub(crate) fn with_tilts(
             })
             .collect::<Result<_, _>>()?;
         // Its own tilt's columns, then the nearest declared sensor's below it on the chain.
+        let column = out.sensor_names.len();
         let below = sensors.iter().zip(&tilts).rev().find(|(s, _)| s.link < a.link);
         out.sensor_names.extend(["x", "y", "z"].map(|c| format!("{}.tilt_{c}", a.name)));
         if below.is_some() {
@@ -125,20 +132,13 @@ pub(crate) fn with_tilts(
             }
         }
         let below = below.map(|(s, _)| s.name.clone());
-        sensors.push(TiltSensor { name: a.name.clone(), link: a.link, column: 0, reference, below });
+        sensors.push(TiltSensor { name: a.name.clone(), link: a.link, column, reference, below });
         tilts.push(tilt);
     }
-    // The raw columns are no drivers: taken out, the tilt columns' places found by name.
-    let raw: Vec<String> = sorted.iter().flat_map(|a| raw_columns(&a.name)).collect();
-    let keep: Vec<usize> = (0..out.sensor_names.len()).filter(|&k| !raw.contains(&out.sensor_names[k])).collect();
-    out.sensor_values = out.sensor_values.iter().map(|r| keep.iter().map(|&k| r[k]).collect()).collect();
-    out.sensor_names = keep.iter().map(|&k| out.sensor_names[k].clone()).collect();
-    for s in &mut sensors {
-        let first = format!("{}.tilt_x", s.name);
-        s.column = out.sensor_names.iter().position(|n| *n == first).unwrap_or(0);
-    }
+    // The raw columns are no drivers: taken out, the tilt columns moved to their places.
     out.tilt_sensors = sensors;
-    Ok(out)
+    let raw: Vec<String> = sorted.iter().flat_map(|a| raw_columns(&a.name)).collect();
+    Ok(out.without_sensor_columns(&raw))
 }
 
 /// The unit mean of the readings' directions.

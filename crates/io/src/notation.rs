@@ -222,14 +222,9 @@ type ReadRow = (usize, Result<(Vec<f64>, thermokin_chain::OperatingState), Strin
 /// flags' directions (none given: unknown).
 fn with_approach_in_measuring_order(rows: &mut [ReadRow], flags: &thermokin_chain::OperatingState) {
     let readable: Vec<usize> = (0..rows.len()).filter(|&k| rows[k].1.is_ok()).collect();
-    let time = |k: usize| rows[k].1.as_ref().ok().and_then(|(_, s)| s.time_min);
-    let times: Option<Vec<f64>> = readable.iter().map(|&k| time(k)).collect();
-    let mut order = readable.clone();
-    if let Some(t) = times
-        && t.iter().any(|&v| v != t[0])
-    {
-        order.sort_by(|&a, &b| time(a).unwrap_or(0.0).total_cmp(&time(b).unwrap_or(0.0)).then(a.cmp(&b)));
-    }
+    let times: Vec<Option<f64>> =
+        readable.iter().map(|&k| rows[k].1.as_ref().ok().and_then(|(_, s)| s.time_min)).collect();
+    let order: Vec<usize> = thermokin_chain::time_order(&times).into_iter().map(|i| readable[i]).collect();
     let mut last: Option<(Vec<f64>, Vec<thermokin_chain::Approach>)> = None;
     for k in order {
         let Ok((q, state)) = &mut rows[k].1 else { continue };
