@@ -6,6 +6,7 @@
 //! This crate does no I/O.
 
 mod bending;
+mod branches;
 mod chain;
 mod choices;
 mod dh;
@@ -20,6 +21,7 @@ mod trig;
 pub mod units;
 
 pub use bending::{lateral_directions, lateral_gravity_moments_into};
+pub use branches::{Branch, branch_load_basis_into, branch_load_basis_len};
 pub use chain::{
     Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,
 };
@@ -30,7 +32,9 @@ pub use factors::JointFactor;
 pub use gravity_loads::{
     gravity_load_basis_into, gravity_load_basis_len, lateral_load_basis_into, lateral_load_basis_len,
 };
-pub use measurements::{Approach, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor, time_order};
+pub use measurements::{
+    Approach, BranchColumns, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor, time_order,
+};
 pub use robot::{
     JointRatings, LinkMass, LinkSensor, OperatingState, Robot, Target, gravity_torques, gravity_torques_into,
 };
@@ -134,5 +138,13 @@ pub enum ChainError {
         link: usize,
         /// The robot's last link (its joint count).
         last: usize,
+    },
+    /// A branch that does not fit the measured chain ([`Branch`]).
+    #[error("branch `{name}`: {message}")]
+    BadBranch {
+        /// Its name.
+        name: String,
+        /// What is wrong.
+        message: String,
     },
 }

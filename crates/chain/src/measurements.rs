@@ -48,6 +48,28 @@ pub struct Dataset {
     /// the sensor's axes) its reading shows against its reference direction ([`TiltSensor::tilt`]), and
     /// the declared sensor's below it on the chain. Empty when none is declared.
     pub tilt_sensors: Vec<TiltSensor>,
+    /// The robot's branches whose joints the sensor columns log ([`crate::Branch`]): per branch, its index
+    /// in [`crate::Robot::branches`] and the first of its consecutive columns, one per branch joint
+    /// (degrees; mm for a slide) — no drivers.
+    pub branch_columns: Vec<BranchColumns>,
+}
+
+/// The sensor columns that log one of the robot's branches ([`Dataset::branch_columns`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct BranchColumns {
+    /// The branch's index in [`crate::Robot::branches`].
+    pub branch: usize,
+    /// The first of its columns in [`Dataset::sensor_names`], one per branch joint in the branch's order.
+    pub column: usize,
+    /// How many: the branch's joints.
+    pub len: usize,
+}
+
+impl BranchColumns {
+    /// Whether sensor column `k` is one of them.
+    pub fn holds(&self, k: usize) -> bool {
+        (self.column..self.column + self.len).contains(&k)
+    }
 }
 
 /// An accelerometer or inclinometer declared on a link ([`Dataset::tilt_sensors`]): its name, the link
@@ -204,6 +226,7 @@ impl Dataset {
                 Vec::new()
             },
             tilt_sensors: self.tilt_sensors.clone(),
+            branch_columns: self.branch_columns.clone(),
         }
     }
 
@@ -221,6 +244,9 @@ impl Dataset {
         };
         for t in &mut out.tilt_sensors {
             t.column = keep.iter().position(|&k| k == t.column).unwrap_or(t.column);
+        }
+        for b in &mut out.branch_columns {
+            b.column = keep.iter().position(|&k| k == b.column).unwrap_or(b.column);
         }
         out
     }

@@ -67,6 +67,7 @@ pub struct Robot {
     masses: Vec<Option<LinkMass>>,
     ratings: Vec<JointRatings>,
     accelerometers: Vec<LinkSensor>,
+    branches: Vec<crate::Branch>,
 }
 
 /// An accelerometer or inclinometer on one of a robot's links, as its robot file declares it: measurement
@@ -90,6 +91,7 @@ impl Robot {
             masses: vec![None; n],
             ratings: vec![JointRatings::default(); n],
             accelerometers: Vec::new(),
+            branches: Vec::new(),
         }
     }
 
@@ -114,6 +116,19 @@ impl Robot {
     /// The accelerometers its file declares on its links.
     pub fn accelerometers(&self) -> &[LinkSensor] {
         &self.accelerometers
+    }
+
+    /// The same robot with these branches hanging from its links ([`crate::Branch`]): each named, on a
+    /// link from 0 to the joint count, every joint name used once in the whole robot.
+    pub fn with_branches(mut self, branches: Vec<crate::Branch>) -> Result<Self, ChainError> {
+        crate::branches::check_branches(&self.chain, &branches)?;
+        self.branches = branches;
+        Ok(self)
+    }
+
+    /// The branches hanging from its links: the rest of its tree beside the measured chain.
+    pub fn branches(&self) -> &[crate::Branch] {
+        &self.branches
     }
 
     /// The same robot with these joint ratings (one per joint).

@@ -251,9 +251,25 @@ fn say_sensors(
     flags: &[thermokin_diagnose::Accelerometer],
 ) {
     let declared = thermokin_diagnose::declared_accelerometers(robot, flags);
-    let of = |s: &str| declared.iter().find(|a| ["x", "y", "z"].iter().any(|c| format!("{}_{c}", a.name) == s));
+    let branch_of = |s: &str| robot.branches().iter().find(|b| b.joints.iter().any(|j| j.name == s));
+    let of = |s: &str| {
+        declared
+            .iter()
+            .find(|a| ["x", "y", "z"].iter().any(|c| format!("{}_{c}", a.name) == s))
+            .map(|_| ())
+            .or(branch_of(s).map(|_| ()))
+    };
     for s in &data.sensor_names {
-        if let Some(a) = of(s) {
+        if let Some(b) = branch_of(s) {
+            eprintln!(
+                "note: {}: column `{s}` read as the position of joint `{s}` of branch `{}` (degrees; mm for a slide): what the branch carries loads the joints below link {}",
+                path.display(),
+                b.name,
+                b.link
+            );
+        } else if let Some(a) =
+            declared.iter().find(|a| ["x", "y", "z"].iter().any(|c| format!("{}_{c}", a.name) == *s))
+        {
             eprintln!(
                 "note: {}: column `{s}` read as accelerometer {}'s tilt (link {})",
                 path.display(),

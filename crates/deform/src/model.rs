@@ -130,6 +130,42 @@ pub fn lateral_row_error(
     ErrorParams::new(translation, rotation)
 }
 
+/// The load of one of the robot's branches ([`thermokin_chain::Branch`]) on joint `joint`'s gravity
+/// compliance, known without masses: `Δq_joint += Σ θ_b g_b(q, q_branch)` over the functions of
+/// [`thermokin_chain::branch_load_basis_into`] at the commanded joints and the branch's joint values —
+/// read from the operating state by the branch joints' names (degrees; mm for a slide), as a
+/// measurement file logs them. The weights lump the joint's stiffness with the branch links' unknown
+/// first moments (radians).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BranchLoad {
+    /// The loaded joint, 0-based.
+    pub joint: usize,
+    /// The branch's name.
+    pub branch: String,
+    /// The weights, radians.
+    pub weights: Vec<f64>,
+}
+
+/// The joint values of `branch` in `state`: each joint's reading by its name (or `temp_NAME`), converted
+/// by [`thermokin_chain::Branch::joint_value`]; an error naming the first missing.
+fn branch_joint_values(branch: &thermokin_chain::Branch, state: &OperatingState) -> Result<Vec<f64>, DeformError> {
+    branch
+        .joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let reading = state.temperature(&j.name).or_else(|| state.temperature(&format!("temp_{}", j.name)));
+            reading.map(|r| branch.joint_value(i, r)).ok_or_else(|| DeformError::MissingState {
+                needed: format!(
+                    "the position of joint `{}` of branch `{}` (degrees; mm for a slide)",
+                    j.name, branch.name
+                ),
+                why: "what hangs from that branch loads the joints below it".into(),
+            })
+        })
+        .collect()
+}
+
 /// Per joint of `chain` (one entry each) none, or as many finite weights as `expected` gives the joint
 /// (`thermokin_chain::gravity_load_basis_len` or `lateral_load_basis_len`, zero where it takes none): a
 /// compliance known without masses, `kind` `"gravity"` or `"lateral"`.
@@ -408,6 +444,8 @@ pub struct RobotModel {
     gravity_loads: Vec<Vec<f64>>,
     /// Per joint: the weights of a lateral compliance known without masses (empty when none).
     lateral_loads: Vec<Vec<f64>>,
+    /// The loads of the robot's branches on its joints' compliance ([`BranchLoad`]).
+    branch_loads: Vec<BranchLoad>,
     drift: Vec<DriftRow>,
     payload: Option<LinkMass>,
     down: Unit<Vector3<f64>>,
@@ -422,6 +460,7 @@ impl RobotModel {
             joints: vec![JointCorrection::NONE; n],
             gravity_loads: vec![Vec::new(); n],
             lateral_loads: vec![Vec::new(); n],
+            branch_loads: Vec::new(),
             drift: Vec::new(),
             payload: None,
             down: -Vector3::z_axis(),
@@ -494,6 +533,41 @@ impl RobotModel {
         check_load_weights(self.robot.chain(), &loads, lumped_lateral_weights_len, "lateral")?;
         self.lateral_loads = loads;
         Ok(self)
+    }
+
+    /// The same model with the loads of its robot's branches on some joints' gravity compliance
+    /// ([`BranchLoad`]): each on a revolute joint below the branch's link, with as many finite weights as
+    /// [`thermokin_chain::branch_load_basis_len`] gives.
+    pub fn with_branch_loads(mut self, loads: Vec<BranchLoad>) -> Result<Self, DeformError> {
+        let chain = self.robot.chain();
+        for l in &loads {
+            let bad = |message: String| Err(DeformError::BadCorrection { joint: l.joint + 1, message });
+            let Some(branch) = self.robot.branches().iter().find(|b| b.name == l.branch) else {
+                let known: Vec<&str> = self.robot.branches().iter().map(|b| b.name.as_str()).collect();
+                return bad(format!("the robot has no branch `{}` (its branches: {})", l.branch, known.join(", ")));
+            };
+            let expected = thermokin_chain::branch_load_basis_len(chain, branch, l.joint);
+            if expected == 0 {
+                return bad(format!(
+                    "branch `{}` loads only the revolute joints below its link {}",
+                    l.branch, branch.link
+                ));
+            }
+            if l.weights.len() != expected || l.weights.iter().any(|w| !w.is_finite()) {
+                return bad(format!(
+                    "{} branch-load weights of `{}` for the {expected} finite ones it takes",
+                    l.weights.len(),
+                    l.branch
+                ));
+            }
+        }
+        self.branch_loads = loads;
+        Ok(self)
+    }
+
+    /// The loads of the robot's branches on its joints' compliance: [`RobotModel::with_branch_loads`].
+    pub fn branch_loads(&self) -> &[BranchLoad] {
+        &self.branch_loads
     }
 
     /// The same model with these drift rows (any number per row; their deviations add).
@@ -620,7 +694,9 @@ impl RobotModel {
     /// `true` when the joint values the chain sees differ from the commanded ones (a gear ratio, a cyclic
     /// error, a compliance with or without masses).
     pub fn corrects_joints(&self) -> bool {
-        self.joints.iter().any(JointCorrection::moves_joint) || self.gravity_loads.iter().any(|l| !l.is_empty())
+        self.joints.iter().any(JointCorrection::moves_joint)
+            || self.gravity_loads.iter().any(|l| !l.is_empty())
+            || !self.branch_loads.is_empty()
     }
 
     /// `true` when some joint has a backlash: its value then depends on the direction it last moved in
@@ -720,6 +796,14 @@ impl RobotModel {
                 }
             }
         }
+        for l in &self.branch_loads {
+            let joints = self.robot.branches().iter().filter(|b| b.name == l.branch).flat_map(|b| &b.joints);
+            for j in joints {
+                if !sensors.contains(&j.name) {
+                    sensors.push(j.name.clone());
+                }
+            }
+        }
         (time, sensors)
     }
 
@@ -742,6 +826,14 @@ impl RobotModel {
             }
             if !self.gravity_loads[j].is_empty() {
                 out.push(format!("joint {} ({}): gravity compliance without masses", j + 1, names[j]));
+            }
+            for l in self.branch_loads.iter().filter(|l| l.joint == j) {
+                out.push(format!(
+                    "joint {} ({}): the load of branch `{}` on its compliance",
+                    j + 1,
+                    names[j],
+                    l.branch
+                ));
             }
             if c.lateral != [0.0; 6] {
                 out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
@@ -886,6 +978,16 @@ impl RobotModel {
             let chain = self.robot.chain();
             thermokin_chain::gravity_load_basis_into(chain, commanded, None, &self.down, j, &mut basis)?;
             actual[j] += basis.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
+        }
+        for l in &self.branch_loads {
+            let branch = self.robot.branches().iter().find(|b| b.name == l.branch);
+            let Some(branch) = branch else { continue };
+            let branch_q = branch_joint_values(branch, state)?;
+            let chain = self.robot.chain();
+            thermokin_chain::branch_load_basis_into(
+                chain, branch, commanded, &branch_q, &self.down, l.joint, &mut basis,
+            )?;
+            actual[l.joint] += basis.iter().zip(&l.weights).map(|(f, w)| f * w).sum::<f64>();
         }
         Ok(actual)
     }

@@ -109,32 +109,49 @@ fn ordered(data: std::borrow::Cow<'_, Dataset>, by: MeasuringOrder) -> std::borr
 }
 
 /// The hold-out set after [`check_joint_counts`], its sensor columns as `data`'s ([`with_sensors_of`]),
-/// each pose's approach direction from its own order ([`ordered`]).
-fn checked_holdout<'h>(
+/// each pose's approach direction from its own order ([`ordered`]) — twice: as the export reads it (its
+/// accelerometers' tilts from the training session's reference directions, its drivers' readings as
+/// given) and on the session's own references, for the refitted protocol (its accelerometers' tilts from
+/// its own mean directions, its drivers' levels moved to the training session's: [`crate::sensors::re_referenced`]).
+fn checked_holdout(
     robot: &Robot,
     data: &Dataset,
-    holdout: Option<&'h Dataset>,
+    holdout: Option<&Dataset>,
     config: &Config,
-) -> Result<Option<std::borrow::Cow<'h, Dataset>>, DiagnoseError> {
+) -> Result<Option<HoldoutSets>, DiagnoseError> {
     let by = config.order;
     check_joint_counts(robot, data, holdout)?;
-    // Its accelerometers read from the training session's reference directions.
+    let Some(given) = holdout else { return Ok(None) };
     let declared = crate::tilts::declared(robot, config);
-    let tilted = match holdout {
-        Some(h) if !declared.is_empty() => {
-            Some(crate::tilts::with_tilts(robot, h, &declared, Some(&data.tilt_sensors))?)
-        }
-        _ => None,
+    let (exported, own) = if declared.is_empty() {
+        (given.clone(), given.clone())
+    } else {
+        (
+            crate::tilts::with_tilts(robot, given, &declared, Some(&data.tilt_sensors))?,
+            crate::tilts::with_tilts(robot, given, &declared, None)?,
+        )
     };
-    let holdout: Option<&Dataset> = tilted.as_ref().or(holdout);
-    if let Some(missing) = holdout.and_then(|h| data.sensor_names.iter().find(|n| !h.sensor_names.contains(n))) {
+    if let Some(missing) = data.sensor_names.iter().find(|n| !exported.sensor_names.contains(n)) {
         return Err(DiagnoseError::HoldoutLacksSensor { sensor: missing.clone() });
     }
-    // In the poses' own order too (the registration refitted on it sums in that order).
-    Ok(holdout.map(|h| {
+    // In the poses' own order too (the registration refitted on it sums in that order), its branch
+    // columns where the training set's are (aligned by name).
+    let prepared = |h: &Dataset| {
         let h = crate::canonical::in_canonical_order(h, by).0;
-        ordered(std::borrow::Cow::Owned(with_sensors_of(&h, data).into_owned()), by)
-    }))
+        let mut h = with_sensors_of(&h, data).into_owned();
+        h.branch_columns = data.branch_columns.clone();
+        ordered(std::borrow::Cow::Owned(h), by).into_owned()
+    };
+    let own = crate::sensors::re_referenced(data, &prepared(&own));
+    Ok(Some(HoldoutSets { exported: prepared(&exported), own }))
+}
+
+/// A hold-out set as each protocol reads it ([`checked_holdout`]).
+pub(crate) struct HoldoutSets {
+    /// As the export reads it: the training session's references.
+    pub(crate) exported: Dataset,
+    /// On the session's own references, for the refitted protocol.
+    pub(crate) own: Dataset,
 }
 
 /// The stages a progress display counts: the selection on all data, each outer fold, the hold-out set.
@@ -249,6 +266,10 @@ fn trusted<'r>(robot: &'r Robot, config: &Config) -> Result<std::borrow::Cow<'r,
 type Prepared<'d> = (std::borrow::Cow<'d, Dataset>, Option<Vec<usize>>, Vec<String>);
 fn prepared<'d>(robot: &Robot, data: &'d Dataset, config: &Config) -> Result<Prepared<'d>, DiagnoseError> {
     let (data, perm) = crate::canonical::in_canonical_order(data, config.order);
+    let data = match crate::branches::with_branches(robot, &data)? {
+        Some(d) => std::borrow::Cow::Owned(d),
+        None => data,
+    };
     let declared = crate::tilts::declared(robot, config);
     let data = if declared.is_empty() {
         data
@@ -310,7 +331,7 @@ fn run(
     let fell_back = judged_beside_the_folds(&scorer, config, &mut selected.selection, nested.as_ref())?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     let holdout_data = holdout;
-    let holdout = match holdout_data.as_deref() {
+    let holdout = match holdout_data.as_ref() {
         // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
         // registration or the tool point is always estimated, the hold-out file may be in another tracker
         // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
@@ -326,7 +347,7 @@ fn run(
     let mut all_warnings: Vec<String> =
         fell_back.into_iter().chain(said_first(config, &tables, nested.as_ref())).collect();
     all_warnings.extend(not_sensors);
-    all_warnings.extend(said_of_the_effects(robot, data, holdout_data.as_deref(), config, &tables));
+    all_warnings.extend(said_of_the_effects(robot, data, holdout_data.as_ref().map(|h| &h.exported), config, &tables));
     let verdict = verdict(config, &tables, nested.as_ref());
     let honest_end = honest_end(&tables, nested.as_ref(), holdout.as_ref());
     let poses = pose_records(robot, data, &tables, heldout_per_pose);
@@ -422,12 +443,14 @@ fn said_of_the_effects(
 /// kept as fitted; and scored as fitted too (the training frame).
 fn holdout_stats(
     scorer: &Scorer<'_>,
-    holdout: &Dataset,
+    holdout: &HoldoutSets,
     tables: &crate::tables::Tables,
     config: &Config,
 ) -> Result<HoldoutStats, DiagnoseError> {
     let always = config.setup().always_estimated(scorer.data);
-    let score = |e: &[thermokin_identify::Effect], lambda| transfer_score(scorer, holdout, e, lambda, config);
+    let score = |e: &[thermokin_identify::Effect], lambda| {
+        transfer_score(scorer, &holdout.exported, &holdout.own, e, lambda, config)
+    };
     let refitted = always.iter().map(thermokin_identify::Effect::label).collect();
     let (nominal, selected) = (score(&always, 0.0)?, score(&tables.effects, tables.shrinkage)?);
     Ok(HoldoutStats {

@@ -73,6 +73,14 @@ pub enum DiagnoseError {
         /// The sensor column's name.
         sensor: String,
     },
+    /// A branch of the robot that the measurements log in part.
+    #[error("branch `{name}`: {reason}")]
+    Branch {
+        /// Its name.
+        name: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A declared accelerometer that the data or the robot cannot read as a link's tilt.
     #[error("accelerometer `{name}`: {reason}")]
     Accelerometer {

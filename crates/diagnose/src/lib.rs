@@ -16,6 +16,7 @@
 //! [`Report`], which renders itself ([`Report::text`]).
 
 mod backward;
+mod branches;
 mod canonical;
 mod clusters;
 mod completion;

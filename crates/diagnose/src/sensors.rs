@@ -18,8 +18,10 @@ pub fn not_sensors(data: &Dataset) -> Vec<(String, String)> {
         return out;
     }
     // A declared accelerometer's tilt columns are its link's tilt, whatever they hold.
+    // A declared accelerometer's tilt columns are its link's tilt, a branch's its joints, whatever they hold.
     let tilt = |s: usize| {
         data.tilt_sensors.iter().any(|t| (t.column..t.column + if t.below.is_some() { 6 } else { 3 }).contains(&s))
+            || data.branch_columns.iter().any(|b| b.holds(s))
     };
     for (s, name) in data.sensor_names.iter().enumerate().filter(|(s, _)| !tilt(*s)) {
         let x = column(s);
@@ -66,6 +68,33 @@ pub(crate) fn only_sensors(data: &Dataset) -> (std::borrow::Cow<'_, Dataset>, Ve
     let said =
         dropped.into_iter().map(|(name, why)| format!("column `{name}` is not read as a sensor: {why}")).collect();
     (std::borrow::Cow::Owned(kept), said)
+}
+
+/// `holdout` (its sensor columns in `train`'s order) with each driver column — neither a declared
+/// accelerometer's tilt nor a branch's joint — shifted so that its mean over the hold-out session is the
+/// training session's: a column not declared has no known zero, so across sessions only its changes are
+/// read (a remounted sensor, a base resting otherwise, shift its level without the robot changing). What
+/// the refitted protocol scores, as it refits the registration: the session's own reference.
+pub(crate) fn re_referenced(train: &Dataset, holdout: &Dataset) -> Dataset {
+    let mut out = holdout.clone();
+    let declared = |k: usize| {
+        train.tilt_sensors.iter().any(|t| (t.column..t.column + if t.below.is_some() { 6 } else { 3 }).contains(&k))
+            || train.branch_columns.iter().any(|b| b.holds(k))
+    };
+    let mean = |d: &Dataset, k: usize| {
+        let v: Vec<f64> = d.sensor_values.iter().filter_map(|r| r.get(k).copied()).filter(|v| v.is_finite()).collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+    };
+    for k in (0..train.sensor_names.len()).filter(|&k| !declared(k)) {
+        if let (Some(a), Some(b)) = (mean(train, k), mean(holdout, k)) {
+            for r in &mut out.sensor_values {
+                if let Some(v) = r.get_mut(k) {
+                    *v += a - b;
+                }
+            }
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -232,27 +232,30 @@ fn gather(outer: usize, outcomes: Vec<OuterOutcome>) -> Nested {
 /// probe — the effects kept as fitted.
 pub(crate) fn transfer_score(
     scorer: &Scorer<'_>,
-    holdout: &Dataset,
+    exported: &Dataset,
+    own: &Dataset,
     effects: &[Effect],
     shrinkage: f64,
     config: &Config,
 ) -> Result<Transfer, DiagnoseError> {
     let robot = scorer.robot;
-    let rows: Vec<usize> = (0..holdout.len()).collect();
+    let rows: Vec<usize> = (0..exported.len()).collect();
     // A hold-out file is scored as the export is used: in the frame the training measurements ended in.
-    let terms = PoseTerms::against(robot, holdout, scorer.data, config.orientation_lever_mm).in_latest_frame();
+    let terms_of =
+        |h: &Dataset| PoseTerms::against(robot, h, scorer.data, config.orientation_lever_mm).in_latest_frame();
+    let (terms, own_terms) = (terms_of(exported), terms_of(own));
     let (trained, f) = scorer.fit_shrunk(effects, &scorer.all(), shrinkage)?;
-    let score = |model: &Model, theta: &[f64]| -> Result<Stats, DiagnoseError> {
-        let r = residuals(robot, model, theta, holdout, &rows, &terms)?;
+    let score = |model: &Model, theta: &[f64], holdout: &Dataset, terms: &PoseTerms| -> Result<Stats, DiagnoseError> {
+        let r = residuals(robot, model, theta, holdout, &rows, terms)?;
         Ok(Stats::of(&norms(&r, terms.stride())))
     };
-    let same_frame = score(&trained, &f.theta)?;
+    let same_frame = score(&trained, &f.theta, exported, &terms)?;
     if !trained.effects().iter().any(|b| !b.is_reported()) {
         return Ok(Transfer { same_frame, refitted: same_frame });
     }
     let mut model = Model::new(robot, effects.to_vec())?;
     if model.has_registration() || effects.contains(&Effect::ToolPoint) {
-        model = model.with_start(initial_frames(robot, holdout, &rows, effects)?);
+        model = model.with_start(initial_frames(robot, own, &rows, effects)?);
     }
     let mut theta = f.theta.clone();
     let mut movable = vec![false; model.len()];
@@ -263,8 +266,8 @@ pub(crate) fn transfer_score(
             movable[o..o + b.len()].fill(true);
         }
     }
-    let refit = fit_from(robot, &model, holdout, &rows, &terms, &Start::new(theta, movable))?;
-    Ok(Transfer { same_frame, refitted: score(&model, &refit.theta)? })
+    let refit = fit_from(robot, &model, own, &rows, &own_terms, &Start::new(theta, movable))?;
+    Ok(Transfer { same_frame, refitted: score(&model, &refit.theta, own, &own_terms)? })
 }
 
 /// A model's errors on a hold-out file under both protocols ([`evaluate`]).
@@ -295,7 +298,8 @@ pub fn evaluate(
             all.push(*e);
         }
     }
-    transfer_score(&scorer, holdout, &all, 0.0, config)
+    let own = crate::sensors::re_referenced(data, holdout);
+    transfer_score(&scorer, holdout, &own, &all, 0.0, config)
 }
 
 #[cfg(test)]

@@ -296,7 +296,24 @@ impl Setup {
 fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex]) -> Vec<Effect> {
     let mut c = Vec::new();
     let columns = |t: &thermokin_chain::TiltSensor| if t.below.is_some() { 6 } else { 3 };
-    let declared = |k: usize| data.tilt_sensors.iter().any(|t| (t.column..t.column + columns(t)).contains(&k));
+    let declared = |k: usize| {
+        data.tilt_sensors.iter().any(|t| (t.column..t.column + columns(t)).contains(&k))
+            || data.branch_columns.iter().any(|b| b.holds(k))
+    };
+    // A branch the set logs loads every revolute joint below its link (a torso carrying the other arm).
+    for b in &data.branch_columns {
+        let (Some(branch), Some(first), Ok(index)) =
+            (robot.branches().get(b.branch), SensorId::of(data, b.column), u8::try_from(b.branch))
+        else {
+            continue;
+        };
+        for &j in joints {
+            let n = thermokin_chain::branch_load_basis_len(robot.chain(), branch, j.index());
+            if let Ok(count) = u8::try_from(n).map_err(|_| ()).and_then(|n| if n > 0 { Ok(n) } else { Err(()) }) {
+                c.push(Effect::BranchLoad(j, first, crate::effect::BranchAt { branch: index, count }));
+            }
+        }
+    }
     for t in &data.tilt_sensors {
         let over = if t.below.is_some() { crate::effect::TiltOver::Below } else { crate::effect::TiltOver::Ground };
         if let (Ok(j), Some(sensor)) = (JointIndex::of(robot, t.link), SensorId::of(data, t.column)) {

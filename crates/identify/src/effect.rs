@@ -232,10 +232,27 @@ pub enum Effect {
     /// chain ([`TiltOver::Below`]), what it turns beyond that sensor's tilt (the next three columns),
     /// seen at that sensor's own yaw `ψ_b`: `Δθ = R_z(ψ) ω − R_z(ψ_b) ω_b`; `[ψ, r_x, r_y, r_z, ψ_b]` (5).
     Tilt(JointIndex, SensorId, TiltOver),
+    /// The load of one of the robot's branches ([`thermokin_chain::Branch`], a second arm on a torso) on
+    /// revolute joint `j`'s gravity compliance, without masses: `Δq_j = Σ θ_b g_b(q, q_branch)`, the
+    /// functions of [`thermokin_chain::branch_load_basis_into`] whose span holds the torque of any masses
+    /// on the branch, the weights lumping the joint's stiffness with them (radians). The branch's joint
+    /// readings are the sensor columns from `SensorId` on, one per branch joint (degrees; mm for a slide),
+    /// as [`thermokin_chain::Dataset::branch_columns`] places them.
+    BranchLoad(JointIndex, SensorId, BranchAt),
     /// A step of the measurement frame — the tracker knocked, its stand or the robot's base moved — at
     /// a point of the measuring order: the poses from there on are measured in the frame moved by a
     /// translation (3, mm) and a rotation `Rx·Ry·Rz` (3), applied in the measurement frame (6).
     FrameStep(StepAt),
+}
+
+/// Which branch loads a joint ([`Effect::BranchLoad`]): its place among the robot's branches and its
+/// functions' count ([`thermokin_chain::branch_load_basis_len`], fixed by the robot).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct BranchAt {
+    /// Its index in [`thermokin_chain::Robot::branches`].
+    pub branch: u8,
+    /// How many weights the effect takes.
+    pub count: u8,
 }
 
 /// What a measured tilt is taken over ([`Effect::Tilt`]).
@@ -390,6 +407,7 @@ impl Effect {
             | Effect::Backlash(j)
             | Effect::ThermalDrift(j, _)
             | Effect::SensorDrift(j, _)
+            | Effect::BranchLoad(j, ..)
             | Effect::Tilt(j, ..) => Some(j),
             Effect::Registration
             | Effect::ToolPoint
@@ -433,6 +451,7 @@ impl Effect {
             Effect::Tilt(_, _, TiltOver::Below) => 5,
             Effect::Periodic(_) => 4,
             Effect::Straightness(_) => 5,
+            Effect::BranchLoad(.., at) => at.count as usize,
             Effect::LumpedCompliance(_, n)
             | Effect::LateralCompliance(_, n)
             | Effect::LumpedLateralCompliance(_, n, _) => *n as usize,
@@ -465,6 +484,7 @@ impl Effect {
             Effect::FrameStep(_) => "frame_step",
             Effect::SensorDrift(..) => "sensor_drift",
             Effect::Tilt(..) => "tilt",
+            Effect::BranchLoad(..) => "branch_load",
         }
     }
 
@@ -477,6 +497,9 @@ impl Effect {
             Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
+            Effect::BranchLoad(j, s, _) => {
+                return format!("branch_load[{}] (the branch from joint {}, no masses)", j.number(), s.name());
+            }
             Effect::Tilt(j, s, _) => {
                 // Its columns are `NAME.tilt_x`, …: the sensor's name.
                 let name = s.name();
@@ -500,6 +523,7 @@ impl Effect {
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::LumpedCompliance(_, n) => (1..=*n as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
+            Effect::BranchLoad(.., at) => (1..=at.count as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
             Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
             Effect::LateralCompliance(_, n) => [
                 "tilt1_deg_per_Nm",
@@ -586,6 +610,7 @@ impl Effect {
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
                 | Effect::Tilt(..)
+                | Effect::BranchLoad(..)
                 | Effect::FrameStep(_)
         )
     }
@@ -609,6 +634,7 @@ impl Effect {
                 Effect::JointOffset(_)
                 | Effect::JointCompliance(_)
                 | Effect::LumpedCompliance(..)
+                | Effect::BranchLoad(..)
                 | Effect::ComplianceCoupling(_)
                 | Effect::Periodic(_)
                 | Effect::Backlash(_)

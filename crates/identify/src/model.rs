@@ -194,6 +194,7 @@ impl Model {
         let mut loads: Vec<Vec<f64>> = vec![Vec::new(); dof];
         let mut lateral_loads: Vec<Vec<f64>> = vec![Vec::new(); dof];
         let mut drift = Vec::new();
+        let mut branch_loads: Vec<thermokin_deform::BranchLoad> = Vec::new();
         let first = data.measurements.iter().min_by(|a, b| a.time_min.total_cmp(&b.time_min));
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
             match *e {
@@ -207,6 +208,7 @@ impl Model {
                     own.iter_mut().zip(&theta[o..o + n as usize]).for_each(|(l, t)| *l += t);
                 }
                 Effect::ComplianceCoupling(j) => joints[j.index()].coupling_rad_per_nm += theta[o],
+                Effect::BranchLoad(j, _, at) => branch_loads.push(branch_load(robot, j, at, &theta[o..])),
                 Effect::LateralCompliance(j, n) => {
                     for (c, t) in joints[j.index()].lateral.iter_mut().zip(&theta[o..o + n as usize]) {
                         *c += t;
@@ -253,6 +255,7 @@ impl Model {
             .with_joint_corrections(joints)?
             .with_gravity_loads(loads)?
             .with_lateral_loads(lateral_loads)?
+            .with_branch_loads(branch_loads)?
             .with_drift(drift)?)
     }
 
@@ -315,6 +318,7 @@ impl Model {
                 | Effect::ThermalDrift(..)
                 | Effect::SensorDrift(..)
                 | Effect::Tilt(..)
+                | Effect::BranchLoad(..)
                 | Effect::FrameStep(_) => {}
             }
         }
@@ -371,6 +375,7 @@ impl Model {
                 Effect::JointOffset(j)
                 | Effect::JointCompliance(j)
                 | Effect::LumpedCompliance(j, _)
+                | Effect::BranchLoad(j, ..)
                 | Effect::JointScale(j)
                 | Effect::Periodic(j)
                 | Effect::Backlash(j) => rows.zeros[j.index()] = true,
@@ -393,6 +398,21 @@ pub struct StartFrames {
     pub registration: Isometry3<f64>,
     /// The tool point's start, added to the robot's tool translation (the last joint's frame), mm.
     pub tool_point_mm: Vector3<f64>,
+}
+
+/// A branch's load on joint `j` as the robot model carries it ([`Effect::BranchLoad`], its weights from
+/// `theta[0]`): the branch by its name, which the robot model checks.
+fn branch_load(
+    robot: &Robot,
+    j: crate::JointIndex,
+    at: crate::BranchAt,
+    theta: &[f64],
+) -> thermokin_deform::BranchLoad {
+    thermokin_deform::BranchLoad {
+        joint: j.index(),
+        branch: robot.branches().get(at.branch as usize).map(|b| b.name.clone()).unwrap_or_default(),
+        weights: theta[..at.count as usize].to_vec(),
+    }
 }
 
 /// The drift rows of a measured tilt ([`Effect::Tilt`], parameters `p`): one per component of its

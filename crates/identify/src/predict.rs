@@ -4,7 +4,7 @@
 use nalgebra::{Matrix3, Matrix6xX, Unit, Vector3};
 use thermokin_chain::{Approach, Chain, ErrorParams, JointKind, Measurement, ParameterLayout, ParameterRows, Robot};
 
-use crate::effect::{DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at, tilt_turn};
+use crate::effect::{BranchAt, DriftShape, Effect, LINEAR_DRIFT_REFERENCE_MIN, TAU_RANGE_MIN, six_at, tilt_turn};
 use crate::error::IdentifyError;
 use crate::model::Model;
 
@@ -37,6 +37,8 @@ pub struct ChainCache {
     /// at the effect's parameter offsets (zero elsewhere), and a buffer for one joint's basis.
     loads: Vec<f64>,
     basis: Vec<f64>,
+    /// A branch's joint values at the current measurement ([`Effect::BranchLoad`]).
+    branch_q: Vec<f64>,
     /// For a model with a lateral compliance: each joint's gravity moments across its axis at the current
     /// measurement ([`thermokin_chain::lateral_gravity_moments_into`]), N·m.
     lateral: Option<Vec<[f64; 2]>>,
@@ -176,6 +178,7 @@ impl Model {
                             e,
                             Effect::JointCompliance(_)
                                 | Effect::LumpedCompliance(..)
+                                | Effect::BranchLoad(..)
                                 | Effect::LateralCompliance(..)
                                 | Effect::LumpedLateralCompliance(..)
                                 | Effect::ComplianceCoupling(_)
@@ -197,6 +200,7 @@ impl Model {
                     torques: Vec::with_capacity(dof),
                     loads: vec![0.0; self.len()],
                     basis: Vec::new(),
+                    branch_q: Vec::new(),
                     lateral: bends.then(|| Vec::with_capacity(dof)),
                 })
             }
@@ -217,26 +221,7 @@ impl Model {
     ) -> Result<(), IdentifyError> {
         q.clear();
         q.extend_from_slice(&m.q);
-        if let Some((chain, down)) = &cached.gravity {
-            thermokin_chain::gravity_torques_into(
-                chain,
-                robot.masses(),
-                &m.q,
-                inputs.sin_cos,
-                down,
-                &mut cached.torques,
-            )?;
-            if let Some(lateral) = cached.lateral.as_mut() {
-                thermokin_chain::lateral_gravity_moments_into(
-                    chain,
-                    robot.masses(),
-                    &m.q,
-                    inputs.sin_cos,
-                    down,
-                    lateral,
-                )?;
-            }
-        }
+        gravity_at(robot, &m.q, inputs.sin_cos, cached)?;
         let mut drift_rows = std::mem::take(&mut cached.drift_rows);
         cached.drift_scale.clear();
         cached.tilt_rates.clear();
@@ -250,6 +235,11 @@ impl Model {
                 Effect::LumpedCompliance(j, n) => {
                     let (j, n) = (j.index(), n as usize);
                     load_basis(cached, *e, &m.q, inputs.sin_cos, o)?;
+                    q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
+                }
+                Effect::BranchLoad(j, first, at) => {
+                    let (j, n) = (j.index(), at.count as usize);
+                    branch_basis(cached, robot, at, first.index(), &m.q, inputs.sensors, j, o)?;
                     q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
                 }
                 Effect::ComplianceCoupling(j) => {
@@ -448,7 +438,7 @@ impl Model {
                     let scale = if chain.joints()[j].kind == JointKind::Revolute { cached.torques[j] } else { 0.0 };
                     copy(o, layout.zero(j), scale);
                 }
-                Effect::LumpedCompliance(j, n) => {
+                Effect::LumpedCompliance(j, n) | Effect::BranchLoad(j, _, BranchAt { count: n, .. }) => {
                     // ∂p/∂θ_b = ∂p/∂zero_j · f_b(q).
                     let zero = layout.zero(j.index());
                     (0..n as usize).for_each(|b| copy(o + b, zero, cached.loads[o + b]));
@@ -592,6 +582,54 @@ fn bent_row(e: Effect, chain: &Chain, c: &[f64], moments: [f64; 2], d: f64) -> E
         }
         _ => ErrorParams::ZERO,
     }
+}
+
+/// The gravity torques (and, for a lateral compliance, the moments across each joint) at the measured
+/// joints `q`, on the model's gravity chain, into the cache — for a model with a compliance.
+fn gravity_at(
+    robot: &Robot,
+    q: &[f64],
+    sin_cos: Option<&[(f64, f64)]>,
+    cached: &mut ChainCache,
+) -> Result<(), IdentifyError> {
+    if let Some((chain, down)) = &cached.gravity {
+        thermokin_chain::gravity_torques_into(chain, robot.masses(), q, sin_cos, down, &mut cached.torques)?;
+        if let Some(lateral) = cached.lateral.as_mut() {
+            thermokin_chain::lateral_gravity_moments_into(chain, robot.masses(), q, sin_cos, down, lateral)?;
+        }
+    }
+    Ok(())
+}
+
+/// A branch's load functions on joint `j` ([`Effect::BranchLoad`]) at the measured joints `q` and the
+/// branch's readings (the sensor columns from `column`), on the model's gravity chain, kept in
+/// `cached.loads` at the effect's offset `o` for its Jacobian. A pose without the readings has none.
+#[allow(clippy::too_many_arguments)] // The pose's inputs, as move_joints_and_drift holds them.
+fn branch_basis(
+    cached: &mut ChainCache,
+    robot: &Robot,
+    at: BranchAt,
+    column: usize,
+    q: &[f64],
+    sensors: &[f64],
+    j: usize,
+    o: usize,
+) -> Result<(), IdentifyError> {
+    let n = at.count as usize;
+    let (Some(branch), Some((chain, down))) = (robot.branches().get(at.branch as usize), &cached.gravity) else {
+        cached.loads[o..o + n].fill(0.0);
+        return Ok(());
+    };
+    let Some(readings) = sensors.get(column..column + branch.joints.len()) else {
+        cached.loads[o..o + n].fill(0.0);
+        return Ok(());
+    };
+    cached.branch_q.clear();
+    cached.branch_q.extend(readings.iter().enumerate().map(|(i, r)| branch.joint_value(i, *r)));
+    thermokin_chain::branch_load_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
+    let used = cached.basis.len().min(n);
+    cached.loads[o..o + used].copy_from_slice(&cached.basis[..used]);
+    Ok(())
 }
 
 /// A compliance without masses' functions of the measured joint values `q` (as the torques are computed,

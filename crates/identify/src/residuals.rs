@@ -199,6 +199,38 @@ mod tests {
         }
     }
 
+    /// The analytic Jacobian of a branch's load on a joint (`Effect::BranchLoad`: an arm of two joints
+    /// hanging from the IRB 140's second link, its joints logged in degrees pose by pose) against central
+    /// differences, beside the joint's own compliance without masses; every weight moves the poses.
+    #[test]
+    fn a_branch_loads_jacobian_is_the_finite_differences() {
+        let branch = thermokin_chain::Branch {
+            name: "second_arm".into(),
+            link: 2,
+            joints: vec![
+                thermokin_chain::Joint::revolute("b1", Vector3::new(0.0, 200.0, 100.0), Vector3::y_axis()),
+                thermokin_chain::Joint::revolute("b2", Vector3::new(0.0, 0.0, -300.0), Vector3::x_axis()),
+            ],
+        };
+        let robot = Robot::new("IRB 140", irb140_table9()).with_branches(vec![branch]).unwrap();
+        let mut data = eight_poses(9);
+        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        data.sensor_names = vec!["b1".into(), "b2".into()];
+        data.sensor_values = (0..data.len()).map(|_| vec![60.0 * gauss(&mut rng), 40.0 * gauss(&mut rng)]).collect();
+        data.branch_columns = vec![thermokin_chain::BranchColumns { branch: 0, column: 0, len: 2 }];
+        let joint = JointIndex::of(&robot, 1).unwrap();
+        let at = crate::BranchAt { branch: 0, count: 4 };
+        let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
+        let model =
+            Model::new(&robot, vec![Effect::named(&robot, "joint_compliance", Some(1)).unwrap(), load]).unwrap();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let theta: Vec<f64> = (0..model.len()).map(|k| 2e-4 * ((k as f64 * 0.9).cos() + 0.2)).collect();
+        let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
+        for k in model.len() - 4..model.len() {
+            assert!(jac.col(k).norm_max() > 1e-3, "column {k} is zero");
+        }
+    }
+
     /// The analytic Jacobian of the joint-level effects that move with gravity — a compliance and a
     /// compliance coupling of two joints — against central differences of the residuals (which are
     /// `measured − predicted`: the Jacobian is the prediction's, the negative of the residuals').

@@ -59,6 +59,45 @@ struct RobotFile {
     /// Accelerometers or inclinometers on the robot's links.
     #[serde(default)]
     accelerometer: Vec<Spanned<AccelerometerSpec>>,
+    /// The rest of the robot's tree: serial chains hanging from its links.
+    #[serde(default)]
+    branch: Vec<Spanned<BranchSpec>>,
+    /// The loads of branches on joints' gravity compliance, known without masses.
+    #[serde(default)]
+    branch_load: Vec<Spanned<BranchLoadSpec>>,
+}
+
+/// `[[branch]]`: a serial chain hanging from link `link` (0 the base, `k` the link joint `k` moves), its
+/// `[[branch.joint]]` rows as `[[joint]]` rows (geometry only).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BranchSpec {
+    name: String,
+    link: usize,
+    joint: Vec<BranchJointSpec>,
+}
+
+/// `[[branch.joint]]`: a branch joint's name, axis, offset from the previous joint (mm), type and zero.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BranchJointSpec {
+    name: String,
+    axis: AxisSpec,
+    offset_mm: [f64; 3],
+    #[serde(default, rename = "type")]
+    kind: KindSpec,
+    #[serde(default)]
+    zero: f64,
+}
+
+/// `[[branch_load]]`: branch `branch`'s load on joint `joint`'s (1-based) gravity compliance, the
+/// weights of `thermokin_chain::branch_load_basis_into`'s functions in degrees.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BranchLoadSpec {
+    joint: usize,
+    branch: String,
+    load_deg: Vec<f64>,
 }
 
 /// `[[accelerometer]]`: a sensor on a link, its columns `NAME_x`, `NAME_y`, `NAME_z`.
@@ -285,7 +324,34 @@ pub fn parse_robot_model_toml(path: &Path, text: &str) -> Result<RobotModel, IoE
         one.map_err(|e| IoError::input(path, at(spanned.span()), "accelerometer", e.to_string()))?;
     }
     let robot = robot.with_accelerometers(sensors).map_err(described)?;
+    let robot = with_branches(path, text, &file, robot)?;
     corrections(path, text, &file, robot)
+}
+
+/// The robot with its file's `[[branch]]` tables, each checked against its chain where it stands.
+fn with_branches(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Result<Robot, IoError> {
+    let mut branches = Vec::with_capacity(file.branch.len());
+    for (b, spanned) in file.branch.iter().enumerate() {
+        let (line, spec) = (Some(line_of(text, spanned.span().start)), spanned.get_ref());
+        let mut joints = Vec::with_capacity(spec.joint.len());
+        for (i, j) in spec.joint.iter().enumerate() {
+            let field = |f: &str| format!("branch[{}].joint[{}].{f}", b + 1, i + 1);
+            let axis = axis(&j.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
+            finite(path, line, &field("offset_mm"), &j.offset_mm)?;
+            finite(path, line, &field("zero"), &[j.zero])?;
+            let offset = Vector3::from(j.offset_mm);
+            let mut joint = match j.kind {
+                KindSpec::Revolute => Joint::revolute(j.name.clone(), offset, axis),
+                KindSpec::Prismatic => Joint::prismatic(j.name.clone(), offset, axis),
+            };
+            joint.zero = units::joint_value_in(joint.kind, j.zero);
+            joints.push(joint);
+        }
+        branches.push(thermokin_chain::Branch { name: spec.name.clone(), link: spec.link, joints });
+        let checked = Robot::new("check", robot.chain().clone()).with_branches(branches.clone());
+        checked.map_err(|e| IoError::input(path, line, format!("branch[{}]", b + 1), e.to_string()))?;
+    }
+    robot.with_branches(branches).map_err(|e| IoError::input(path, None, "branch", e.to_string()))
 }
 
 /// A TOML syntax or schema error located: the line, the key it names, and for a key in other units
@@ -517,6 +583,7 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
             let line = file.joint.get(joint - 1).and_then(|s| at(s.span()));
             IoError::input(path, line, format!("joint[{joint}]"), e.to_string())
         })?;
+    model = with_branch_loads(path, text, file, model)?;
     let mut drift = Vec::with_capacity(file.drift.len());
     for (i, spanned) in file.drift.iter().enumerate() {
         let (line, spec) = (at(spanned.span()), spanned.get_ref());
@@ -538,6 +605,35 @@ fn corrections(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Resul
         model = model.with_gravity(Unit::new_normalize(g));
     }
     Ok(model)
+}
+
+/// The model with its file's `[[branch_load]]` tables, each checked where it stands.
+fn with_branch_loads(path: &Path, text: &str, file: &RobotFile, model: RobotModel) -> Result<RobotModel, IoError> {
+    let at = |span: std::ops::Range<usize>| Some(line_of(text, span.start));
+    let mut branch_loads = Vec::with_capacity(file.branch_load.len());
+    for (i, spanned) in file.branch_load.iter().enumerate() {
+        let (line, spec) = (at(spanned.span()), spanned.get_ref());
+        let field = |f: &str| format!("branch_load[{}].{f}", i + 1);
+        let dof = model.robot().chain().dof();
+        if !(1..=dof).contains(&spec.joint) {
+            return Err(IoError::input(
+                path,
+                line,
+                field("joint"),
+                format!("joint {} of a robot with {dof} joints", spec.joint),
+            ));
+        }
+        finite(path, line, &field("load_deg"), &spec.load_deg)?;
+        let load = thermokin_deform::BranchLoad {
+            joint: spec.joint - 1,
+            branch: spec.branch.clone(),
+            weights: spec.load_deg.iter().map(|&d| units::radians(d)).collect(),
+        };
+        branch_loads.push(load);
+        let checked = model.clone().with_branch_loads(branch_loads[branch_loads.len() - 1..].to_vec());
+        checked.map_err(|e| IoError::input(path, line, format!("branch_load[{}]", i + 1), e.to_string()))?;
+    }
+    model.with_branch_loads(branch_loads).map_err(|e| IoError::input(path, None, "branch_load", e.to_string()))
 }
 
 /// One `[[drift]]` table.
@@ -944,7 +1040,42 @@ pub fn robot_model_to_toml(model: &RobotModel) -> String {
             l = a.link
         ));
     }
+    branches_toml(&mut s, model);
     s
+}
+
+/// The `[[branch]]` and `[[branch_load]]` tables of a model.
+fn branches_toml(s: &mut String, model: &RobotModel) {
+    for b in model.robot().branches() {
+        s.push_str(&format!(
+            "\n# A chain hanging from link {l} (0 the base); a measurements file's columns named as its joints give their positions (degrees; mm for a slide).\n[[branch]]\nname = {n:?}\nlink = {l}\n",
+            n = b.name,
+            l = b.link
+        ));
+        for j in &b.joints {
+            s.push_str(&format!(
+                "[[branch.joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
+                j.name,
+                axis_toml(&j.axis),
+                fmt3(&j.offset)
+            ));
+            if j.kind == JointKind::Prismatic {
+                s.push_str("type = \"prismatic\"\n");
+            }
+            if j.zero != 0.0 {
+                s.push_str(&format!("zero = {}\n", num(units::joint_value_out(j.kind, j.zero))));
+            }
+        }
+    }
+    for l in model.branch_loads() {
+        let deg: Vec<String> = l.weights.iter().map(|&w| format!("{:e}", units::degrees(w))).collect();
+        s.push_str(&format!(
+            "\n# The load of branch {b:?} on joint {j}'s compliance, without masses: the weights of its load functions (give the branch's joint positions at run time).\n[[branch_load]]\njoint = {j}\nbranch = {b:?}\nload_deg = [{}]\n",
+            deg.join(", "),
+            b = l.branch,
+            j = l.joint + 1
+        ));
+    }
 }
 
 /// One `[[joint]]` table.

@@ -259,3 +259,6 @@ mod rocking {
     }
 }
 pub use rocking::rocking_lift_session;
+
+mod torso;
+pub use torso::{two_armed_torso_session, two_armed_torso_urdf};

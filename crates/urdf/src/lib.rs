@@ -136,9 +136,11 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
         .zip(&frames)
         .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
         .collect();
+    let branches = tree.branches(&path);
     let imported = Robot::new(robot.name.clone(), chain)
         .with_masses(masses)
         .and_then(|r| r.with_ratings(folded.ratings))
+        .and_then(|r| r.with_branches(branches))
         .map_err(described)?;
     Ok(ImportedRobot { robot: imported, base_link: base, tip_link: tip })
 }
@@ -279,6 +281,79 @@ impl<'r> Tree<'r> {
                 ))),
             },
         }
+    }
+
+    /// The branches hanging from the links of `path` (the measured chain's joints): from each link on it
+    /// (the base's too), each joint leading off the path starts one, followed down its tree (at a fork,
+    /// into the child with the most moving joints below it, then the first by name) and cut before a
+    /// mimic joint; folded like the measured chain along the path to it, so that its joints are in the
+    /// same-orientation table's terms. A branch of no moving joint is none.
+    fn branches(&self, path: &[&'r urdf_rs::Joint]) -> Vec<thermokin_chain::Branch> {
+        let on_path: HashSet<&str> = path.iter().map(|j| j.child.link.as_str()).collect();
+        let moving = |j: &urdf_rs::Joint| !matches!(j.joint_type, urdf_rs::JointType::Fixed);
+        let mut out = Vec::new();
+        for k in 0..=path.len() {
+            let link = if k == 0 {
+                path.first().map(|j| j.parent.link.as_str())
+            } else {
+                Some(path[k - 1].child.link.as_str())
+            };
+            let Some(link) = link else { continue };
+            let mut leaving: Vec<&urdf_rs::Joint> = self
+                .robot
+                .joints
+                .iter()
+                .filter(|j| j.parent.link == link && !on_path.contains(j.child.link.as_str()))
+                .collect();
+            leaving.sort_by(|a, b| a.name.cmp(&b.name));
+            for first in leaving {
+                let mut along: Vec<&urdf_rs::Joint> = Vec::new();
+                let mut next = Some(first);
+                let modelled = |j: &&urdf_rs::Joint| {
+                    j.mimic.is_none()
+                        && matches!(
+                            j.joint_type,
+                            urdf_rs::JointType::Fixed
+                                | urdf_rs::JointType::Revolute
+                                | urdf_rs::JointType::Continuous
+                                | urdf_rs::JointType::Prismatic
+                        )
+                };
+                while let Some(j) = next.filter(modelled) {
+                    along.push(j);
+                    let mut below: Vec<&urdf_rs::Joint> =
+                        self.robot.joints.iter().filter(|c| c.parent.link == j.child.link).collect();
+                    below.sort_by(|a, b| self.moving_below(b).cmp(&self.moving_below(a)).then(a.name.cmp(&b.name)));
+                    next = below.first().copied();
+                }
+                if !along.iter().any(|j| moving(j)) {
+                    continue;
+                }
+                let shared = path[..k].iter().filter(|j| moving(j)).count();
+                let full: Vec<&urdf_rs::Joint> = path[..k].iter().copied().chain(along).collect();
+                // A side branch the model cannot read (a zero axis) leaves the measured chain as it was.
+                let Ok(folded) = fold(self.robot, &full, &self.src) else { continue };
+                let Ok(chain) = Chain::from_factors(&folded.factors, &folded.pending) else { continue };
+                out.push(thermokin_chain::Branch {
+                    name: first.child.link.clone(),
+                    link: shared,
+                    joints: chain.joints()[shared..].to_vec(),
+                });
+            }
+        }
+        out
+    }
+
+    /// How many moving joints the subtree below joint `j` holds, `j` included.
+    fn moving_below(&self, j: &urdf_rs::Joint) -> usize {
+        let own = usize::from(!matches!(j.joint_type, urdf_rs::JointType::Fixed));
+        own + self
+            .robot
+            .joints
+            .iter()
+            .filter(|c| c.parent.link == j.child.link)
+            .map(|c| self.moving_below(c))
+            .sum::<usize>()
     }
 
     /// The joints from `base` to `tip`, in order.

@@ -1,0 +1,261 @@
+//! Robots with branches (issue #59): a torso carrying two arms, a lift carrying a second tool. The
+//! measured chain is one path of the robot's tree; a [`Branch`] is a serial chain of joints hanging from
+//! one of its links, whose joint values a measurement file may log beside the measured chain's. What
+//! hangs from the branch loads the links it shares with the measured chain: its gravity torque about a
+//! shared joint changes with the branch's joints, which a model of the measured chain alone reads as
+//! noise.
+//!
+//! The torque of any masses on the branch's links about revolute joint `j` of the measured chain (`j`
+//! below the link the branch hangs from) follows [`crate::gravity_load_basis_into`]'s derivation along
+//! the branch's path: with `w = d × aⱼ`, each branch link `b` with unknown first moment `v_b` (constant in
+//! its frame) adds `v_b · (R_bᵀ w)`, its origin terms folding inwards to a moment of the link the branch
+//! hangs from — already among the measured chain's own functions — and a slide of the branch adds its
+//! travel times the mass it carries, `q_b (R_b a_b) · w`. So the branch adds, per revolute joint of it,
+//! the two functions `e_b,k · (R_bᵀ w)` (the perpendiculars of its axis) and per slide one; `R_b` is the
+//! orientation of branch link `b`: the measured chain's link the branch hangs from, turned by the
+//! branch's joints in the same-orientation convention (section 2.3: every joint frame keeps the base's
+//! orientation at zero, so each branch axis turns about itself as given). A test checks that the torque
+//! of masses on a branch, computed by [`crate::Robot::gravity_torques`] on the serial chain along its
+//! path, lies in the span of the measured chain's functions and these.
+
+use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
+
+use crate::gravity_loads::perpendiculars;
+use crate::{Chain, ChainError, Joint, JointKind};
+
+/// A serial chain of joints hanging from one link of the measured chain: its name, the link (0 the
+/// robot's base, `k` the link joint `k` of the measured chain moves) and its joints from that link
+/// outwards, in the same-orientation table's terms (each joint's offset from the previous one — the
+/// first's from the origin of the link it hangs from — and its axis, in the base's orientation at zero).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Branch {
+    /// Its name (a URDF's first link of the branch, or the robot file's).
+    pub name: String,
+    /// The link of the measured chain it hangs from.
+    pub link: usize,
+    /// Its joints, from that link outwards (at least one).
+    pub joints: Vec<Joint>,
+}
+
+impl Branch {
+    /// Joint `i`'s value in the library's units (radians; mm for a slide) from a measurement file's
+    /// reading of it (degrees; mm for a slide) — the one place a branch's logged joint is converted.
+    pub fn joint_value(&self, i: usize, reading: f64) -> f64 {
+        match self.joints.get(i).map(|j| j.kind) {
+            Some(JointKind::Revolute) => crate::units::radians(reading),
+            _ => reading,
+        }
+    }
+}
+
+/// The number of functions [`branch_load_basis_into`] gives for joint `joint` (0-based) of the measured
+/// chain: two per revolute and one per prismatic joint of `branch`, when `joint` is revolute and carries
+/// the branch (it lies below the link the branch hangs from); zero otherwise.
+pub fn branch_load_basis_len(chain: &Chain, branch: &Branch, joint: usize) -> usize {
+    let carries = joint < branch.link && chain.joints().get(joint).is_some_and(|j| j.kind == JointKind::Revolute);
+    if !carries {
+        return 0;
+    }
+    branch.joints.iter().map(|j| if j.kind == JointKind::Revolute { 2 } else { 1 }).sum()
+}
+
+/// The functions of the measured chain's joints `q` and the branch's `branch_q` (radians; mm for a
+/// slide: [`Branch::joint_value`]) whose weighted sum is the gravity torque about revolute joint `joint`
+/// of any masses on `branch`'s links (the module's derivation), into `out` (length
+/// [`branch_load_basis_len`]). `down` is gravity's direction in the chain's world frame.
+///
+/// ```
+/// use nalgebra::Vector3;
+/// use thermokin_chain::{Branch, Chain, FixedRow, Joint, branch_load_basis_into, branch_load_basis_len};
+/// # fn main() -> Result<(), thermokin_chain::ChainError> {
+/// // A torso turning about a horizontal axis, an arm of two joints hanging from it.
+/// let torso = vec![Joint::revolute("torso", Vector3::zeros(), Vector3::y_axis())];
+/// let chain = Chain::new(FixedRow::identity(), torso, FixedRow::identity())?;
+/// let arm = Branch {
+///     name: "left".into(),
+///     link: 1,
+///     joints: vec![
+///         Joint::revolute("left_1", Vector3::new(0.0, 200.0, 400.0), Vector3::y_axis()),
+///         Joint::revolute("left_2", Vector3::new(300.0, 0.0, 0.0), Vector3::y_axis()),
+///     ],
+/// };
+/// let mut basis = Vec::new();
+/// branch_load_basis_into(&chain, &arm, &[0.1], &[0.4, -0.3], &-Vector3::z_axis(), 0, &mut basis)?;
+/// assert_eq!((basis.len(), branch_load_basis_len(&chain, &arm, 0)), (4, 4));
+/// # Ok(())
+/// # }
+/// ```
+pub fn branch_load_basis_into(
+    chain: &Chain,
+    branch: &Branch,
+    q: &[f64],
+    branch_q: &[f64],
+    down: &Unit<Vector3<f64>>,
+    joint: usize,
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
+    out.clear();
+    if branch_load_basis_len(chain, branch, joint) == 0 {
+        return Ok(());
+    }
+    if branch_q.len() != branch.joints.len() {
+        return Err(ChainError::WrongJointCount { expected: branch.joints.len(), got: branch_q.len() });
+    }
+    if let Some(i) = branch_q.iter().position(|v| !v.is_finite()) {
+        return Err(ChainError::NonFiniteJoint { joint: i + 1 });
+    }
+    let joints = chain.joints();
+    let mut w = Vector3::zeros();
+    let mut hung_from = Matrix3::identity();
+    chain.visit_joint_frames(q, None, |i, _parent, rot: &Matrix3<f64>, _origin| {
+        if i == joint {
+            w = down.cross(&(rot * joints[i].axis.into_inner()));
+        }
+        if i + 1 == branch.link {
+            hung_from = *rot;
+        }
+    })?;
+    let mut rot = hung_from;
+    for (b, &qb) in branch.joints.iter().zip(branch_q) {
+        match b.kind {
+            JointKind::Revolute => {
+                rot *= Rotation3::from_axis_angle(&b.axis, qb + b.zero).into_inner();
+                let rw = rot.transpose() * w;
+                let [e1, e2] = perpendiculars(&b.axis);
+                out.extend([e1.dot(&rw), e2.dot(&rw)]);
+            }
+            JointKind::Prismatic => out.push(qb * (rot * b.axis.into_inner()).dot(&w)),
+        }
+    }
+    Ok(())
+}
+
+/// `branches` checked against `chain`: each named, on a link from 0 to the joint count, with at least
+/// one joint, every joint name (the measured chain's and the branches') used once.
+pub(crate) fn check_branches(chain: &Chain, branches: &[Branch]) -> Result<(), ChainError> {
+    let bad = |name: &str, message: String| Err(ChainError::BadBranch { name: name.to_string(), message });
+    let mut names: Vec<&str> = chain.joints().iter().map(|j| j.name.as_str()).collect();
+    for b in branches {
+        if b.name.trim().is_empty() {
+            return bad(&b.name, "a branch needs a name".into());
+        }
+        if b.link > chain.dof() {
+            return bad(&b.name, format!("hangs from link {} of a chain of {} joints", b.link, chain.dof()));
+        }
+        if b.joints.is_empty() {
+            return bad(&b.name, "has no joint".into());
+        }
+        for j in &b.joints {
+            if j.name.trim().is_empty() || names.contains(&j.name.as_str()) {
+                return bad(&b.name, format!("joint `{}`: every joint needs a name of its own", j.name));
+            }
+            if !(j.offset.iter().all(|v| v.is_finite()) && j.zero.is_finite() && j.axis.iter().all(|v| v.is_finite())) {
+                return bad(&b.name, format!("joint `{}`: its offset, axis and zero must be finite", j.name));
+            }
+            names.push(&j.name);
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use super::*;
+    use crate::{FixedRow, LinkMass, Robot};
+    use nalgebra::{DMatrix, DVector};
+
+    /// A torso of two revolute joints (a vertical turn, a forward bend) and a branch of three joints (a
+    /// shoulder, its roll, an elbow) hanging from the torso's second link, off its axis.
+    fn torso_and_arm() -> (Chain, Branch) {
+        let torso = vec![
+            Joint::revolute("turn", Vector3::zeros(), Vector3::z_axis()),
+            Joint::revolute("bend", Vector3::new(0.0, 0.0, 300.0), Vector3::y_axis()),
+            Joint::revolute("right_1", Vector3::new(0.0, -250.0, 350.0), Vector3::y_axis()),
+        ];
+        let chain = Chain::new(FixedRow::identity(), torso, FixedRow::identity()).unwrap();
+        let arm = Branch {
+            name: "left".into(),
+            link: 2,
+            joints: vec![
+                Joint::revolute("left_1", Vector3::new(0.0, 250.0, 350.0), Vector3::y_axis()),
+                Joint::revolute("left_2", Vector3::new(0.0, 80.0, 0.0), Vector3::x_axis()),
+                Joint::revolute("left_3", Vector3::new(0.0, 0.0, -300.0), Vector3::y_axis()),
+            ],
+        };
+        (chain, arm)
+    }
+
+    /// The torque about the torso's bend of masses on the branch's links alone, computed independently: by
+    /// [`Robot::gravity_torques`] on the serial chain along the branch's path (the torso's joints, then
+    /// the branch's), masses on the branch's links only. It lies in the span of the measured chain's own
+    /// functions and the branch's (residual at rounding), and not in the span of the chain's alone.
+    #[test]
+    fn a_branchs_gravity_torque_lies_in_the_span_of_its_functions() {
+        let (chain, arm) = torso_and_arm();
+        let path: Vec<Joint> = chain.joints()[..arm.link].iter().cloned().chain(arm.joints.iter().cloned()).collect();
+        let along = Chain::new(FixedRow::identity(), path, FixedRow::identity()).unwrap();
+        let masses = vec![
+            None,
+            None,
+            Some(LinkMass { mass_kg: 4.0, com_mm: Vector3::new(10.0, 40.0, -20.0) }),
+            Some(LinkMass { mass_kg: 2.5, com_mm: Vector3::new(0.0, 5.0, -150.0) }),
+            Some(LinkMass { mass_kg: 1.5, com_mm: Vector3::new(30.0, 0.0, -120.0) }),
+        ];
+        let along = Robot::new("along", along).with_masses(masses).unwrap();
+        let down = -Vector3::z_axis();
+        let (mut own, mut extra) = (Vec::new(), Vec::new());
+        let mut rows_all = Vec::new();
+        let mut rows_own = Vec::new();
+        let mut torque = Vec::new();
+        let mut state = 7_u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 3.0 - 1.5
+        };
+        for _ in 0..60 {
+            let q = [next(), next(), next()];
+            let bq = [next(), next(), next()];
+            crate::gravity_load_basis_into(&chain, &q, None, &down, 1, &mut own).unwrap();
+            branch_load_basis_into(&chain, &arm, &q, &bq, &down, 1, &mut extra).unwrap();
+            rows_own.push(own.clone());
+            rows_all.push(own.iter().chain(&extra).copied().collect::<Vec<_>>());
+            torque.push(along.gravity_torques(&[q[0], q[1], bq[0], bq[1], bq[2]], &down).unwrap()[1]);
+        }
+        let residual = |rows: &[Vec<f64>]| {
+            let a = DMatrix::from_fn(rows.len(), rows[0].len(), |r, c| rows[r][c]);
+            let b = DVector::from_vec(torque.clone());
+            let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
+            (a * x - &b).norm() / b.norm()
+        };
+        assert_eq!(extra.len(), branch_load_basis_len(&chain, &arm, 1));
+        assert!(residual(&rows_all) < 1e-9, "{}", residual(&rows_all));
+        assert!(residual(&rows_own) > 0.05, "the chain's own functions alone: {}", residual(&rows_own));
+    }
+
+    /// A branch carried by no revolute joint below it has no functions; a joint above its link neither.
+    #[test]
+    fn only_the_joints_below_a_branch_carry_it() {
+        let (chain, arm) = torso_and_arm();
+        assert_eq!(branch_load_basis_len(&chain, &arm, 0), 6);
+        assert_eq!(branch_load_basis_len(&chain, &arm, 2), 0);
+        let mut out = vec![1.0];
+        branch_load_basis_into(&chain, &arm, &[0.0; 3], &[0.0; 3], &-Vector3::z_axis(), 2, &mut out).unwrap();
+        assert!(out.is_empty());
+        let err = branch_load_basis_into(&chain, &arm, &[0.0; 3], &[0.0; 2], &-Vector3::z_axis(), 1, &mut out);
+        assert!(matches!(err, Err(ChainError::WrongJointCount { expected: 3, got: 2 })));
+    }
+
+    /// A branch's joint named as one of the chain's, or on a link past the chain, is refused by name.
+    #[test]
+    fn a_branch_is_checked_against_its_chain() {
+        let (chain, mut arm) = torso_and_arm();
+        assert!(check_branches(&chain, std::slice::from_ref(&arm)).is_ok());
+        arm.joints[1].name = "bend".into();
+        let err = check_branches(&chain, std::slice::from_ref(&arm)).unwrap_err();
+        assert!(err.to_string().contains("`bend`"), "{err}");
+        let (_, mut arm) = torso_and_arm();
+        arm.link = 4;
+        assert!(check_branches(&chain, &[arm]).unwrap_err().to_string().contains("link 4"));
+    }
+}
