@@ -112,7 +112,8 @@ pub enum UrdfCommand {
         /// Base link (default: the root).
         #[arg(long)]
         base: Option<String>,
-        /// Tip link (default: the single leaf; an error lists the candidates when there are several).
+        /// Tip link (default: the single leaf; an error lists the candidates when there are several). The
+        /// chains beside the path to it are written as the robot's `[[branch]]` tables.
         #[arg(long)]
         tip: Option<String>,
         /// Output TOML (written atomically).
@@ -143,7 +144,9 @@ pub struct RobotArgs {
     /// URDF base link (default: the root link).
     #[arg(long, value_name = "LINK")]
     pub base: Option<String>,
-    /// URDF tip link (default: the single leaf).
+    /// URDF tip link (default: the single leaf). In a tree (a torso with two arms) the chains beside the
+    /// path to it are the robot's branches: a measurements column named as a branch joint is its position
+    /// (degrees; mm for a slide), and what the branch carries loads the joints below it.
     #[arg(long, value_name = "LINK")]
     pub tip: Option<String>,
     /// A tool behind the robot file's tool frame (the URDF's --tip link, a TOML's `[tool]`): the TCP in that

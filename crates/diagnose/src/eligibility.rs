@@ -95,7 +95,7 @@ pub(crate) fn arc(data: &Dataset, j: usize) -> (f64, f64) {
 /// A compliance without masses' rule: every fit of the selection holds [`crate::MIN_REDUNDANCY`] residual
 /// rows per parameter of it and the always-estimated blocks.
 fn room_for(scorer: &Scorer<'_>, always: &[Effect], e: Effect) -> Option<Refusal> {
-    if !matches!(e, Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..)) {
+    if !matches!(e, Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..) | Effect::BranchLoad(..)) {
         return None;
     }
     let nuisance: usize = always.iter().map(Effect::len).sum();

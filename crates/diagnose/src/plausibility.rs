@@ -51,6 +51,44 @@ pub(crate) struct RobotScale {
     /// [`thermokin_chain::lateral_load_basis_into`]'s, with the joint's value (a slide's extension) — so
     /// that a lumped compliance is bounded by what it does over the data, as every other effect is.
     pub(crate) loads: Vec<LumpedLoads>,
+    /// For each branch the data log (its joints' columns, [`thermokin_chain::Dataset::branch_columns`]) and
+    /// each joint below it: the branch's load functions at every pose
+    /// ([`thermokin_chain::branch_load_basis_into`]), pose after pose — `(joint, branch, per pose, functions)`.
+    pub(crate) branch_loads: Vec<(usize, usize, usize, Vec<f64>)>,
+}
+
+/// How far `Σ θ_b f_b` changes over the poses of `values` (`len` functions per pose; largest less
+/// smallest): what a zero offset cannot take.
+fn weighted_change(values: &[f64], len: usize, weights: &[f64]) -> f64 {
+    let dot = |f: &[f64]| f.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
+    let (lo, hi) = crate::stats::span(values.chunks(len.max(1)).map(dot));
+    if lo <= hi { hi - lo } else { 0.0 }
+}
+
+/// The load functions of each branch `data` logs on each revolute joint below it, at every pose
+/// ([`RobotScale::branch_loads`]).
+fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<(usize, usize, usize, Vec<f64>)> {
+    let (chain, down) = (robot.chain(), -nalgebra::Vector3::z_axis());
+    let mut out = Vec::new();
+    for columns in &data.branch_columns {
+        let Some(branch) = robot.branches().get(columns.branch) else { continue };
+        for j in 0..chain.dof() {
+            let len = thermokin_chain::branch_load_basis_len(chain, branch, j);
+            if len == 0 {
+                continue;
+            }
+            let (mut values, mut basis) = (Vec::with_capacity(len * data.len()), Vec::new());
+            for (m, r) in data.measurements.iter().zip(&data.sensor_values) {
+                let Some(readings) = r.get(columns.column..columns.column + columns.len) else { continue };
+                let bq: Vec<f64> = readings.iter().enumerate().map(|(i, v)| branch.joint_value(i, *v)).collect();
+                if thermokin_chain::branch_load_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis).is_ok() {
+                    values.extend_from_slice(&basis);
+                }
+            }
+            out.push((j, columns.branch, len, values));
+        }
+    }
+    out
 }
 
 /// One joint's lumped load functions over the data ([`RobotScale::loads`]), pose-major.
@@ -90,9 +128,7 @@ impl LumpedLoads {
     /// (largest less smallest, radians): what a zero offset cannot take. Its level is not bounded — the
     /// functions' span holds offset-like parts that trade with the joint's offset, whose own bound holds.
     fn deflection_change(&self, weights: &[f64]) -> f64 {
-        let dot = |f: &[f64]| f.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
-        let (lo, hi) = crate::stats::span(self.gravity.chunks(self.gravity_len.max(1)).map(dot));
-        if lo <= hi { hi - lo } else { 0.0 }
+        weighted_change(&self.gravity, self.gravity_len, weights)
     }
 
     /// How far a lateral compliance without masses (`sets` sets of weights: a bearing's tilt, a column's
@@ -167,6 +203,7 @@ impl RobotScale {
         let loads = if massive { Vec::new() } else { (0..dof).map(|j| LumpedLoads::of(robot, data, j)).collect() };
         Self {
             loads,
+            branch_loads: branch_loads_of(robot, data),
             extent_mm: lever_mm.first().copied().unwrap_or(0.0),
             reach,
             revolute: chain.joints().iter().map(|j| j.kind == thermokin_chain::JointKind::Revolute).collect(),
@@ -372,6 +409,7 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let what = "the change of its deflection under gravity over the data";
             over(what, deg(deflection), deflection * lever, lever, "°")
         }
+        Effect::BranchLoad(j, _, at) => branch_load_bound(scale, v, j.index(), at.branch as usize, &over),
         Effect::JointOffset(j)
         | Effect::Backlash(j)
         | Effect::JointScale(j)
@@ -379,6 +417,16 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
         | Effect::JointCompliance(j) => joint_level(scale, v, effect, j, &over),
         _ => None,
     }
+}
+
+/// A branch's load on joint `j` ([`Effect::BranchLoad`]): how far it moves the joint over the data's
+/// poses, at the joint's axis lever.
+fn branch_load_bound(scale: &RobotScale, v: &[f64], j: usize, branch: usize, over: &Over<'_>) -> Option<Implausible> {
+    let lever = scale.axis_lever_mm[j].max(1.0);
+    let (.., len, values) = scale.branch_loads.iter().find(|(k, b, ..)| *k == j && *b == branch)?;
+    let deflection = weighted_change(values, *len, v);
+    let what = "the change of the joint under the branch's load over the data";
+    over(what, units::degrees(deflection), deflection * lever, lever, "°")
 }
 
 /// The effects that move the joint value itself (an offset, a backlash, a scale, a cyclic error, a
@@ -491,6 +539,7 @@ mod tests {
             sensor_reach: Vec::new(),
             max_lateral_nm: vec![0.0; 6],
             loads: Vec::new(),
+            branch_loads: Vec::new(),
         }
     }
 

@@ -3,6 +3,7 @@
 
 mod accelerometers;
 mod bad_inputs;
+mod branches;
 mod citizen;
 mod cli;
 mod edges;
