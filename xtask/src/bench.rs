@@ -196,6 +196,19 @@ pub(crate) fn bench(json: bool, baseline: Option<&str>) -> Result<()> {
             "peak memory of that process, MiB",
             300.0,
         ),
+        ("diagnose_ur10_100k_s", scale["100000"]["seconds"].as_f64(), "the same, 100,000 poses", f64::NAN),
+        (
+            "diagnose_growth_100k_over_12k",
+            ratio(scale["100000"]["seconds"].as_f64(), scale["12000"]["seconds"].as_f64()),
+            "cost growth for 8.3× the poses (issue #60: at most 10)",
+            10.0,
+        ),
+        (
+            "diagnose_ur10_100k_peak_mib",
+            scale["100000"]["peak_rss_mib"].as_f64(),
+            "peak memory of the process after 100,000 poses, MiB (issue #60: at most 1,024)",
+            1024.0,
+        ),
         (
             "plan_60_of_3000_s",
             mean_ns("plan/60_of_3000").map(|n| n / 1e9),
