@@ -172,6 +172,20 @@ impl PyRobot {
         self.chain().joints().iter().map(|j| j.name.clone()).collect()
     }
 
+    /// The robot's branches (a URDF tree's chains beside the measured one): `{name: (link, [joint
+    /// names])}`, the link of the measured chain each hangs from (0 the base). A measurements column named
+    /// as a branch joint is its position (degrees; mm for a slide), what the branch carries loading the
+    /// joints below it in `diagnose`.
+    #[getter]
+    fn branches(&self) -> std::collections::BTreeMap<String, (usize, Vec<String>)> {
+        let robot = self.model.robot();
+        robot
+            .branches()
+            .iter()
+            .map(|b| (b.name.clone(), (b.link, b.joints.iter().map(|j| j.name.clone()).collect())))
+            .collect()
+    }
+
     /// `(dof, 2)`: lower and upper limit per joint, degrees (mm for prismatic joints); ±inf where the
     /// file gives none.
     #[getter]

@@ -33,6 +33,14 @@ def test_robot_facts(irb140):
     assert irb140.limits_deg.shape == (6, 2)
     assert np.all(irb140.limits_deg[:, 0] < irb140.limits_deg[:, 1])
     assert irb140.is_plain
+    assert irb140.branches == {}
+
+
+def test_a_urdf_trees_other_chains_are_its_branches(root):
+    # The Panda's hand carries two fingers beside the tool point: the left's slide is a branch from the
+    # last link; the right one mimics it (a mimic joint cuts a branch, leaving it none).
+    panda = thermokin.Robot.from_file(root / "fixtures" / "urdf" / "panda.urdf", tip="panda_hand_tcp")
+    assert panda.branches == {"panda_leftfinger": (7, ["panda_finger_joint1"])}
 
 
 def test_fk_equals_the_command_line(irb140, root, cli):
