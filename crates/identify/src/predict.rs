@@ -363,44 +363,59 @@ impl Model {
         theta: &[f64],
         m: &Measurement,
         inputs: &PoseInputs<'_>,
-        (mut p, mut rot): (Vector3<f64>, Matrix3<f64>),
-        mut jac: Option<&mut Matrix6xX<f64>>,
+        (p, rot): (Vector3<f64>, Matrix3<f64>),
+        jac: Option<&mut Matrix6xX<f64>>,
     ) -> (Vector3<f64>, Matrix3<f64>) {
-        for (e, &o) in self.effects().iter().zip(self.offsets()) {
-            let Effect::FrameStep(at) = *e else { continue };
-            if !(inputs.latest_frame || at.applies(m.time_min, inputs.line)) {
-                continue;
-            }
-            let t = Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
-            let angles = Vector3::new(theta[o + 3], theta[o + 4], theta[o + 5]);
-            let r_s = thermokin_chain::xyz_rotation(&angles);
-            p = r_s * p + t;
-            rot = r_s * rot;
-            if let Some(jac) = jac.as_deref_mut() {
-                for c in 0..jac.ncols() {
-                    let turned_p = r_s * Vector3::new(jac[(0, c)], jac[(1, c)], jac[(2, c)]);
-                    let turned_w = r_s * Vector3::new(jac[(3, c)], jac[(4, c)], jac[(5, c)]);
-                    for a in 0..3 {
-                        jac[(a, c)] = turned_p[a];
-                        jac[(3 + a, c)] = turned_w[a];
-                    }
-                }
-                let rx = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, 0.0, 0.0));
-                let rxy = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, angles.y, 0.0));
-                let omegas = [Vector3::x(), rx * Vector3::y(), rxy * Vector3::z()];
+        let applies = |at: &crate::StepAt| inputs.latest_frame || at.applies(m.time_min, inputs.line);
+        let steps = || {
+            self.effects().iter().zip(self.offsets()).filter_map(move |(e, &o)| match e {
+                Effect::FrameStep(at) if applies(at) => Some(o),
+                _ => None,
+            })
+        };
+        // Every step in force turns what came before it: their product, applied once to the columns
+        // filled so far, as turning them step after step does (O(columns), not O(steps · columns)).
+        let rotation_at =
+            |o: usize| thermokin_chain::xyz_rotation(&Vector3::new(theta[o + 3], theta[o + 4], theta[o + 5]));
+        let total = steps().fold(Matrix3::identity(), |r, o| rotation_at(o) * r);
+        let Some(jac) = jac else {
+            let p = steps().fold(p, |p, o| rotation_at(o) * p + Vector3::new(theta[o], theta[o + 1], theta[o + 2]));
+            return (p, total * rot);
+        };
+        if total != Matrix3::identity() {
+            for c in 0..jac.ncols() {
+                let turned_p = total * Vector3::new(jac[(0, c)], jac[(1, c)], jac[(2, c)]);
+                let turned_w = total * Vector3::new(jac[(3, c)], jac[(4, c)], jac[(5, c)]);
                 for a in 0..3 {
-                    for r in 0..6 {
-                        jac[(r, o + a)] = if r == a { 1.0 } else { 0.0 };
-                    }
-                    let dp = omegas[a].cross(&(p - t));
-                    for r in 0..3 {
-                        jac[(r, o + 3 + a)] = dp[r];
-                        jac[(3 + r, o + 3 + a)] = omegas[a][r];
-                    }
+                    jac[(a, c)] = turned_p[a];
+                    jac[(3 + a, c)] = turned_w[a];
                 }
             }
         }
-        (p, rot)
+        // Each step's own columns, at the point it leaves, turned by the steps after it: `total · upto⁻¹`.
+        let (mut p, mut upto) = (p, Matrix3::identity());
+        for o in steps() {
+            let t = Vector3::new(theta[o], theta[o + 1], theta[o + 2]);
+            let angles = Vector3::new(theta[o + 3], theta[o + 4], theta[o + 5]);
+            let r_s = rotation_at(o);
+            p = r_s * p + t;
+            upto = r_s * upto;
+            let after = total * upto.transpose();
+            let rx = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, 0.0, 0.0));
+            let rxy = thermokin_chain::xyz_rotation(&Vector3::new(angles.x, angles.y, 0.0));
+            let omegas = [Vector3::x(), rx * Vector3::y(), rxy * Vector3::z()];
+            for a in 0..3 {
+                let unit = after.column(a).into_owned();
+                let (dp, dw) = (after * omegas[a].cross(&(p - t)), after * omegas[a]);
+                for r in 0..3 {
+                    jac[(r, o + a)] = unit[r];
+                    jac[(3 + r, o + a)] = 0.0;
+                    jac[(r, o + 3 + a)] = dp[r];
+                    jac[(3 + r, o + 3 + a)] = dw[r];
+                }
+            }
+        }
+        (p, total * rot)
     }
 
     /// The model's 6 × len Jacobian from the chain's parameter Jacobian `cached.pj`: each effect's

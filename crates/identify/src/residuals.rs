@@ -414,9 +414,10 @@ mod tests {
         assert!(moved > 0.1, "{moved}");
     }
 
-    /// A step of the measurement frame at minute 50 of a session, beside a link deviation and the
-    /// registration: the analytic Jacobian of every column — the step's own and those it turns — against
-    /// central differences, position and orientation rows alike, on poses before and after the step.
+    /// Steps of the measurement frame at minutes 50 and 75 of a session, beside a link deviation and the
+    /// registration: the analytic Jacobian of every column — the steps' own and those they turn, the
+    /// first step's turned by the second — against central differences, position and orientation rows
+    /// alike, on poses before, between and after the steps.
     #[test]
     fn the_frame_steps_jacobian_is_the_finite_differences() {
         let robot = Robot::new("IRB 140", irb140_table9());
@@ -433,7 +434,9 @@ mod tests {
         let mut data = Dataset { measurements, ..Dataset::default() };
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let step = Effect::FrameStep(crate::StepAt::time(50.0));
-        let model = Model::new(&robot, vec![Effect::Registration, Effect::LinkDeviation(joint(2)), step]).unwrap();
+        let second = Effect::FrameStep(crate::StepAt::time(75.0));
+        let model =
+            Model::new(&robot, vec![Effect::Registration, Effect::LinkDeviation(joint(2)), step, second]).unwrap();
         let theta: Vec<f64> = (0..model.len()).map(|k| 0.01 * ((k as f64 * 1.7).sin())).collect();
         // Measured orientations as predicted at `theta`: the rotation rows' Gauss–Newton Jacobian (the
         // angular twist) is the derivative of their log at zero residual.
