@@ -1053,18 +1053,7 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
             l = b.link
         ));
         for j in &b.joints {
-            s.push_str(&format!(
-                "[[branch.joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
-                j.name,
-                axis_toml(&j.axis),
-                fmt3(&j.offset)
-            ));
-            if j.kind == JointKind::Prismatic {
-                s.push_str("type = \"prismatic\"\n");
-            }
-            if j.zero != 0.0 {
-                s.push_str(&format!("zero = {}\n", num(units::joint_value_out(j.kind, j.zero))));
-            }
+            joint_geometry_toml(s, "[[branch.joint]]", j);
         }
     }
     for l in model.branch_loads() {
@@ -1078,11 +1067,10 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
     }
 }
 
-/// One `[[joint]]` table.
-fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorrection) {
-    let to_file = |v: f64| units::joint_value_out(j.kind, v);
+/// A joint's geometry under `header` (`[[joint]]`, `[[branch.joint]]`): name, axis, offset, type, zero.
+fn joint_geometry_toml(s: &mut String, header: &str, j: &Joint) {
     s.push_str(&format!(
-        "\n[[joint]]\nname = {:?}\naxis = {}\noffset_mm = {}\n",
+        "{header}\nname = {:?}\naxis = {}\noffset_mm = {}\n",
         j.name,
         axis_toml(&j.axis),
         fmt3(&j.offset)
@@ -1091,8 +1079,14 @@ fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorre
         s.push_str("type = \"prismatic\"\n");
     }
     if j.zero != 0.0 {
-        s.push_str(&format!("zero = {}\n", num(to_file(j.zero))));
+        s.push_str(&format!("zero = {}\n", num(units::joint_value_out(j.kind, j.zero))));
     }
+}
+
+/// One `[[joint]]` table.
+fn joint_toml(s: &mut String, robot: &Robot, i: usize, j: &Joint, c: &JointCorrection) {
+    let to_file = |v: f64| units::joint_value_out(j.kind, v);
+    joint_geometry_toml(s, "\n[[joint]]", j);
     if let Some(l) = j.limits {
         s.push_str(&format!("limits = [{}, {}]\n", num(to_file(l.lower)), num(to_file(l.upper))));
     }

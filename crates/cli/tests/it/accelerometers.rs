@@ -11,14 +11,19 @@ use crate::cli::{stderr, stdout, thermokin, tmp};
 /// `data` as a measurements file: `q1` in mm (the column), the arm's joints in degrees, the position and
 /// the accelerometers' columns.
 fn write(path: &std::path::Path, data: &Dataset) {
+    write_columns(path, data, |j, v| if j == 0 { format!("{v}") } else { format!("{}", v.to_degrees()) });
+}
+
+/// `data` as a measurements file with seven joint columns `q1…q7` (each joint's value as `cell` writes
+/// it from radians or mm), the position and every sensor column by its name.
+pub(crate) fn write_columns(path: &std::path::Path, data: &Dataset, cell: impl Fn(usize, f64) -> String) {
     let mut text = String::from("q1,q2,q3,q4,q5,q6,q7,x,y,z");
     for n in &data.sensor_names {
         text.push_str(&format!(",{n}"));
     }
     text.push('\n');
     for (m, s) in data.measurements.iter().zip(&data.sensor_values) {
-        let mut cells: Vec<String> = vec![format!("{}", m.q[0])];
-        cells.extend(m.q[1..].iter().map(|v| format!("{}", v.to_degrees())));
+        let mut cells: Vec<String> = m.q.iter().enumerate().map(|(j, v)| cell(j, *v)).collect();
         cells.extend(m.position_mm.iter().map(|v| format!("{v}")));
         cells.extend(s.iter().map(|v| format!("{v}")));
         text.push_str(&cells.join(","));

@@ -9,19 +9,7 @@ use crate::cli::{stderr, stdout, thermokin, tmp};
 
 /// `data` as a measurements file: the measured chain's joints and the left arm's in degrees, the position.
 fn write(path: &std::path::Path, data: &Dataset) {
-    let mut text = String::from("q1,q2,q3,q4,q5,q6,q7,x,y,z");
-    for n in &data.sensor_names {
-        text.push_str(&format!(",{n}"));
-    }
-    text.push('\n');
-    for (m, s) in data.measurements.iter().zip(&data.sensor_values) {
-        let mut cells: Vec<String> = m.q.iter().map(|v| format!("{}", v.to_degrees())).collect();
-        cells.extend(m.position_mm.iter().map(|v| format!("{v}")));
-        cells.extend(s.iter().map(|v| format!("{v}")));
-        text.push_str(&cells.join(","));
-        text.push('\n');
-    }
-    std::fs::write(path, text).unwrap();
+    crate::accelerometers::write_columns(path, data, |_, v| format!("{}", v.to_degrees()));
 }
 
 #[test]

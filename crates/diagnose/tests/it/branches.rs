@@ -59,27 +59,7 @@ fn a_torsos_other_arm_loads_it_through_its_logged_joints() {
 /// pose's left-arm joints as `fk --temperature` gives readings: it stands where the other session
 /// measured, to the hold-out's own figure; without them it says which joint it needs.
 fn exported_robot_takes_the_other_arms_joints(robot: &Robot, report: &thermokin_diagnose::Report, other: &Dataset) {
-    let export = report.export_model(robot, None, "torso").unwrap();
-    let text = thermokin_io::robot_model_to_toml(&export);
-    assert!(text.contains("[[branch]]") && text.contains("[[branch_load]]"), "{text}");
-    let model = thermokin_io::parse_robot_model_toml("torso-calibrated.toml".as_ref(), &text).unwrap();
-    let mut sum = 0.0;
-    for (m, readings) in other.measurements.iter().zip(&other.sensor_values) {
-        let temperatures_c =
-            other.sensor_names.iter().zip(readings).map(|(n, v)| (thermokin_io::sensor_name(n), *v)).collect();
-        let state = thermokin_chain::OperatingState { temperatures_c, ..Default::default() };
-        model.check_state(&state, false, false).unwrap();
-        let p = model.tool_pose(&m.q, &state).unwrap().translation.vector;
-        sum += (p - m.position_mm).norm_squared();
-    }
-    let rms = (sum / other.len() as f64).sqrt();
-    let h = report.holdout.as_ref().unwrap();
-    eprintln!(
-        "the export with the left arm's joints: {rms:.4} mm RMS (the report: {:.4})",
-        h.same_frame.selected.heldout_rms_mm
-    );
-    assert!((rms - h.same_frame.selected.heldout_rms_mm).abs() < 1e-6, "{rms}");
-    let e = model.tool_pose(&other.measurements[0].q, &Default::default()).unwrap_err().to_string();
+    let e = crate::tracker::export_given_the_columns(robot, report, other, "[[branch_load]]");
     assert!(e.contains("left_1"), "{e}");
 }
 

@@ -17,6 +17,20 @@ fn lift() -> Robot {
     thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap()
 }
 
+/// The diagnosis's settings for the lift (tracker frame, the selection alone): as they are, and with the
+/// two accelerometers declared on the chassis (link 0) and the carriage (link 1).
+fn configs() -> (Config, Config) {
+    let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
+    let declared = Config {
+        accelerometers: vec![
+            Accelerometer { name: "acc_base".into(), link: 0 },
+            Accelerometer { name: "acc_top".into(), link: 1 },
+        ],
+        ..base.clone()
+    };
+    (base, declared)
+}
+
 /// Declared, the two accelerometers name the chassis's tilt and the column's bend and take the other
 /// session to the noise in both protocols; without them, or read as free drivers of rows, the same
 /// poses are far from it.
@@ -26,14 +40,7 @@ fn a_rocking_lifts_accelerometers_are_read_as_the_tilts_they_measure() {
     let train = session(robot.chain(), 300, 5901, Vector3::new(0.0004, -0.0003, 0.0));
     // The other session: the chassis rests 0.05° otherwise.
     let other = session(robot.chain(), 150, 5902, Vector3::new(-0.0005, 0.0006, 0.0));
-    let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
-    let declared = Config {
-        accelerometers: vec![
-            Accelerometer { name: "acc_base".into(), link: 0 },
-            Accelerometer { name: "acc_top".into(), link: 1 },
-        ],
-        ..base.clone()
-    };
+    let (base, declared) = configs();
     let without = |d: &Dataset| Dataset { sensor_names: Vec::new(), sensor_values: Vec::new(), ..d.clone() };
     let noise_rms = crate::tracker::NOISE_MM * 3f64.sqrt();
     let mut rms = Vec::new();
@@ -72,30 +79,10 @@ fn a_rocking_lifts_accelerometers_are_read_as_the_tilts_they_measure() {
 
 /// The robot `--export` writes, read back from its text, given each pose's raw accelerometer readings as
 /// `fk --temperature` gives them (`temp_acc_base_x=…`): it stands where the other session measured, to
-/// the hold-out's own figure (the frame it was trained in is the one the other session is measured in).
+/// the hold-out's own figure (the frame it was trained in is the one the other session is measured in);
+/// without its readings it says what it needs.
 fn exported_robot_takes_the_readings(robot: &Robot, report: &thermokin_diagnose::Report, other: &Dataset) {
-    let export = report.export_model(robot, None, "lift").unwrap();
-    let text = thermokin_io::robot_model_to_toml(&export);
-    assert!(text.contains("tilt = { sensor = \"acc_base\""), "{text}");
-    let model = thermokin_io::parse_robot_model_toml("lift-calibrated.toml".as_ref(), &text).unwrap();
-    let mut sum = 0.0;
-    for (m, readings) in other.measurements.iter().zip(&other.sensor_values) {
-        let temperatures_c =
-            other.sensor_names.iter().zip(readings).map(|(n, v)| (thermokin_io::sensor_name(n), *v)).collect();
-        let state = thermokin_chain::OperatingState { temperatures_c, ..Default::default() };
-        model.check_state(&state, false, false).unwrap();
-        let p = model.tool_pose(&m.q, &state).unwrap().translation.vector;
-        sum += (p - m.position_mm).norm_squared();
-    }
-    let rms = (sum / other.len() as f64).sqrt();
-    let h = report.holdout.as_ref().unwrap();
-    eprintln!(
-        "the export with the readings: {rms:.4} mm RMS (the report: {:.4})",
-        h.same_frame.selected.heldout_rms_mm
-    );
-    assert!((rms - h.same_frame.selected.heldout_rms_mm).abs() < 1e-6, "{rms}");
-    // Without its readings the export says what it needs.
-    let e = model.tool_pose(&other.measurements[0].q, &Default::default()).unwrap_err().to_string();
+    let e = crate::tracker::export_given_the_columns(robot, report, other, "tilt = { sensor = \"acc_base\"");
     assert!(e.contains("acc_base") || e.contains("acc_top"), "{e}");
 }
 
@@ -111,14 +98,7 @@ fn accelerometers_declared_in_the_robot_file_are_the_flags() {
     assert_eq!(in_file.accelerometers().len(), 2);
     let robot = lift();
     let train = session(robot.chain(), 150, 5921, Vector3::new(0.0004, -0.0003, 0.0));
-    let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
-    let flags = Config {
-        accelerometers: vec![
-            Accelerometer { name: "acc_base".into(), link: 0 },
-            Accelerometer { name: "acc_top".into(), link: 1 },
-        ],
-        ..base.clone()
-    };
+    let (base, flags) = configs();
     let (a, b) = (diagnose(&robot, &train, None, &flags).unwrap(), diagnose(&in_file, &train, None, &base).unwrap());
     assert_eq!(a.text().to_string(), b.text().to_string());
     // The export keeps the declaration.
@@ -145,14 +125,7 @@ fn a_remounted_sensor_is_read_on_its_sessions_own_reference() {
         r[3] += 0.08;
         r[4] -= 0.05;
     }
-    let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
-    let declared = Config {
-        accelerometers: vec![
-            Accelerometer { name: "acc_base".into(), link: 0 },
-            Accelerometer { name: "acc_top".into(), link: 1 },
-        ],
-        ..base.clone()
-    };
+    let (base, declared) = configs();
     let without = |d: &Dataset| Dataset { sensor_names: Vec::new(), sensor_values: Vec::new(), ..d.clone() };
     let mut refitted = Vec::new();
     for (what, config, train, other) in [

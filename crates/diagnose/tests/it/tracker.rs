@@ -108,3 +108,36 @@ pub fn measure_short_arc(
         .collect();
     Dataset { measurements, ..Dataset::default() }
 }
+
+/// The robot the report exports, written as TOML (which must contain `written`) and read back, at each
+/// pose of `other` with its sensor columns given as `fk --temperature` gives them (`temp_NAME=…`): its RMS
+/// distance from where `other` measured is the report's as-exported hold-out figure (to 1e-6 mm). Returns
+/// what the export says at the first pose without the columns.
+pub fn export_given_the_columns(
+    robot: &thermokin_chain::Robot,
+    report: &thermokin_diagnose::Report,
+    other: &Dataset,
+    written: &str,
+) -> String {
+    let export = report.export_model(robot, None, "exported").unwrap();
+    let text = thermokin_io::robot_model_to_toml(&export);
+    assert!(text.contains(written), "{text}");
+    let model = thermokin_io::parse_robot_model_toml("exported.toml".as_ref(), &text).unwrap();
+    let mut sum = 0.0;
+    for (m, readings) in other.measurements.iter().zip(&other.sensor_values) {
+        let temperatures_c =
+            other.sensor_names.iter().zip(readings).map(|(n, v)| (thermokin_io::sensor_name(n), *v)).collect();
+        let state = thermokin_chain::OperatingState { temperatures_c, ..Default::default() };
+        model.check_state(&state, false, false).unwrap();
+        let p = model.tool_pose(&m.q, &state).unwrap().translation.vector;
+        sum += (p - m.position_mm).norm_squared();
+    }
+    let rms = (sum / other.len() as f64).sqrt();
+    let h = report.holdout.as_ref().unwrap();
+    eprintln!(
+        "the export given the columns: {rms:.4} mm RMS (the report: {:.4})",
+        h.same_frame.selected.heldout_rms_mm
+    );
+    assert!((rms - h.same_frame.selected.heldout_rms_mm).abs() < 1e-6, "{rms}");
+    model.tool_pose(&other.measurements[0].q, &Default::default()).unwrap_err().to_string()
+}
