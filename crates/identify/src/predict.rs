@@ -601,6 +601,7 @@ fn bent_row(e: Effect, chain: &Chain, c: &[f64], moments: [f64; 2], d: f64) -> E
 
 /// The gravity torques (and, for a lateral compliance, the moments across each joint) at the measured
 /// joints `q`, on the model's gravity chain, into the cache — for a model with a compliance.
+#[inline]
 fn gravity_at(
     robot: &Robot,
     q: &[f64],
