@@ -5,7 +5,7 @@ use numpy::{AllowTypeChange, PyArrayDyn, PyArrayLikeDyn};
 use pyo3::prelude::*;
 use thermokin_identify::Effect;
 use thermokin_io::units::joints_to_internal;
-use thermokin_planner::{Candidates, Params, Plan, WorkspaceBox};
+use thermokin_planner::{Candidates, Params, Plan, Poses, Region, WorkspaceBox};
 
 use crate::arrays::{Rows, output};
 use crate::convert::choice;
@@ -75,6 +75,21 @@ impl PyPlan {
     }
 }
 
+/// `poses`: a positive count or `"auto"` (at most every candidate).
+fn pose_count(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Poses>> {
+    let Some(v) = value else { return Ok(None) };
+    if let Ok(s) = v.extract::<String>() {
+        return match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(Some(Poses::Auto { at_most: usize::MAX })),
+            _ => Err(input(format!("poses: `{s}`: a positive number of poses, or \"auto\""))),
+        };
+    }
+    match v.extract::<usize>() {
+        Ok(n) if n > 0 => Ok(Some(Poses::Exactly(n))),
+        _ => Err(input(format!("poses: {v}: a positive number of poses, or \"auto\""))),
+    }
+}
+
 /// Configurations (N, dof) in degrees (mm for a prismatic joint), in the library's units.
 fn configurations(
     robot: &PyRobot,
@@ -95,16 +110,19 @@ fn configurations(
 /// within the joint limits, kept inside `box` — `(x0, y0, z0, x1, y1, z1)` mm of the base frame — when
 /// given), after the `measured` configurations. `effects`: `"KIND[:JOINT]"` strings (default: the
 /// catalogue's that some choice of the candidates can make eligible — the others are in
-/// `to_dict()["left_out"]`); `criterion` (`"parameters"`: D-optimal, `"prediction"`: I-optimal), `frame`, `tool` as
-/// `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
+/// `to_dict()["left_out"]`); `region`: the poses of use ((N, dof) degrees: the program the robot will
+/// run, `thermokin plan --for`) — the plan then chooses for the predicted error there and states its
+/// promise there (`to_dict()["promise"]`); `poses`: a count or `"auto"`; `criterion` (`"parameters"`:
+/// D-optimal, `"prediction"`: I-optimal, the default),
+/// `frame`, `tool` as `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=None, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None))]
+#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=None, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None, region=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
     robot: &PyRobot,
     candidates: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
-    poses: Option<usize>,
+    poses: Option<Bound<'_, PyAny>>,
     measured: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
     samples: Option<usize>,
     r#box: Option<Vec<f64>>,
@@ -114,6 +132,7 @@ pub fn plan(
     frame: Option<&str>,
     tool: Option<&str>,
     seed: Option<u64>,
+    region: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
 ) -> PyResult<PyPlan> {
     let samples = samples.unwrap_or(thermokin_planner::DEFAULT_SAMPLES);
     let defaults = Params::default();
@@ -125,10 +144,15 @@ pub fn plan(
                 .collect::<PyResult<Vec<_>>>()
         })
         .transpose()?;
+    let region = match region {
+        Some(r) => Region::Poses(configurations(robot, &r, "region")?),
+        None => Region::Candidates,
+    };
     let params = Params {
-        poses: poses.unwrap_or(defaults.poses),
+        poses: pose_count(poses.as_ref())?.unwrap_or(defaults.poses),
         noise_mm: noise_mm.unwrap_or(defaults.noise_mm),
         criterion: choice("criterion", criterion, defaults.criterion)?,
+        region,
         frame: choice("frame", frame, defaults.frame)?,
         tool: choice("tool", tool, defaults.tool)?,
         effects,

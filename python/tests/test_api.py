@@ -347,13 +347,32 @@ def test_plan_is_a_subset_in_degrees(irb140):
     np.testing.assert_allclose(plan.joints, q[plan.indices], rtol=1e-14, atol=1e-12)
     assert plan.expected_xyz.shape == (15, 3)
     np.testing.assert_allclose(plan.expected_xyz[0], irb140.fk(plan.joints[0])[:3, 3], atol=1e-9)
-    assert all(b >= a for a, b in zip(plan.criterion_by_pose, plan.criterion_by_pose[1:]))
+    # The default criterion is the predicted error over the candidates: it never rises pose by pose.
+    assert all(b <= a * (1 + 1e-9) for a, b in zip(plan.criterion_by_pose, plan.criterion_by_pose[1:]))
     assert plan.text.startswith("PLAN: 15 poses of 300 candidates")
+    d_optimal = thermokin.plan(irb140, q, poses=15, seed=1, criterion="parameters")
+    assert all(b >= a for a, b in zip(d_optimal.criterion_by_pose, d_optimal.criterion_by_pose[1:]))
     # Sampled candidates within a box of the base frame, and after measured poses.
     sampled = thermokin.plan(irb140, poses=5, samples=200, box=(-1000, -1000, 0, 1000, 1000, 1500))
     assert sampled.to_dict()["candidates"] == 200
     after = thermokin.plan(irb140, q, poses=5, measured=q[:20])
     assert after.to_dict()["measured"] == 20
+
+
+def test_plan_for_the_poses_of_use(irb140):
+    """`plan --for` from a notebook: the poses of use as degrees, the promise there against random draws,
+    and an automatic count that says why it stopped."""
+    q = configurations(irb140, 300, 3)
+    plan = thermokin.plan(irb140, q, poses=20, region=q[:12], seed=1)
+    promise = plan.to_dict()["promise"]
+    assert promise["region"] == "given" and promise["poses_of_use"] == 12
+    assert promise["planned_rms_mm"] < promise["random_rms_mm"]
+    assert plan.to_dict()["criterion"] == "Prediction"
+    auto = thermokin.plan(irb140, q, poses="auto", region=q[:12], seed=1)
+    gain, resolution = auto.to_dict()["count"]["stopped"]
+    assert gain < resolution
+    with pytest.raises(InputError, match="auto"):
+        thermokin.plan(irb140, q, poses="many")
 
 
 @pytest.mark.parametrize(

@@ -244,7 +244,7 @@ def plan(
     robot: Robot,
     candidates: _Array | None = None,
     *,
-    poses: int | None = None,
+    poses: int | str | None = None,
     measured: _Array | None = None,
     samples: int | None = None,
     box: Sequence[float] | None = None,
@@ -254,6 +254,7 @@ def plan(
     frame: str | None = None,
     tool: str | None = None,
     seed: int | None = None,
+    region: _Array | None = None,
 ) -> Plan: ...
 def compensate(
     robot: Robot,

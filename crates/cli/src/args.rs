@@ -85,7 +85,7 @@ pub enum Command {
     Diagnose(DiagnoseArgs),
     /// Plan which poses to measure: the N that make the diagnosis' parameters identifiable and precise.
     #[command(
-        after_help = "Examples:\n  thermokin plan --robot fixtures/urdf/ur10.urdf --tip tool0 --frame tracker --tool unknown \\\n      --candidates taught.csv --poses 60 --out plan.csv --program plan.script\n  thermokin plan --robot configs/irb140.toml --samples 3000 --box -200,-800,0,900,800,1200 --poses 30 --out plan.csv\n  thermokin plan --robot robot.toml --candidates taught.csv --measured done.csv --poses 12 --out next.csv\n\nCandidates CSV: q1..qn (degrees; other columns ignored) — the poses you can reach. The plan CSV keeps\ntheir values and lines, in a measuring order that keeps joint motion short, with where the tracker should\nsee the tool (nominal, base frame). The report: every parameter's predicted σ at --noise, and the\ncondition number and O1–O5 against random poses of the same candidates (docs/planner.md)."
+        after_help = "Examples:\n  thermokin plan --robot fixtures/urdf/ur10.urdf --tip tool0 --frame tracker --tool unknown \\\n      --candidates taught.csv --poses 60 --out plan.csv --program plan.script\n  thermokin plan --robot configs/irb140.toml --samples 3000 --box -200,-800,0,900,800,1200 --poses 30 --out plan.csv\n  thermokin plan --robot robot.toml --candidates taught.csv --measured done.csv --poses 12 --out next.csv\n  thermokin plan --robot robot.toml --candidates taught.csv --for program.csv --poses auto --out plan.csv\n\nCandidates CSV: q1..qn (degrees; other columns ignored) — the poses you can reach. --for: the joints of\nthe program the robot will run (q1..qn); the poses are chosen for the error there. The plan CSV keeps\ntheir values and lines, in a measuring order that keeps joint motion short, with where the tracker should\nsee the tool (nominal, base frame). The report: the held-out error the plan promises at the poses of use\nagainst random poses, every parameter's predicted σ at --noise, and the condition number and O1–O5\nagainst random poses of the same candidates (docs/planner.md)."
     )]
     Plan(PlanArgs),
     /// Generate a measurement set from hidden effects (to check what the diagnosis finds).
@@ -350,6 +350,12 @@ pub struct DiagnoseArgs {
     /// refitted on it when they are estimated); it never influences the selection.
     #[arg(long, value_name = "FILE")]
     pub holdout: Option<PathBuf>,
+    /// Where the robot will work: a joints or targets file with q1..qn (the program to be compensated;
+    /// only the joints are read). The report predicts the final model's held-out error there from its
+    /// own fit — what `plan --for` promised, at the noise the fit found — and, when --holdout holds
+    /// those poses, sets the measured error beside it. Never used to choose.
+    #[arg(long = "for", value_name = "FILE")]
+    pub region: Option<PathBuf>,
     /// Frame of the measurements.
     #[arg(long, value_parser = choice(FrameMode::CHOICES), default_value_t = Config::default().frame)]
     pub frame: FrameMode,
@@ -467,18 +473,27 @@ pub struct PlanArgs {
     /// Poses already measured (q1..qn): plan the next ones that add the most to them.
     #[arg(long, value_name = "FILE")]
     pub measured: Option<PathBuf>,
+    /// Where the robot will work: a joints or targets file with q1..qn (the program to be compensated,
+    /// or any poses of its work; only the joints are read). The plan then chooses for the predicted
+    /// error there (I-optimal over these poses, unless --criterion says otherwise) and states what it
+    /// promises there against random poses. Without it the poses of use are the candidates.
+    #[arg(long = "for", value_name = "FILE")]
+    pub region: Option<PathBuf>,
     /// Plan for these effects only, `KIND[:JOINT]` (repeat); default: every pose-dependent effect of the
     /// diagnosis' catalogue that some choice of the candidates can make eligible (a gear ratio or cyclic
     /// error whose joint no candidate moves far enough is left out, and the report says so).
     #[arg(long = "effect", value_name = "SPEC")]
     pub effects: Vec<String>,
-    /// Poses to plan.
-    #[arg(long, default_value_t = Params::default().poses)]
-    pub poses: usize,
+    /// Poses to plan: a count, or `auto` — as many as each lower the predicted held-out error at the
+    /// poses of use by more than a test there could show (its standard error over those poses), at most
+    /// every candidate; the report says where and why it stopped.
+    #[arg(long, value_name = "N|auto", default_value_t = Params::default().poses, value_parser = parse_poses)]
+    pub poses: thermokin_planner::Poses,
     /// The tracker noise per axis (mm) the predicted σ are stated at.
     #[arg(long, value_name = "MM", default_value_t = Params::default().noise_mm)]
     pub noise: f64,
-    /// What the poses optimise.
+    /// What the poses optimise: the predicted error at the poses of use (--for; the candidates without
+    /// it), or the parameters (the poses that pin down what a diagnosis refused).
     #[arg(long, value_parser = choice(Criterion::CHOICES), default_value_t = Params::default().criterion)]
     pub criterion: Criterion,
     /// Frame the poses will be measured in.
@@ -577,6 +592,17 @@ pub struct ReproduceArgs {
 
 /// Parses a comma-separated list of finite numbers ([`thermokin_io::parse_list`]), naming the flag in
 /// errors.
+/// `--poses`: a positive count, or `auto` (at most every candidate).
+fn parse_poses(s: &str) -> Result<thermokin_planner::Poses, String> {
+    if s.trim().eq_ignore_ascii_case("auto") {
+        return Ok(thermokin_planner::Poses::Auto { at_most: usize::MAX });
+    }
+    match s.trim().parse::<usize>() {
+        Ok(n) if n > 0 => Ok(thermokin_planner::Poses::Exactly(n)),
+        _ => Err(format!("`{s}`: a positive number of poses, or auto")),
+    }
+}
+
 pub fn parse_list(flag: &str, s: &str) -> anyhow::Result<Vec<f64>> {
     thermokin_io::parse_list(s).map_err(|m| anyhow::anyhow!("--{flag}: {m}"))
 }

@@ -90,7 +90,7 @@ fn next_poses(a: &DiagnoseArgs, report: &Report) -> Option<(String, String)> {
     }
     let tip = a.robot.tip.as_deref().map(|t| format!(" --tip {}", shell_word(t))).unwrap_or_default();
     let command = format!(
-        "thermokin plan --robot {}{tip} --frame {} --tool {} --measured {} --poses 20 --out next.csv",
+        "thermokin plan --robot {}{tip} --frame {} --tool {} --measured {} --criterion parameters --poses 20 --out next.csv",
         shell_word(&a.robot.robot.display().to_string()),
         a.frame,
         a.tool,
@@ -111,13 +111,23 @@ fn shell_word(word: &str) -> String {
     }
 }
 
+/// `--for`: the configurations of a joints file (radians; empty without one).
+fn poses_of_use(
+    path: Option<&Path>,
+    kinds: &[thermokin_chain::JointKind],
+    units: Option<thermokin_io::JointUnits>,
+) -> Result<Vec<Vec<f64>>, Failure> {
+    let Some(path) = path else { return Ok(Vec::new()) };
+    Ok(thermokin_io::read_configurations_checked(path, kinds, units).map_err(crate::input::units_error)?.0)
+}
+
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
             "diagnose takes a static robot: drop --profile/--time/--temperature (thermal drift is a candidate effect; the data's time_min and temp_* columns drive it)"
         )));
     }
-    let config = Config {
+    let mut config = Config {
         folds_by: a.folds_by,
         outliers: a.outliers,
         masses: a.masses,
@@ -164,6 +174,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         Some(p) => Some(read_measurements_with(p, &kinds, units).map_err(units_error)?),
         None => None,
     };
+    config.poses_of_use = poses_of_use(a.region.as_deref(), &kinds, a.joint_units)?;
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     // The robot as the fit sees it: with the payload (gravity only; the export keeps the file's masses).
     let fitted_robot = match &a.robot.payload {

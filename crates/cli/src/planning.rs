@@ -5,7 +5,7 @@ use thermokin_chain::Robot;
 use thermokin_compensate::poses_program;
 use thermokin_identify::Effect;
 use thermokin_io::read_configurations_checked;
-use thermokin_planner::{Candidates, Params, WorkspaceBox};
+use thermokin_planner::{Candidates, Params, Region, WorkspaceBox};
 
 use crate::args::{PlanArgs, parse_list};
 use crate::input::{load, program_controller, working_chain};
@@ -38,12 +38,17 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         Some(path) => configurations(path, &robot, &a)?.0,
         None => Vec::new(),
     };
+    let region = match &a.region {
+        Some(path) => Region::Poses(configurations(path, &robot, &a)?.0),
+        None => Region::Candidates,
+    };
     let effects = a.effects.iter().map(|s| Effect::parse(&robot, s).map_err(|e| anyhow!("--effect {s}: {e}")));
     let effects = effects.collect::<anyhow::Result<Vec<_>>>().map_err(Failure::input)?;
     let params = Params {
         poses: a.poses,
         noise_mm: a.noise,
         criterion: a.criterion,
+        region,
         frame: a.frame,
         tool: a.tool,
         lateral: a.lateral,

@@ -74,6 +74,11 @@ pub struct Config {
     /// The accelerometers (or inclinometers) on the robot's links, each read as the tilt of its link
     /// ([`Accelerometer`]); empty: every sensor column is a free driver of rows.
     pub accelerometers: Vec<Accelerometer>,
+    /// Where the robot will work (radians; mm for a prismatic joint): the report predicts the final
+    /// model's held-out error there from its own fit and sets it beside a hold-out set of those poses
+    /// ([`crate::AtUse`]). Empty: no prediction. Never used to choose.
+    #[serde(skip)]
+    pub poses_of_use: Vec<Vec<f64>>,
 }
 
 /// An accelerometer or inclinometer declared on a link (`--accelerometer NAME=LINK`): its columns
@@ -350,6 +355,7 @@ impl Default for Config {
             lateral: thermokin_identify::Lateral::default(),
             order: thermokin_chain::MeasuringOrder::default(),
             accelerometers: Vec::new(),
+            poses_of_use: Vec::new(),
         }
     }
 }

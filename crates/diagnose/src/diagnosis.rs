@@ -61,8 +61,18 @@ pub struct Progress {
 }
 
 /// Every measurement of the training and hold-out sets has one value per joint of the robot.
-fn check_joint_counts(robot: &Robot, data: &Dataset, holdout: Option<&Dataset>) -> Result<(), DiagnoseError> {
+fn check_joint_counts(
+    robot: &Robot,
+    data: &Dataset,
+    holdout: Option<&Dataset>,
+    config: &Config,
+) -> Result<(), DiagnoseError> {
     let n = robot.chain().dof();
+    if let Some((i, q)) =
+        config.poses_of_use.iter().enumerate().find(|(_, q)| q.len() != n || q.iter().any(|v| !v.is_finite()))
+    {
+        return Err(DiagnoseError::JointCount { set: "poses of use", measurement: i + 1, got: q.len(), expected: n });
+    }
     let sets = [("training", Some(data)), ("hold-out", holdout)];
     for (set, d) in sets.iter().filter_map(|(s, d)| d.map(|d| (*s, d))) {
         if let Some((i, m)) = d.measurements.iter().enumerate().find(|(_, m)| m.q.len() != n) {
@@ -120,7 +130,7 @@ fn checked_holdout(
     config: &Config,
 ) -> Result<Option<HoldoutSets>, DiagnoseError> {
     let by = config.order;
-    check_joint_counts(robot, data, holdout)?;
+    check_joint_counts(robot, data, holdout, config)?;
     let Some(given) = holdout else { return Ok(None) };
     let declared = crate::tilts::declared(robot, config);
     let (exported, own) = if declared.is_empty() {
@@ -331,17 +341,13 @@ fn run(
     let fell_back = judged_beside_the_folds(&scorer, config, &mut selected.selection, nested.as_ref())?;
     let tables = main.time(Phase::Tables, || tables(&scorer, config, selected))?;
     let holdout_data = holdout;
-    let holdout = match holdout_data.as_ref() {
-        // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
-        // registration or the tool point is always estimated, the hold-out file may be in another tracker
-        // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
-        Some(h) => {
-            let stats = main.time(Phase::Holdout, || holdout_stats(&scorer, h, &tables, config))?;
-            tell("hold-out set".into());
-            Some(stats)
-        }
-        None => None,
-    };
+    // Fitted on all of `data`, scored on `holdout`: the selection above never saw it. When the
+    // registration or the tool point is always estimated, the hold-out file may be in another tracker
+    // frame or carry another probe: those blocks (only) are refitted on it, the effects kept as fitted.
+    let scored =
+        holdout_data.as_ref().map(|h| main.time(Phase::Holdout, || holdout_stats(&scorer, h, &tables, config)));
+    let holdout = scored.transpose()?.inspect(|_| tell("hold-out set".into()));
+    let at_use = predicted_at_use(&scorer, config, &tables, holdout_data.as_ref(), holdout.as_ref())?;
     let report_started = std::time::Instant::now();
     // A transfer the poses cannot show is said first.
     let mut all_warnings: Vec<String> =
@@ -366,6 +372,7 @@ fn run(
         nominal: tables.nominal,
         nested,
         holdout,
+        at_use,
         calibrated: tables.calibrated,
         identified: tables.identified,
         honest_end,
@@ -386,6 +393,29 @@ fn run(
         poses,
     };
     Ok(to_given_order(perm.as_deref(), &screened.kept, report))
+}
+
+/// The final model's predicted error at the poses of use ([`crate::at_use`]), the hold-out set's RMS
+/// (registration and tool refitted on it) beside it where the hold-out set holds those poses.
+fn predicted_at_use(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    tables: &crate::tables::Tables,
+    holdout: Option<&HoldoutSets>,
+    stats: Option<&crate::report::HoldoutStats>,
+) -> Result<Option<crate::report::AtUse>, DiagnoseError> {
+    if config.poses_of_use.is_empty() {
+        return Ok(None);
+    }
+    let at = crate::at_use::at_use(scorer, &tables.effects, &config.poses_of_use)?;
+    Ok(at.map(|mut a| {
+        if let (Some(h), Some(s)) = (holdout, stats)
+            && crate::at_use::same_poses(&h.own, &config.poses_of_use)
+        {
+            a.measured_rms_mm = Some(s.selected.heldout_rms_mm);
+        }
+        a
+    }))
 }
 
 /// For each chosen row a sensor column drives ([`thermokin_identify::Effect::SensorDrift`]), the sentence

@@ -15,6 +15,7 @@
 //! it never saw (nested, a hold-out set), the warnings and the verdict; [`diagnose`] assembling the
 //! [`Report`], which renders itself ([`Report::text`]).
 
+mod at_use;
 mod backward;
 mod branches;
 mod canonical;
@@ -61,7 +62,7 @@ pub use outliers::MIN_REDUNDANCY;
 pub use profile::{Phase, PhaseCost, Profile};
 pub use render::ReportText;
 pub use report::{
-    Along, Breakdown, Cluster, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested,
+    Along, AtUse, Breakdown, Cluster, EffectReport, FittedFrames, HoldoutPair, HoldoutStats, Identifiability, Nested,
     OuterFold, Outlier, OutlierScreen, ParameterValue, PoseHeldOut, PoseRecord, PoseReport, Refusal, Report,
     ScaleSource, ScreenCompliance, ScreenModel, Skipped, TableRow,
 };

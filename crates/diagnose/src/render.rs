@@ -170,6 +170,9 @@ fn heldout(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         line(f, "nominal", &h.nominal)?;
         line(f, "the effects chosen below", &h.selected)?;
     }
+    if let Some(a) = &r.at_use {
+        at_use(f, a)?;
+    }
     writeln!(f, "\nselection: {} — scores that chose the effects (optimistic):", r.validation)?;
     writeln!(f, "  {:<44} {:>9} {:>9} {:>9}", "model", "mean", "RMS", "max")?;
     for row in &r.additive {
@@ -354,6 +357,42 @@ fn identifiability(r: &Report, f: &mut fmt::Formatter<'_>) -> fmt::Result {
     }
     for fixed in &r.identifiability.fixed {
         writeln!(f, "  fixed {}: {}", fixed.parameter, fixed.reason)?;
+    }
+    Ok(())
+}
+
+/// The prediction at the poses of use ([`crate::AtUse`]) and, where a hold-out set holds those poses, how
+/// its measured RMS compares.
+fn at_use(f: &mut std::fmt::Formatter<'_>, a: &crate::report::AtUse) -> std::fmt::Result {
+    let frame = if a.refitted > 0 {
+        format!(", the {} frame parameters a test fits there refitted", a.refitted)
+    } else {
+        String::new()
+    };
+    writeln!(
+        f,
+        "\npredicted at the {} poses of use (the final model's least-squares fit, its residuals' scale {:.4} mm per coordinate{frame}): held-out RMS {:.4} mm, of which the model's parameters {:.4} mm; a test there resolves {:.1} % of it",
+        a.poses,
+        a.residual_scale_mm,
+        a.predicted_rms_mm,
+        a.model_rms_mm,
+        100.0 * a.resolution
+    )?;
+    if let Some(m) = a.measured_rms_mm {
+        let ratio = m / a.predicted_rms_mm;
+        let reading = if (ratio - 1.0).abs() <= 2.0 * a.resolution {
+            "as predicted, within a test's resolution".to_string()
+        } else if ratio > 1.0 {
+            format!(
+                "{ratio:.2} × the prediction: the model errs more there than where it was fitted (it is not the robot there, or the poses of use leave the measured arcs)"
+            )
+        } else {
+            format!("{ratio:.2} × the prediction: better than its own residuals promised")
+        };
+        writeln!(
+            f,
+            "  the hold-out set holds these poses: measured {m:.4} mm RMS (registration and tool refitted on it) — {reading}"
+        )?;
     }
     Ok(())
 }

@@ -374,6 +374,26 @@ pub struct OuterFold {
     pub effects: Vec<String>,
 }
 
+/// The diagnosis's prediction at the poses of use ([`crate::Report::at_use`], computed by `crate::at_use`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct AtUse {
+    /// How many poses of use.
+    pub poses: usize,
+    /// Frame parameters a test fits again there (registration, unknown tool).
+    pub refitted: usize,
+    /// The final model's residual scale on all measurements, mm per coordinate (`√(SSR / (rows − free))`).
+    pub residual_scale_mm: f64,
+    /// The model's own share of the predicted error there, mm RMS per pose (`√trace(W Σ)`).
+    pub model_rms_mm: f64,
+    /// The predicted held-out RMS per pose of use, mm.
+    pub predicted_rms_mm: f64,
+    /// The standard error of a held-out RMS measured there, as a fraction of it.
+    pub resolution: f64,
+    /// The hold-out set's RMS (registration and tool refitted on it), when its poses are the poses of
+    /// use, mm.
+    pub measured_rms_mm: Option<f64>,
+}
+
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct HoldoutStats {
@@ -415,6 +435,9 @@ pub struct Report {
     /// Nominal and selected model on an explicit hold-out set, when one was given (it never influences
     /// the selection).
     pub holdout: Option<HoldoutStats>,
+    /// The final model's predicted held-out error at the poses of use ([`crate::Config::poses_of_use`]),
+    /// beside what a hold-out set of those poses measured; `None` without poses of use.
+    pub at_use: Option<AtUse>,
     /// The chain of the identified robot: its static effects (frames, registration in the base row, tool,
     /// offsets, link deviations), fitted on all measurements.
     #[serde(skip)]

@@ -26,6 +26,7 @@ mod registration;
 mod residuals;
 mod sampling;
 mod terms;
+mod use_error;
 
 pub use catalogue::{FrameMode, Lateral, Setup, ToolMode, approach_counts, gravity_compliance};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
@@ -45,3 +46,4 @@ pub use registration::{initial_frames, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
 pub use sampling::{normal, random_configuration};
 pub use terms::{PoseTerms, gravity_torques, max_gravity_torques, sensor_joint};
+pub use use_error::{frame_refitted_weight, heldout_resolution, heldout_rms, trace_of_product};

@@ -4,11 +4,12 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use thermokin_identify::{FrameMode, ToolMode};
-use thermokin_planner::{Candidates, Params, plan};
+use thermokin_planner::{Candidates, Params, Poses, plan};
 
 fn bench(c: &mut Criterion) {
     let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
-    let params = Params { poses: 60, frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Params::default() };
+    let params =
+        Params { poses: Poses::Exactly(60), frame: FrameMode::Tracker, tool: ToolMode::Unknown, ..Params::default() };
     let mut group = c.benchmark_group("plan");
     group.sample_size(10);
     for n in [1500, 3000, 6000] {

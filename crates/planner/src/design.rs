@@ -9,12 +9,12 @@ use nalgebra::Vector3;
 use rayon::prelude::*;
 use thermokin_chain::{Dataset, Measurement, Robot, units};
 use thermokin_identify::{
-    Effect, Eligibility, FixedParameter, Model, PoseTerms, Setup, arc_needed, identifiable, residuals_and_jacobian,
-    travel,
+    Effect, Eligibility, FixedParameter, Model, PoseTerms, Setup, arc_needed, frame_refitted_weight, identifiable,
+    residuals_and_jacobian, travel,
 };
 
 use crate::error::PlanError;
-use crate::params::Params;
+use crate::params::{Params, Region};
 use crate::report::LeftOut;
 
 /// Poses per chunk of the Jacobian's parallel evaluation.
@@ -37,10 +37,16 @@ pub(crate) struct Design {
     pub measured: Mat<f64>,
     /// Nominal tool positions of the candidates, mm (the robot's base frame).
     pub positions: Vec<Vector3<f64>>,
-    /// `W`: the mean over the candidates of `M̃ᵢᵀ M̃ᵢ`, `M̃ᵢ` candidate `i`'s rows without the registration's
-    /// columns — so that `trace(W Σ)` is the mean variance of the predicted tool position over the
-    /// candidates, in the robot's base frame, of a parameter covariance `Σ` (scaled columns).
+    /// `W`: the mean over the poses of use ([`crate::Region`]) of `M̃ᵢᵀ M̃ᵢ`, `M̃` their rows with the
+    /// frame a test re-measures projected out ([`thermokin_identify::frame_refitted_weight`]) — so that `trace(W Σ)` is the mean
+    /// squared error of the predicted tool position over the poses of use, once that frame is fitted
+    /// there, of a parameter covariance `Σ` (scaled columns).
     pub use_weight: Mat<f64>,
+    /// The poses of use.
+    pub region_poses: usize,
+    /// The free columns of the frame a test re-measures (registration, unknown tool), fitted again on
+    /// the poses of use: what their fit takes of a test's own noise.
+    pub refitted: usize,
     /// The catalogue effects left out: the diagnosis refuses them on any choice of the candidates.
     pub left_out: Vec<LeftOut>,
 }
@@ -179,19 +185,30 @@ impl Design {
             .collect();
         let reduce = |j: &Mat<f64>| Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])] / scale[k]);
         let candidates_rows = reduce(&jac_pool);
-        let used = Mat::from_fn(candidates_rows.nrows(), free.len(), |r, k| {
-            if matches!(model.parameter(free[k]), Some((Effect::Registration, _))) {
-                0.0
-            } else {
-                candidates_rows[(r, k)]
+        let refitted: Vec<usize> = (0..free.len())
+            .filter(|&k| {
+                matches!(
+                    model.parameter(free[k]),
+                    Some((Effect::Registration | Effect::ToolPoint | Effect::ToolRotation, _))
+                )
+            })
+            .collect();
+        let (use_weight, region_poses) = match &params.region {
+            Region::Candidates => (frame_refitted_weight(&candidates_rows, &refitted), candidates.len()),
+            Region::Poses(poses) => {
+                for (i, q) in poses.iter().enumerate() {
+                    crate::candidates::check(robot, q, "pose of use", i + 1)?;
+                }
+                let rows = reduce(&jacobian(robot, &model, &nominal_set(robot, poses)?)?);
+                (frame_refitted_weight(&rows, &refitted), poses.len())
             }
-        });
-        let mut use_weight = product(used.as_ref().transpose(), used.as_ref());
-        use_weight *= faer::Scale(1.0 / candidates.len().max(1) as f64);
+        };
         Ok(Self {
             left_out,
             not_identifiable: model.fixed_parameters(&ident.fixed),
             use_weight,
+            region_poses,
+            refitted: refitted.len(),
             candidates: candidates_rows,
             measured: reduce(&jac_done),
             positions: pool.measurements.iter().map(|m| m.position_mm).collect(),

@@ -1,21 +1,22 @@
 #![doc = include_str!("../README.md")]
 //! `thermokin-planner`: which poses to measure. From candidate poses (the user's taught, collision-free
 //! ones, or sampled within the joint limits and a workspace box), it chooses the poses that make the
-//! parameters the diagnosis considers identifiable and precise — D-optimal on the same model and
+//! calibrated model's predicted error smallest where the robot will work ([`Region`]; I-optimal) — or
+//! the parameters the diagnosis considers identifiable and precise (D-optimal) — on the same model and
 //! Jacobian the diagnosis fits (`thermokin-identify`), after the poses already measured when there are
-//! some — puts them in a measuring order that keeps joint motion short, and says what they are predicted
-//! to give against random poses of the same pool, and what stays unidentifiable and why.
+//! some; puts them in a measuring order that keeps joint motion short, and says what they promise at the
+//! poses of use against random poses of the same pool ([`Promise`]), and what stays unidentifiable and why.
 //!
 //! ```
-//! use thermokin_planner::{Candidates, Params, plan};
+//! use thermokin_planner::{Candidates, Params, Poses, plan};
 //! let robot = thermokin_chain::Robot::new("irb140", thermokin_testdata::irb140_table9());
 //! let pool = Candidates::sampled(&robot, 300, 7, None).unwrap();
-//! let plan = plan(&robot, &pool, &[], &Params { poses: 20, ..Params::default() }).unwrap();
+//! let plan = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(20), ..Params::default() }).unwrap();
 //! assert_eq!(plan.poses.len(), 20);
 //! // Each pose is one of the candidates, values unchanged.
 //! assert!(plan.poses.iter().all(|p| pool.joints()[p.candidate] == p.joints_rad));
-//! // The criterion never decreases as poses are added.
-//! assert!(plan.criterion_by_pose.windows(2).all(|w| w[1] >= w[0]));
+//! // The criterion (the mean predicted variance over the candidates) never rises as poses are added.
+//! assert!(plan.criterion_by_pose.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-9)));
 //! ```
 
 mod candidates;
@@ -31,8 +32,10 @@ use thermokin_chain::{Robot, units};
 
 pub use candidates::{Candidates, DEFAULT_SAMPLES};
 pub use error::PlanError;
-pub use params::{Criterion, Params, WorkspaceBox};
-pub use report::{Comparison, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose};
+pub use params::{Criterion, Params, Poses, Region, WorkspaceBox};
+pub use report::{
+    Beyond, Comparison, CountRule, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose, Promise,
+};
 pub use select::RIDGE;
 
 use crate::design::Design;
@@ -49,14 +52,23 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
     for (i, q) in measured.iter().enumerate() {
         candidates::check(robot, q, "measured pose", i + 1)?;
     }
-    if params.poses > candidates.len() {
+    let wanted = match params.poses {
+        Poses::Exactly(n) => n,
+        Poses::Auto { at_most } => at_most.min(candidates.len()),
+    };
+    if wanted > candidates.len() {
         let copies = candidates.copies().len();
-        return Err(PlanError::TooFewCandidates { poses: params.poses, candidates: candidates.len(), copies });
+        return Err(PlanError::TooFewCandidates { poses: wanted, candidates: candidates.len(), copies });
     }
     let design = Design::new(robot, candidates.joints(), measured, params)?;
-    let selected = select::choose(&design, params.poses, params.criterion).ok_or(PlanError::Singular)?;
+    let count = match params.poses {
+        Poses::Exactly(n) => Poses::Exactly(n),
+        Poses::Auto { .. } => Poses::Auto { at_most: wanted },
+    };
+    let select::Chosen { rows: selected, stop } =
+        select::choose(&design, count, params.criterion).ok_or(PlanError::Singular)?;
     let planned = precision(&design, &selected);
-    let random = random_sets(&design, params.poses, params.random_draws, params.seed);
+    let random = random_sets(&design, selected.len(), params.random_draws, params.seed);
     let chosen: Vec<Vec<f64>> = selected.iter().map(|&i| candidates.joints()[i].clone()).collect();
     // The order on the joints as the controller moves them: degrees, mm for a prismatic joint.
     let chosen_external: Vec<Vec<f64>> = chosen.iter().map(|q| external(robot, q)).collect();
@@ -98,6 +110,18 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
         poses,
         criterion_by_pose,
         comparison: comparison(&planned, &random),
+        promise: promise(&design, params, &planned, &random),
+        beyond_candidates: match &params.region {
+            Region::Poses(poses) => beyond(robot, poses, candidates.joints(), measured),
+            Region::Candidates => Vec::new(),
+        },
+        count: match count {
+            Poses::Auto { at_most } => Some(CountRule {
+                at_most,
+                stopped: stop.map(|s| [s.next_gain * params.noise_mm, s.resolution * params.noise_mm]),
+            }),
+            Poses::Exactly(_) => None,
+        },
         parameters: parameters(&design, &planned, &random, params.noise_mm),
         not_identifiable: planned.not_identifiable.clone(),
         never_identifiable: design.not_identifiable.clone(),
@@ -124,6 +148,42 @@ fn helps(design: &Design, reduced: &[f64]) -> Vec<String> {
         }
     }
     out
+}
+
+/// The joints along which the poses of use reach more than a degree (a slide: a millimetre) beyond
+/// every candidate's and measured pose's arc.
+fn beyond(robot: &Robot, poses: &[Vec<f64>], candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<Beyond> {
+    let ext = |j: usize, v: f64| units::joint_value_out(robot.chain().joints()[j].kind, v);
+    (0..robot.chain().dof())
+        .filter_map(|j| {
+            let (lo, hi) = design::arc(poses.iter().map(Vec::as_slice), j);
+            let (c_lo, c_hi) = design::arc(candidates.iter().chain(measured).map(Vec::as_slice), j);
+            let out = (ext(j, c_lo) - ext(j, lo)).max(ext(j, hi) - ext(j, c_hi));
+            (out > 1.0).then(|| Beyond {
+                joint: j + 1,
+                use_arc: [ext(j, lo), ext(j, hi)],
+                candidates_arc: [ext(j, c_lo), ext(j, c_hi)],
+            })
+        })
+        .collect()
+}
+
+/// The predicted held-out error at the poses of use ([`Promise`]).
+fn promise(design: &Design, params: &Params, planned: &Precision, random: &[Precision]) -> Promise {
+    let rms = |v: f64| params.noise_mm * select::heldout_rms(design, v);
+    Promise {
+        region: match params.region {
+            Region::Candidates => "candidates",
+            Region::Poses(_) => "given",
+        },
+        poses_of_use: design.region_poses,
+        refitted: design.refitted,
+        noise_mm: params.noise_mm,
+        planned_rms_mm: rms(planned.variance),
+        planned_model_rms_mm: params.noise_mm * planned.variance.max(0.0).sqrt(),
+        random_rms_mm: median(random.iter().map(|r| r.variance.is_finite().then(|| rms(r.variance)))),
+        resolution: select::resolution(design),
+    }
 }
 
 /// The plan's criterion and indices against the random draws' medians.

@@ -11,11 +11,14 @@ use crate::error::PlanError;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 pub enum Criterion {
     /// D-optimal: the smallest volume of the parameters' confidence ellipsoid (`log det` of the
-    /// information, as FIGAROH and most of the literature).
-    #[default]
+    /// information, as FIGAROH and most of the literature): for pinning parameters down (the poses
+    /// `diagnose` suggests after a refusal).
     Parameters,
-    /// I-optimal: the smallest mean variance of the predicted tool position over the candidates — the
-    /// accuracy the calibrated model would have where the robot works if the model were the robot.
+    /// I-optimal: the smallest mean variance of the predicted tool position over the poses of use
+    /// ([`Params::region`]; the candidates without one) — the accuracy the calibrated model would have
+    /// where the robot works if the model were the robot, after the frame a test re-measures
+    /// (registration, unknown tool) is fitted there. The default: what a calibration is used for.
+    #[default]
     Prediction,
 }
 
@@ -26,18 +29,67 @@ thermokin_chain::choices!(
         ("parameters", "D-optimal: the largest log det of the parameters' information", Criterion::Parameters),
         (
             "prediction",
-            "I-optimal: the smallest mean variance of the predicted tool position over the candidates",
+            "I-optimal: the smallest mean variance of the predicted tool position over the poses of use (--for; the candidates without it)",
             Criterion::Prediction
         ),
     ]
 );
 
+/// Where the robot will work: the poses whose predicted error a plan for prediction lowers and every
+/// plan's promise is stated at ([`crate::Promise`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Region {
+    /// The candidates themselves: the whole reachable space the user gave (or the sampled one).
+    #[default]
+    Candidates,
+    /// These configurations (radians; mm for a prismatic joint): the program the robot will run, or any
+    /// poses of its work. Only their joints are used, never a measurement.
+    Poses(Vec<Vec<f64>>),
+}
+
+/// How many poses to plan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Poses {
+    /// Exactly this many (after the measured ones).
+    Exactly(usize),
+    /// As many as lower the predicted error at the poses of use by more than a test there could show,
+    /// at most this many: the greedy choice stops at the first pose whose fall of the predicted held-out
+    /// RMS is below that RMS's own standard error over the poses of use ([`crate::Promise`]; the rule
+    /// in `select`'s documentation).
+    Auto {
+        /// The most poses planned.
+        at_most: usize,
+    },
+}
+
+impl std::fmt::Display for Poses {
+    /// As the command line takes it: the count, or `auto`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Poses::Exactly(n) => write!(f, "{n}"),
+            Poses::Auto { .. } => f.write_str("auto"),
+        }
+    }
+}
+
+impl Poses {
+    /// The largest count this setting may plan.
+    pub fn at_most(self) -> usize {
+        match self {
+            Poses::Exactly(n) | Poses::Auto { at_most: n } => n,
+        }
+    }
+}
+
 /// The settings of a plan ([`crate::plan`]), with the diagnosis' defaults where they mean the same thing.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Params {
-    /// Poses to plan (after the measured ones). Default 30.
-    pub poses: usize,
-    /// What the poses optimise. Default: the parameters (D-optimal).
+    /// Poses to plan (after the measured ones). Default: exactly 30.
+    pub poses: Poses,
+    /// Where the robot will work: the poses the plan's promise is stated at, and those a plan for
+    /// prediction chooses for. Default: the candidates.
+    pub region: Region,
+    /// What the poses optimise. Default: the predicted error at the poses of use (I-optimal).
     pub criterion: Criterion,
     /// The tracker's noise, mm (one standard deviation per coordinate): the predicted standard deviation
     /// of every parameter is stated at it. Default 0.02 mm — a laser tracker's repeatability at a few
@@ -71,8 +123,9 @@ pub struct Params {
 impl Default for Params {
     fn default() -> Self {
         Self {
-            poses: 30,
-            criterion: Criterion::Parameters,
+            poses: Poses::Exactly(30),
+            region: Region::Candidates,
+            criterion: Criterion::Prediction,
             noise_mm: 0.02,
             frame: FrameMode::Base,
             tool: ToolMode::Known,
@@ -89,8 +142,17 @@ impl Params {
     /// Checks the settings: at least one pose, a positive finite noise, at least one random draw, no
     /// effect that poses cannot plan for.
     pub fn validate(&self) -> Result<(), PlanError> {
-        if self.poses == 0 {
+        if self.poses.at_most() == 0 {
             return Err(PlanError::NoPoses);
+        }
+        if let Region::Poses(p) = &self.region
+            && p.is_empty()
+        {
+            return Err(PlanError::Setting {
+                setting: "region",
+                value: "no poses".into(),
+                rule: "give at least one pose of use",
+            });
         }
         if !(self.noise_mm.is_finite() && self.noise_mm > 0.0) {
             return Err(PlanError::Setting {

@@ -15,6 +15,9 @@ use crate::select::{information, log_det_inverse};
 pub(crate) struct Precision {
     /// `log det(δI + MᵀM)`: the criterion.
     pub criterion: f64,
+    /// `trace(W B)`, `B = (δI + MᵀM)⁻¹`: the mean squared error of the predicted tool position over
+    /// the poses of use per unit of noise variance ([`thermokin_identify::frame_refitted_weight`]).
+    pub variance: f64,
     /// Per free column of the design, its predicted standard deviation in model units (mm, radians, …)
     /// at noise 1 mm; `None` where these poses cannot identify it.
     pub sigma_per_mm: Vec<Option<f64>>,
@@ -27,7 +30,10 @@ pub(crate) struct Precision {
 /// The precision of candidates `rows` after the measured poses.
 pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
     let m = design.rows_with_measured(rows);
-    let criterion = log_det_inverse(&information(&m)).map_or(f64::NEG_INFINITY, |(d, _)| d);
+    let (criterion, variance) = match log_det_inverse(&information(&m)) {
+        Some((d, b)) => (d, thermokin_identify::trace_of_product(&design.use_weight, &b)),
+        None => (f64::NEG_INFINITY, f64::INFINITY),
+    };
     let ident = identifiable(&m, &vec![true; m.ncols()]);
     let cols: Vec<usize> = (0..m.ncols()).filter(|&c| ident.free[c]).collect();
     let mut sigma_per_mm = vec![None; m.ncols()];
@@ -55,6 +61,7 @@ pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
         .collect();
     Precision {
         criterion,
+        variance,
         sigma_per_mm,
         not_identifiable: design.model.fixed_parameters(&fixed),
         observability: observability(&m, &vec![true; m.ncols()]),

@@ -30,6 +30,13 @@ pub struct Plan {
     pub criterion_by_pose: Vec<f64>,
     /// The plan against random poses of the same pool.
     pub comparison: Comparison,
+    /// The predicted held-out error at the poses of use, planned and random.
+    pub promise: Promise,
+    /// Why an automatic count of poses stopped where it did (`--poses auto`); `None` for a given count.
+    pub count: Option<CountRule>,
+    /// The joints along which the poses of use leave every candidate's (and measured pose's) arc: there
+    /// the promise is an extrapolation of the model, which no variance bounds.
+    pub beyond_candidates: Vec<Beyond>,
     /// Every parameter's predicted standard deviation, planned and random.
     pub parameters: Vec<ParameterPrecision>,
     /// Parameters the candidates can identify but the planned poses (with the measured ones) cannot.
@@ -78,6 +85,58 @@ pub struct Comparison {
     pub planned: Option<Observability>,
     /// The median of each index over the random draws.
     pub random: Option<Observability>,
+}
+
+/// What the plan promises where the robot will work ([`crate::Region`]): the predicted held-out RMS
+/// error per pose of use (3-D, mm) at the stated noise, if the model planned for were the robot — the
+/// model's prediction error there, with the frame a test re-measures (registration, unknown tool)
+/// fitted on those poses, plus what the test's own noise leaves after that fit:
+/// `σ √(trace(W B) + 3 − k/u)` ([`thermokin_identify::frame_refitted_weight`],
+/// [`thermokin_identify::heldout_rms`]).
+/// Its error scales with the noise: a diagnosis whose residuals are wider than the tracker (a model
+/// that is not the robot) measures more, in proportion.
+#[derive(Clone, Debug, Serialize)]
+pub struct Promise {
+    /// What the poses of use are: `"candidates"` or `"given"` (`--for`).
+    pub region: &'static str,
+    /// How many poses of use.
+    pub poses_of_use: usize,
+    /// Frame parameters fitted again on the poses of use (registration, unknown tool).
+    pub refitted: usize,
+    /// The noise the figures are stated at, mm per axis.
+    pub noise_mm: f64,
+    /// The planned poses' predicted held-out RMS, mm.
+    pub planned_rms_mm: f64,
+    /// Of which the model's prediction error alone (`σ √trace(W B)`), mm.
+    pub planned_model_rms_mm: f64,
+    /// The median over the random draws of their predicted held-out RMS, mm (`None`: most draws cannot
+    /// identify the model).
+    pub random_rms_mm: Option<f64>,
+    /// The standard error of a held-out RMS measured at the poses of use, as a fraction of it
+    /// (`1/√(2(3u − k))`): differences below it a test there cannot show.
+    pub resolution: f64,
+}
+
+/// A joint along which the poses of use leave the candidates' arc.
+#[derive(Clone, Debug, Serialize)]
+pub struct Beyond {
+    /// 1-based joint.
+    pub joint: usize,
+    /// The poses of use's lowest and highest value, degrees (mm for a prismatic joint).
+    pub use_arc: [f64; 2],
+    /// The candidates' and measured poses', the same units.
+    pub candidates_arc: [f64; 2],
+}
+
+/// Why `--poses auto` planned the count it did.
+#[derive(Clone, Debug, Serialize)]
+pub struct CountRule {
+    /// The most poses allowed.
+    pub at_most: usize,
+    /// The fall of the predicted held-out RMS (mm) the next pose would have given, and the standard
+    /// error (mm) of a held-out RMS at the poses of use it fell below; `None`: the count reached
+    /// `at_most`.
+    pub stopped: Option<[f64; 2]>,
 }
 
 /// A parameter's predicted standard deviation, report units.
@@ -141,6 +200,7 @@ impl Plan {
     pub fn text(&self) -> String {
         let mut out = self.head();
         out.push_str(&self.pose_table());
+        out.push_str(&self.promise_text());
         out.push_str(&self.comparison_table());
         out.push_str(&self.parameter_table());
         if !self.left_out.is_empty() {
@@ -204,6 +264,60 @@ impl Plan {
                 .collect::<Vec<_>>()
                 .join(", ")
         ));
+        out
+    }
+
+    fn promise_text(&self) -> String {
+        let p = &self.promise;
+        let region = match p.region {
+            "given" => format!("the {} poses of use given", p.poses_of_use),
+            _ => format!("the {} candidates (the poses of use: no --for)", p.poses_of_use),
+        };
+        let frame = if p.refitted > 0 {
+            format!(", the {} frame parameters a test fits there refitted", p.refitted)
+        } else {
+            String::new()
+        };
+        let random = p.random_rms_mm.map_or("not identifiable in most draws".into(), |r| format!("{r:.4} mm"));
+        let mut out = format!(
+            "\nPredicted held-out RMS at {region} (noise {} mm per axis{frame}; the model planned for taken as the robot):\n  planned {:.4} mm (the model's own share {:.4}), random ({} draws, median) {random}; a test there resolves {:.1} % of it\n",
+            p.noise_mm,
+            p.planned_rms_mm,
+            p.planned_model_rms_mm,
+            self.comparison.random_draws,
+            100.0 * p.resolution
+        );
+        if !self.beyond_candidates.is_empty() {
+            let joints: Vec<String> = self
+                .beyond_candidates
+                .iter()
+                .map(|b| {
+                    format!(
+                        "q{} {:.0}…{:.0} (candidates {:.0}…{:.0})",
+                        b.joint, b.use_arc[0], b.use_arc[1], b.candidates_arc[0], b.candidates_arc[1]
+                    )
+                })
+                .collect();
+            out.push_str(&format!(
+                "warning: the poses of use leave the candidates' arcs — {}: there the model is extrapolated, its error there is not what any variance promises, and a model that is not the robot may do worse than the promise; candidates that cover those arcs would measure it\n",
+                joints.join(", ")
+            ));
+        }
+        if let Some(c) = &self.count {
+            match c.stopped {
+                Some([gain, resolution]) => out.push_str(&format!(
+                    "Poses: {} — one more would lower that RMS by {:.2e} mm, below the {:.2e} mm a test at the poses of use can show (at most {})\n",
+                    self.poses.len(),
+                    gain,
+                    resolution,
+                    c.at_most
+                )),
+                None => out.push_str(&format!(
+                    "Poses: {} — the most allowed; each still lowered the predicted RMS by more than a test at the poses of use can show\n",
+                    self.poses.len()
+                )),
+            }
+        }
         out
     }
 

@@ -5,17 +5,23 @@
 //! `B = (δI + MᵀM)⁻¹` the parameters' covariance per unit of noise (the ridge `δ`, [`RIDGE`], is a prior
 //! of the parameters — a Bayesian design — that keeps it finite while fewer poses than parameters leave
 //! directions unseen, so small that each pose first adds the directions nothing has seen yet).
-//! - **Parameters (D-optimal, the default):** maximise `log det(δI + MᵀM)`, the volume of the
-//!   confidence ellipsoid; FIGAROH's and most of the literature's. Invariant to a re-parameterisation of
-//!   the whole model (a rotation of the tracker frame, a change of units).
-//! - **Prediction (I-optimal):** minimise `trace(W B)`, `W` the mean of `M̃ᵢᵀM̃ᵢ` over the
-//!   candidates without the registration's columns: the mean variance of the predicted tool position, in
-//!   the robot's base frame, over the poses the user can reach. That is what a calibration is used for
-//!   and what a held-out test scores; a parameter counts as much as it moves the tool where the robot
-//!   works — and it is invariant under any invertible change of parameters too. It is offered, not the
-//!   default, because real data decided against it: its poses gather where the candidates are dense,
-//!   and a model that is not the robot, fitted there, extrapolates worse — 60 poses of the real UR10's
-//!   series C transfer to series B at 1.02 mm against the D-optimal ones' 0.68 (docs/planner.md).
+//! - **Prediction (I-optimal, the default):** minimise `trace(W B)`, `W` the mean of `M̃ᵢᵀM̃ᵢ` over the
+//!   poses of use (`Region`: the poses given, the program to be compensated, or else the candidates),
+//!   `M̃` their rows with the frame a test re-measures (a tracker's registration, an unknown tool)
+//!   projected out over all of them ([`thermokin_identify::frame_refitted_weight`]): the mean squared
+//!   error of the predicted tool position where the robot will work, once that frame is fitted there.
+//!   That is what a calibration is used for and what a held-out test scores; a parameter counts as much
+//!   as it moves the tool where the robot works, and the criterion is invariant under any invertible
+//!   change of parameters. Measured on the real arms (docs/planner.md): over the candidates it reaches
+//!   series B from 60 poses of the UR10's series C at 0.436 mm (D-optimal 0.482) and the WAM's 20 random
+//!   poses from 30 of its grid at 2.672 (D-optimal 2.847), and equals D-optimal on the WAM grid's halves.
+//!   (Before its frame was projected out — the registration's columns only zeroed — it lost on the
+//!   UR10: 1.02 against 0.68 mm, its poses gathered where the candidates are dense.)
+//! - **Parameters (D-optimal):** maximise `log det(δI + MᵀM)`, the volume of the confidence ellipsoid;
+//!   FIGAROH's and most of the literature's. Invariant to a re-parameterisation of the whole model (a
+//!   rotation of the tracker frame, a change of units). For pinning parameters down: the poses
+//!   `diagnose` suggests after refusing an effect for what the poses cover, and an effect that matters
+//!   little where the robot works (a wrist's cyclic error where the wrist hardly turns) but is wanted.
 //!
 //! **Algorithm.** Adding pose `i` (rows `Mᵢ`, 3 × p), with `Sᵢ = Mᵢ B Mᵢᵀ` and `C = I₃ + Sᵢ`, multiplies
 //! the determinant by `det C` (the matrix determinant lemma) and, by Woodbury's identity,
@@ -31,8 +37,10 @@ use faer::linalg::solvers::DenseSolveCore;
 use faer::{Accum, Mat, Par};
 use nalgebra::Matrix3;
 
+use thermokin_identify::trace_of_product;
+
 use crate::design::{Design, product};
-use crate::params::Criterion;
+use crate::params::{Criterion, Poses};
 
 /// The ridge `δ` of the criterion, in the scaled columns (where one pose adds about 1 to each column's
 /// diagonal): a millionth of a pose's information. Large enough that `δI + MᵀM` stays invertible in
@@ -91,11 +99,6 @@ fn diagonal_blocks(a: &Mat<f64>, b: &Mat<f64>) -> Mat<f64> {
     })
 }
 
-/// `trace(a · b)` of two square matrices.
-fn trace_product(a: &Mat<f64>, b: &Mat<f64>) -> f64 {
-    (0..a.nrows()).map(|i| (0..a.ncols()).map(|k| a[(i, k)] * b[(k, i)]).sum::<f64>()).sum()
-}
-
 impl<'a> State<'a> {
     /// The measured poses alone.
     fn new(design: &'a Design) -> Option<Self> {
@@ -110,7 +113,7 @@ impl<'a> State<'a> {
         let s = diagonal_blocks(&mb, m);
         let mbw = product(mb.as_ref(), w.as_ref());
         let t = diagonal_blocks(&mbw, &mb);
-        let variance = trace_product(w, &b);
+        let variance = trace_of_product(w, &b);
         Some(Self { design, m, w, b, s, t, log_det, variance, rows, variance_at_refresh: variance })
     }
 
@@ -197,19 +200,67 @@ const MAX_EXCHANGE_PASSES: usize = 4;
 /// the updates, far below what one pose adds.
 const EXCHANGE_GAIN: f64 = 1e-9;
 
-/// Chooses `n` candidates after the measured poses: greedily, then by exchange passes until one makes
-/// no exchange. `None` when the information matrix cannot be factorised (the ridge makes it positive
-/// definite: a non-finite Jacobian).
-pub(crate) fn choose(design: &Design, n: usize, criterion: Criterion) -> Option<Vec<usize>> {
+/// The predicted held-out RMS error per pose of use (3-D), per unit of noise
+/// ([`thermokin_identify::heldout_rms`] of `trace(W B)`).
+pub(crate) fn heldout_rms(design: &Design, variance: f64) -> f64 {
+    thermokin_identify::heldout_rms(variance, 1.0, design.refitted, design.region_poses)
+}
+
+/// The standard error of a held-out RMS measured over the poses of use, as a fraction of it
+/// ([`thermokin_identify::heldout_resolution`]).
+pub(crate) fn resolution(design: &Design) -> f64 {
+    thermokin_identify::heldout_resolution(design.refitted, design.region_poses)
+}
+
+/// Why an automatic count stopped ([`crate::Poses::Auto`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct AutoStop {
+    /// The fall of the predicted held-out RMS the next pose would have given, per unit of noise.
+    pub next_gain: f64,
+    /// The standard error of a measured held-out RMS at the poses of use, per unit of noise.
+    pub resolution: f64,
+}
+
+/// The chosen candidates, and, for an automatic count that stopped before its most, why.
+pub(crate) struct Chosen {
+    pub rows: Vec<usize>,
+    pub stop: Option<AutoStop>,
+}
+
+/// Chooses candidates after the measured poses: greedily, then by exchange passes until one makes no
+/// exchange. `poses` is the count, or [`Poses::Auto`]: the greedy choice stops at the first pose whose
+/// fall of the predicted held-out RMS at the poses of use ([`heldout_rms`]) is below that RMS's own
+/// standard error there ([`resolution`]) — a gain no test of those poses could show — but not before
+/// the poses' rows (with the measured ones') reach the free parameters' count, below which the
+/// predicted error is the ridge's, not the poses'. `None` when the information matrix cannot be
+/// factorised (the ridge makes it positive definite: a non-finite Jacobian).
+pub(crate) fn choose(design: &Design, poses: Poses, criterion: Criterion) -> Option<Chosen> {
     let mut state = State::new(design)?;
     let mut taken = vec![false; design.candidates.nrows() / 3];
-    let mut chosen = Vec::with_capacity(n);
-    for _ in 0..n {
+    let mut chosen = Vec::with_capacity(poses.at_most());
+    let floor = design.free.len().div_ceil(3).saturating_sub(design.measured.nrows() / 3);
+    let mut stop = None;
+    while chosen.len() < poses.at_most() {
         let (i, _) = state.best(&taken, criterion)?;
+        if matches!(poses, Poses::Auto { .. }) && chosen.len() >= floor {
+            let now = heldout_rms(design, state.variance);
+            let next_gain = now - heldout_rms(design, state.variance - state.gain(i, 1.0, Criterion::Prediction));
+            let resolution = resolution(design) * now;
+            if next_gain < resolution {
+                stop = Some(AutoStop { next_gain, resolution });
+                break;
+            }
+        }
         state.update(i, 1.0)?;
         taken[i] = true;
         chosen.push(i);
     }
+    exchange(&mut state, &mut taken, &mut chosen, criterion)?;
+    Some(Chosen { rows: chosen, stop })
+}
+
+/// Fedorov's exchange passes over `chosen` until one makes no exchange ([`MAX_EXCHANGE_PASSES`] at most).
+fn exchange(state: &mut State<'_>, taken: &mut [bool], chosen: &mut [usize], criterion: Criterion) -> Option<()> {
     for _ in 0..MAX_EXCHANGE_PASSES {
         let mut exchanged = false;
         for k in 0..chosen.len() {
@@ -217,7 +268,7 @@ pub(crate) fn choose(design: &Design, n: usize, criterion: Criterion) -> Option<
             let before = state.value(criterion);
             state.update(out, -1.0)?;
             taken[out] = false;
-            let (inn, gain) = state.best(&taken, criterion)?;
+            let (inn, gain) = state.best(taken, criterion)?;
             let better = state.value(criterion) + gain > before + EXCHANGE_GAIN * before.abs().max(1.0);
             let into = if better { inn } else { out };
             state.update(into, 1.0)?;
@@ -229,7 +280,7 @@ pub(crate) fn choose(design: &Design, n: usize, criterion: Criterion) -> Option<
             break;
         }
     }
-    Some(chosen)
+    Some(())
 }
 
 /// The criterion after the measured poses and then after each of `rows` in turn — the log det, which
@@ -258,7 +309,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
-    use super::{Criterion, State, block, information, log_det_inverse, product, trace_product};
+    use super::{Criterion, State, block, information, log_det_inverse, product, trace_of_product};
     use crate::design::Design;
 
     /// A design of `n` random candidates on `p` columns after `p` measured random poses.
@@ -277,6 +328,8 @@ mod tests {
             measured: Mat::from_fn(3 * p, p, |_, _| rng.random_range(-1.0..1.0)),
             positions: vec![],
             use_weight: w,
+            region_poses: n,
+            refitted: 0,
             left_out: vec![],
         }
     }
@@ -305,7 +358,7 @@ mod tests {
         let m = with_measured(&rows);
         let (log_det, b) = log_det_inverse(&information(&m)).unwrap();
         assert!((state.log_det - log_det).abs() < TOLERANCE * log_det.abs().max(1.0), "{} {log_det}", state.log_det);
-        let variance = trace_product(&d.use_weight, &b);
+        let variance = trace_of_product(&d.use_weight, &b);
         let mb = product(d.candidates.as_ref(), b.as_ref());
         let g = product(product(b.as_ref(), d.use_weight.as_ref()).as_ref(), b.as_ref());
         let mg = product(d.candidates.as_ref(), g.as_ref());
@@ -333,6 +386,6 @@ mod tests {
         let m0 = with_measured(&rows0);
         let (log_det0, b0) = log_det_inverse(&information(&m0)).unwrap();
         assert!((log_det0 - log_det - gain_d).abs() < TOLERANCE * log_det0.abs().max(1.0));
-        assert!((variance - trace_product(&d.use_weight, &b0) - gain_i).abs() < TOLERANCE * variance);
+        assert!((variance - trace_of_product(&d.use_weight, &b0) - gain_i).abs() < TOLERANCE * variance);
     }
 }

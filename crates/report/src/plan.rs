@@ -44,11 +44,24 @@ pub fn plan_page(plan: &Plan, context: &PageContext) -> String {
 fn comparison(out: &mut String, plan: &Plan) {
     let c = &plan.comparison;
     out.push_str("<h2>Against random poses</h2>");
+    let promise = &plan.promise;
+    let at = match promise.region {
+        "given" => format!("the {} poses of use", promise.poses_of_use),
+        _ => format!("the {} candidates", promise.poses_of_use),
+    };
     let mut rows = vec![vec![
+        cell(&format!("predicted held-out RMS at {at} [mm]")),
+        figure("promise.planned_rms_mm", promise.planned_rms_mm, 4),
+        match promise.random_rms_mm {
+            Some(r) => figure("promise.random_rms_mm", r, 4),
+            None => cell("not identifiable"),
+        },
+    ]];
+    rows.push(vec![
         cell("D-criterion log det"),
         figure("comparison.planned_criterion", c.planned_criterion, 3),
         figure("comparison.random_criterion", c.random_criterion, 3),
-    ]];
+    ]);
     if let (Some(p), Some(r)) = (&c.planned, &c.random) {
         rows.push(vec![
             cell("condition number"),

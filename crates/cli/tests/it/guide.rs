@@ -95,7 +95,7 @@ fn guide_runs_from_an_empty_directory_and_its_figures_hold() {
     quotes(&page, "(0.49 mm RMS)", &format!("({rms:.2} mm RMS)"));
     let noise_rms = 0.01 * 3f64.sqrt();
     quotes(&page, "28 times the stated noise", &format!("{:.0} times the stated noise", (rms / noise_rms).floor()));
-    assert!(outputs[1].contains("next poses: `thermokin plan --robot fixtures/urdf/ur10.urdf --tip tool0 --frame tracker --tool unknown --measured fixtures/real/ur10-ipa/series_C.csv --poses 20 --out next.csv`"));
+    assert!(outputs[1].contains("next poses: `thermokin plan --robot fixtures/urdf/ur10.urdf --tip tool0 --frame tracker --tool unknown --measured fixtures/real/ur10-ipa/series_C.csv --criterion parameters --poses 20 --out next.csv`"));
     let refused = report["identifiability"]["not_identifiable"].as_array().unwrap();
     let reason = |effect: &str| {
         refused.iter().find(|r| r["effect"] == effect).map(|r| r["reason"].as_str().unwrap().to_string())

@@ -145,3 +145,76 @@ fn the_planners_inputs_are_read_as_carefully_as_the_diagnosiss() {
     assert!(!o.status.success());
     assert!(stderr(&o).contains("backlash[2] follows the direction each joint comes from"), "{}", stderr(&o));
 }
+
+/// `plan --for` and `diagnose --for` on the real WAM: the plan chosen for the 20 random poses' joints
+/// says what it promises there against random draws (JSON and text), `--poses auto` says where it stopped
+/// and why, and the diagnosis of the planned poses' measurements predicts its own error at those poses
+/// and sets the hold-out set's beside it. A poses-of-use file with a joint missing is refused by name.
+#[test]
+fn plan_and_diagnose_for_the_poses_of_use() {
+    let wam = ["--robot", "fixtures/real/jacobi-wam/wam.urdf", "--frame", "tracker", "--tool", "unknown"];
+    let (out, json) = (tmp("plan-for.csv"), tmp("plan-for.json"));
+    let mut args = vec!["plan"];
+    args.extend(wam);
+    args.extend([
+        "--candidates",
+        "fixtures/real/jacobi-wam/wam-grid.csv",
+        "--for",
+        "fixtures/real/jacobi-wam/wam-random.csv",
+        "--poses",
+        "auto",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let o = thermokin(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("chosen for the prediction (I-optimal)"), "{text}");
+    assert!(text.contains("Predicted held-out RMS at the 20 poses of use given"), "{text}");
+    assert!(text.contains("a test at the poses of use can show"), "{text}");
+    let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let promise = &report["promise"];
+    assert!(promise["planned_rms_mm"].as_f64().unwrap() < promise["random_rms_mm"].as_f64().unwrap());
+    let stopped = report["count"]["stopped"].as_array().unwrap();
+    assert!(stopped[0].as_f64().unwrap() < stopped[1].as_f64().unwrap());
+    // The planned poses' rows of the grid, measured, diagnosed for the same poses of use.
+    let grid = std::fs::read_to_string(thermokin_testdata::workspace("fixtures/real/jacobi-wam/wam-grid.csv")).unwrap();
+    let lines: Vec<&str> = grid.lines().collect();
+    let mut measured = format!("{}\n", lines[0]);
+    for row in std::fs::read_to_string(&out).unwrap().lines().skip(1) {
+        let line: usize = row.split(',').nth(1).unwrap().parse().unwrap();
+        measured.push_str(lines[line - 1]);
+        measured.push('\n');
+    }
+    let measured_path = tmp("plan-for-measured.csv");
+    std::fs::write(&measured_path, measured).unwrap();
+    let mut args = vec!["diagnose"];
+    args.extend(wam);
+    args.extend([
+        "--measurements",
+        measured_path.to_str().unwrap(),
+        "--holdout",
+        "fixtures/real/jacobi-wam/wam-random.csv",
+        "--for",
+        "fixtures/real/jacobi-wam/wam-random.csv",
+        "--quiet",
+    ]);
+    let o = thermokin(&args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.contains("predicted at the 20 poses of use"), "{text}");
+    assert!(text.contains("the hold-out set holds these poses: measured"), "{text}");
+    // A poses-of-use file one joint short.
+    let short = tmp("plan-for-short.csv");
+    std::fs::write(&short, "q1,q2,q3,q4,q5,q6\n0,0,0,90,0,0\n").unwrap();
+    let mut args = vec!["plan"];
+    args.extend(wam);
+    args.extend(["--candidates", "fixtures/real/jacobi-wam/wam-grid.csv", "--for", short.to_str().unwrap()]);
+    let short_out = tmp("plan-for-short-out.csv");
+    args.extend(["--out", short_out.to_str().unwrap()]);
+    let o = thermokin(&args);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("plan-for-short.csv"), "{}", stderr(&o));
+}

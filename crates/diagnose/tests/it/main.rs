@@ -1,6 +1,7 @@
 //! Integration tests of the diagnosis: hidden effects it must find, the real Rokae data set, the paper.
 #![allow(clippy::unwrap_used, clippy::panic, clippy::type_complexity, missing_docs)] // Tests unwrap and panic to fail.
 
+mod at_use;
 mod branches;
 mod catalogue;
 mod causes;

@@ -5,4 +5,5 @@
 
 mod plan;
 mod real;
+mod region;
 mod simulated;

@@ -5,7 +5,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Dataset, Measurement, Robot};
 use thermokin_identify::{Effect, JointIndex, Model, PoseTerms, fit};
-use thermokin_planner::{Candidates, Params, plan};
+use thermokin_planner::{Candidates, Criterion, Params, Poses, plan};
 
 fn irb140() -> Robot {
     thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap()
@@ -15,7 +15,9 @@ fn irb140() -> Robot {
 fn the_plan_is_a_subset_of_the_candidates_in_a_shorter_order() {
     let robot = irb140();
     let pool = Candidates::sampled(&robot, 400, 11, None).unwrap();
-    let p = plan(&robot, &pool, &[], &Params { poses: 25, ..Params::default() }).unwrap();
+    // The D-optimal machinery (the criterion a log det); the prediction criterion's in the test below.
+    let params = Params { poses: Poses::Exactly(25), criterion: Criterion::Parameters, ..Params::default() };
+    let p = plan(&robot, &pool, &[], &params).unwrap();
     assert_eq!(p.poses.len(), 25);
     let mut seen = std::collections::HashSet::new();
     for pose in &p.poses {
@@ -39,9 +41,9 @@ fn the_plan_is_a_subset_of_the_candidates_in_a_shorter_order() {
 fn bad_settings_and_candidates_are_refused_with_their_reason() {
     let robot = irb140();
     let pool = Candidates::sampled(&robot, 10, 1, None).unwrap();
-    let e = plan(&robot, &pool, &[], &Params { poses: 11, ..Params::default() }).unwrap_err();
+    let e = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(11), ..Params::default() }).unwrap_err();
     assert_eq!(e.to_string(), "11 poses asked for, but only 10 candidates");
-    let e = plan(&robot, &pool, &[], &Params { poses: 0, ..Params::default() }).unwrap_err();
+    let e = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(0), ..Params::default() }).unwrap_err();
     assert!(e.to_string().contains("at least one pose"), "{e}");
     let e = Candidates::new(&robot, vec![vec![0.0; 6], vec![0.0, 0.0, 1.0, 0.0, 0.0, 0.0]], vec![2, 3]).unwrap_err();
     assert_eq!(e.to_string(), "candidate 3: joint 3 is outside its limits");
@@ -49,7 +51,8 @@ fn bad_settings_and_candidates_are_refused_with_their_reason() {
     assert_eq!(e.to_string(), "candidate 1: joint 2 is not a finite number");
     let drift = Effect::ThermalDrift(JointIndex::of(&robot, 1).unwrap(), thermokin_identify::DriftShape::Linear);
     let e =
-        plan(&robot, &pool, &[], &Params { poses: 5, effects: Some(vec![drift]), ..Params::default() }).unwrap_err();
+        plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(5), effects: Some(vec![drift]), ..Params::default() })
+            .unwrap_err();
     assert!(e.to_string().starts_with("thermal_drift[2] (linear) is identified over operating time"), "{e}");
 }
 
@@ -64,7 +67,8 @@ fn the_predicted_sigma_matches_the_spread_of_fits_over_simulated_noise() {
     let mut effects: Vec<Effect> = (0..6).map(|k| Effect::JointOffset(j(k))).collect();
     effects.push(Effect::LinkDeviation(j(2)));
     let pool = Candidates::sampled(&robot, 500, 5, None).unwrap();
-    let params = Params { poses: 20, noise_mm: 0.05, effects: Some(effects.clone()), ..Params::default() };
+    let params =
+        Params { poses: Poses::Exactly(20), noise_mm: 0.05, effects: Some(effects.clone()), ..Params::default() };
     let p = plan(&robot, &pool, &[], &params).unwrap();
     let model = Model::new(&robot, effects).unwrap();
     let names = model.parameter_names();
@@ -126,7 +130,7 @@ fn effects_no_choice_of_the_candidates_makes_eligible_are_left_out_with_the_reas
         })
         .collect();
     let pool = Candidates::new(&robot, joints, vec![]).unwrap();
-    let p = plan(&robot, &pool, &[], &Params { poses: 25, ..Params::default() }).unwrap();
+    let p = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(25), ..Params::default() }).unwrap();
     let left: Vec<&str> = p.left_out.iter().map(|l| l.effect.as_str()).collect();
     assert_eq!(left, ["joint_scale[1]", "periodic[1]", "periodic[2]"], "{:?}", p.left_out);
     assert!(
@@ -147,9 +151,10 @@ fn the_plan_carries_the_lateral_compliances_the_diagnosis_will_offer() {
     let pool = Candidates::sampled(&robot, 400, 17, None).unwrap();
     let lateral =
         |p: &thermokin_planner::Plan| p.effects.iter().filter(|e| e.starts_with("lateral_compliance")).count();
-    let by_default = plan(&robot, &pool, &[], &Params { poses: 60, ..Params::default() }).unwrap();
+    let by_default = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(60), ..Params::default() }).unwrap();
     assert_eq!(lateral(&by_default), 0, "{:?}", by_default.effects);
-    let params = Params { poses: 60, lateral: thermokin_identify::Lateral::Joints, ..Params::default() };
+    let params =
+        Params { poses: Poses::Exactly(60), lateral: thermokin_identify::Lateral::Joints, ..Params::default() };
     let joints = plan(&robot, &pool, &[], &params).unwrap();
     assert!(joints.effects.iter().any(|e| e == "lateral_compliance[2] (no masses)"), "{:?}", joints.effects);
 }
@@ -164,7 +169,7 @@ fn a_lifts_plan_carries_its_straightness_and_spans_the_stroke() {
     let robot = thermokin_io::parse_robot_toml("lift.toml".as_ref(), &text).unwrap();
     let massless = robot.clone().with_masses(vec![None; 7]).unwrap();
     let pool = Candidates::sampled(&massless, 600, 23, None).unwrap();
-    let params = Params { poses: 40, ..Params::default() };
+    let params = Params { poses: Poses::Exactly(40), ..Params::default() };
     let without = plan(&massless, &pool, &[], &params).unwrap();
     assert!(without.effects.iter().any(|e| e == "lateral_compliance[1] (no masses)"), "{:?}", without.effects);
     let pool = Candidates::sampled(&robot, 600, 23, None).unwrap();
@@ -185,4 +190,38 @@ fn a_lifts_plan_carries_its_straightness_and_spans_the_stroke() {
 
 fn pool_range(pool: &Candidates) -> (f64, f64) {
     pool.joints().iter().map(|q| q[0]).fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), d| (l.min(d), h.max(d)))
+}
+
+/// The prediction criterion (the default): the mean predicted variance after each pose in measuring order
+/// never increases, the plan's promise at the poses of use is below random draws', and `Poses::Auto`
+/// stops where it says: the next pose's gain below a test's resolution, no sooner than the rows reach the
+/// free parameters' count, and no later than the count it would stop at with one pose more allowed.
+#[test]
+fn a_plan_for_prediction_lowers_the_predicted_error_and_stops_where_a_test_could_not_tell() {
+    let robot = irb140();
+    let pool = Candidates::sampled(&robot, 400, 11, None).unwrap();
+    let p = plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(25), ..Params::default() }).unwrap();
+    assert_eq!(p.criterion, Criterion::Prediction);
+    assert!(p.criterion_by_pose.windows(2).all(|w| w[1] <= w[0] * (1.0 + 1e-9)), "{:?}", p.criterion_by_pose);
+    let promise = &p.promise;
+    assert!(promise.planned_rms_mm < promise.random_rms_mm.unwrap(), "{promise:?}");
+    // At noise σ with nothing to fit the held-out RMS would be σ√3; the model's share only adds to it.
+    assert!(promise.planned_rms_mm > promise.noise_mm * 3f64.sqrt());
+    let auto = Params { poses: Poses::Auto { at_most: 400 }, ..Params::default() };
+    let a = plan(&robot, &pool, &[], &auto).unwrap();
+    let rule = a.count.clone().unwrap();
+    let [gain, resolution] = rule.stopped.expect("stopped before every candidate");
+    assert!(gain < resolution, "{rule:?}");
+    let free = p.parameters.len();
+    assert!(3 * a.poses.len() >= free, "{} poses for {free} parameters", a.poses.len());
+    // The count is the greedy choice's: asked for that many exactly, the same poses (before exchanges
+    // the two runs share every step), and the promise of one pose more lowers the RMS by `gain`.
+    let exactly =
+        plan(&robot, &pool, &[], &Params { poses: Poses::Exactly(a.poses.len()), ..Params::default() }).unwrap();
+    let same = |x: &thermokin_planner::Plan| {
+        let mut c: Vec<usize> = x.poses.iter().map(|p| p.candidate).collect();
+        c.sort();
+        c
+    };
+    assert_eq!(same(&a), same(&exactly));
 }
