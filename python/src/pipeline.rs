@@ -394,9 +394,11 @@ impl PyReport {
 /// what a backlash follows), `lateral` (`"slides"`, or `"joints"`: every joint's bearing may tilt under the
 /// gravity moment across its axis, its loads lumped without masses), `accelerometers` (`{"acc_top": 1}`:
 /// each sensor's link, 0 the base — its columns `NAME_x`, `NAME_y`, `NAME_z` of a measurements file read
-/// as the link's tilt, as `--accelerometer NAME=LINK`). Runs without the GIL.
+/// as the link's tilt, as `--accelerometer NAME=LINK`), `region` (the poses of use, `(M, n)` degrees, as
+/// `--for`: the report's `at_use` predicts the final model's held-out error there from its fit, beside a
+/// `holdout` of those poses). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None, accelerometers=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None, accelerometers=None, region=None))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per setting.
 pub fn diagnose(
     py: Python<'_>,
@@ -420,6 +422,7 @@ pub fn diagnose(
     order: Option<&str>,
     lateral: Option<&str>,
     accelerometers: Option<HashMap<String, usize>>,
+    region: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -463,6 +466,10 @@ pub fn diagnose(
             a.sort_by(|x, y| x.name.cmp(&y.name));
             a
         },
+        poses_of_use: region
+            .map(|r| crate::planning::configurations(robot, &r, "region"))
+            .transpose()?
+            .unwrap_or_default(),
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -91,7 +91,7 @@ fn pose_count(value: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Poses>> {
 }
 
 /// Configurations (N, dof) in degrees (mm for a prismatic joint), in the library's units.
-fn configurations(
+pub(crate) fn configurations(
     robot: &PyRobot,
     value: &PyArrayLikeDyn<'_, f64, AllowTypeChange>,
     what: &str,

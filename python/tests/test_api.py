@@ -435,3 +435,16 @@ def test_lateral_joints_offers_a_bearings_tilt_without_masses(root, tmp_path):
     assert not any(e.startswith("lateral_compliance") for e in by_default.effects), by_default.text
     with pytest.raises(InputError, match="lateral"):
         thermokin.diagnose(robot, data, lateral="all")
+
+
+def test_diagnose_predicts_its_error_at_the_poses_of_use(irb140):
+    """`diagnose(..., region=)` as `diagnose --for`: the final model's predicted held-out error at the
+    poses of use, with a hold-out set of those poses measured beside it."""
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=120, minutes=0)
+    held = thermokin.Measurements(irb140, data.q[80:], data.xyz[80:])
+    report = thermokin.diagnose(irb140, data.q[:80], data.xyz[:80], holdout=held, region=data.q[80:], noise_mm=0.005)
+    at_use = report.to_dict()["at_use"]
+    assert at_use["poses"] == 40
+    assert at_use["measured_rms_mm"] == pytest.approx(report.to_dict()["holdout"]["selected"]["heldout_rms_mm"])
+    assert at_use["predicted_rms_mm"] > 0
+    assert thermokin.diagnose(irb140, data.q[:80], data.xyz[:80]).to_dict()["at_use"] is None

@@ -239,6 +239,7 @@ def diagnose(
     order: str | None = None,
     lateral: str | None = None,
     accelerometers: dict[str, int] | None = None,
+    region: _Array | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,
