@@ -18,7 +18,8 @@
 use faer::Mat;
 use thermokin_chain::{Dataset, Measurement};
 use thermokin_identify::{
-    Effect, PoseTerms, frame_refitted_weight, heldout_resolution, heldout_rms, residuals_and_jacobian, trace_of_product,
+    Effect, PoseTerms, frame_refitted_weight, heldout_resolution, heldout_rms, refitted_frame, residuals_and_jacobian,
+    trace_of_product,
 };
 
 use crate::error::DiagnoseError;
@@ -51,14 +52,7 @@ pub(crate) fn at_use(
     let rows: Vec<usize> = (0..use_data.len()).collect();
     let (_, ju) = residuals_and_jacobian(scorer.robot, &model, &fit.theta, &use_data, &rows, &terms)?;
     let mu = Mat::from_fn(ju.nrows(), free.len(), |r, k| ju[(r, free[k])]);
-    let frame: Vec<usize> = (0..free.len())
-        .filter(|&k| {
-            matches!(
-                model.parameter(free[k]),
-                Some((Effect::Registration | Effect::ToolPoint | Effect::ToolRotation, _))
-            )
-        })
-        .collect();
+    let frame = refitted_frame(&model, &free);
     let w = frame_refitted_weight(&mu, &frame);
     let share = trace_of_product(&w, &covariance);
     Ok(Some(AtUse {

@@ -46,4 +46,4 @@ pub use registration::{initial_frames, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
 pub use sampling::{normal, random_configuration};
 pub use terms::{PoseTerms, gravity_torques, max_gravity_torques, sensor_joint};
-pub use use_error::{frame_refitted_weight, heldout_resolution, heldout_rms, trace_of_product};
+pub use use_error::{frame_refitted_weight, heldout_resolution, heldout_rms, refitted_frame, trace_of_product};

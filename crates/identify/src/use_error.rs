@@ -15,6 +15,8 @@ use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
 use faer::{Accum, Mat, Par};
 
+use crate::{Effect, Model};
+
 /// `W = (1/u) Mᵀ(I − P)M` of the poses of use whose rows are `rows` (3 per pose), `P` the projection
 /// onto the columns `frame` over all of them together. With `G = MᵀM` this is the Schur complement
 /// `(G − G[:, F] G[F, F]⁻¹ G[F, :]) / u`; `G[F, F]` is ridged by `1e-12` of its largest diagonal entry,
@@ -53,6 +55,20 @@ pub fn frame_refitted_weight(rows: &Mat<f64>, frame: &[usize]) -> Mat<f64> {
     }
     g *= faer::Scale(1.0 / u);
     g
+}
+
+/// The positions in `columns` (model columns) of the parameters of the frame a test re-measures on its own
+/// poses — a tracker's registration, an unknown tool's point and rotation: the `frame` of
+/// [`frame_refitted_weight`].
+pub fn refitted_frame(model: &Model, columns: &[usize]) -> Vec<usize> {
+    (0..columns.len())
+        .filter(|&k| {
+            matches!(
+                model.parameter(columns[k]),
+                Some((Effect::Registration | Effect::ToolPoint | Effect::ToolRotation, _))
+            )
+        })
+        .collect()
 }
 
 /// The predicted held-out RMS per pose of use (3-D): `√(v + σ²(3 − k/u))` for a model's share `v`

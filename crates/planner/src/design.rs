@@ -185,14 +185,7 @@ impl Design {
             .collect();
         let reduce = |j: &Mat<f64>| Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])] / scale[k]);
         let candidates_rows = reduce(&jac_pool);
-        let refitted: Vec<usize> = (0..free.len())
-            .filter(|&k| {
-                matches!(
-                    model.parameter(free[k]),
-                    Some((Effect::Registration | Effect::ToolPoint | Effect::ToolRotation, _))
-                )
-            })
-            .collect();
+        let refitted = thermokin_identify::refitted_frame(&model, &free);
         let (use_weight, region_poses) = match &params.region {
             Region::Candidates => (frame_refitted_weight(&candidates_rows, &refitted), candidates.len()),
             Region::Poses(poses) => {
