@@ -356,6 +356,11 @@ pub struct DiagnoseArgs {
     /// those poses, sets the measured error beside it. Never used to choose.
     #[arg(long = "for", value_name = "FILE")]
     pub region: Option<PathBuf>,
+    /// The plan of the measured poses (the JSON `plan --for ... --json` wrote): its promise at the poses
+    /// of use, restated at the residual scale the fit finds, is set beside the prediction and the
+    /// hold-out set's measured error. With --for, the same poses of use.
+    #[arg(long, value_name = "FILE", requires = "region")]
+    pub plan: Option<PathBuf>,
     /// Frame of the measurements.
     #[arg(long, value_parser = choice(FrameMode::CHOICES), default_value_t = Config::default().frame)]
     pub frame: FrameMode,

@@ -121,6 +121,30 @@ fn poses_of_use(
     Ok(thermokin_io::read_configurations_checked(path, kinds, units).map_err(crate::input::units_error)?.0)
 }
 
+/// `--plan`: the promise of the plan's JSON (`promise.planned_rms_mm` at `promise.noise_mm`), made for
+/// `poses` poses of use.
+fn promised(path: &Path, poses: usize) -> Result<thermokin_diagnose::Promised, Failure> {
+    let text = std::fs::read_to_string(path).map_err(|e| Failure::input(anyhow!("{}: {e}", path.display())))?;
+    let json: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Failure::input(anyhow!("{}:{}: not a plan's JSON: {e}", path.display(), e.line())))?;
+    let field = |name: &str| {
+        json["promise"][name].as_f64().filter(|v| v.is_finite() && *v > 0.0).ok_or_else(|| {
+            Failure::input(anyhow!(
+                "{}: promise.{name}: missing or not a positive number (the JSON `thermokin plan --json` writes)",
+                path.display()
+            ))
+        })
+    };
+    let made_for = field("poses_of_use")? as usize;
+    if made_for != poses {
+        return Err(Failure::input(anyhow!(
+            "{}: promise.poses_of_use: the plan promised at {made_for} poses of use, --for gives {poses}: give the file the plan was made --for",
+            path.display()
+        )));
+    }
+    Ok(thermokin_diagnose::Promised { rms_mm: field("planned_rms_mm")?, noise_mm: field("noise_mm")? })
+}
+
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
     if a.robot.profile.is_some() || a.robot.time.is_some() || a.robot.temperature.is_some() {
         return Err(Failure::input(anyhow!(
@@ -175,6 +199,7 @@ pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {
         None => None,
     };
     config.poses_of_use = poses_of_use(a.region.as_deref(), &kinds, a.joint_units)?;
+    config.promised = a.plan.as_deref().map(|p| promised(p, config.poses_of_use.len())).transpose()?;
     let robot = loaded.robot.with_chain(chain).map_err(Failure::input)?;
     // The robot as the fit sees it: with the payload (gravity only; the export keeps the file's masses).
     let fitted_robot = match &a.robot.payload {

@@ -63,6 +63,7 @@ pub(crate) fn at_use(
         predicted_rms_mm: heldout_rms(share, s2.sqrt(), frame.len(), poses.len()),
         resolution: heldout_resolution(frame.len(), poses.len()),
         measured_rms_mm: None,
+        promised_rms_mm: None,
     }))
 }
 

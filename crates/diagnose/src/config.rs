@@ -79,6 +79,20 @@ pub struct Config {
     /// ([`crate::AtUse`]). Empty: no prediction. Never used to choose.
     #[serde(skip)]
     pub poses_of_use: Vec<Vec<f64>>,
+    /// What the plan of the measured poses promised at the poses of use (`thermokin plan --json`'s
+    /// `promise`): the report restates it at the residual scale its fit found, beside its own prediction
+    /// and the hold-out set's measured error ([`crate::AtUse::promised_rms_mm`]).
+    pub promised: Option<Promised>,
+}
+
+/// A plan's promise at the poses of use ([`crate::Config::promised`]): its predicted held-out RMS and the
+/// tracker noise it was stated at.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Promised {
+    /// The predicted held-out RMS per pose of use, mm.
+    pub rms_mm: f64,
+    /// The noise per axis it was stated at, mm.
+    pub noise_mm: f64,
 }
 
 /// An accelerometer or inclinometer declared on a link (`--accelerometer NAME=LINK`): its columns
@@ -306,6 +320,16 @@ impl Config {
         {
             return bad("validation.outer", outer as f64, "must be at least 2");
         }
+        if let Some(p) = self.promised {
+            if self.poses_of_use.is_empty() {
+                return bad("promised", p.rms_mm, "needs the poses of use it was stated at (poses_of_use)");
+            }
+            for (setting, v) in [("promised.rms_mm", p.rms_mm), ("promised.noise_mm", p.noise_mm)] {
+                if !(v.is_finite() && v > 0.0) {
+                    return bad(setting, v, "must be a positive number of millimetres");
+                }
+            }
+        }
         if let Some(n) = self.noise_mm
             && !(n.is_finite() && n > 0.0)
         {
@@ -356,6 +380,7 @@ impl Default for Config {
             order: thermokin_chain::MeasuringOrder::default(),
             accelerometers: Vec::new(),
             poses_of_use: Vec::new(),
+            promised: None,
         }
     }
 }

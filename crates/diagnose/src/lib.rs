@@ -54,7 +54,7 @@ mod verdict;
 
 pub use config::{
     Accelerometer, Completion, Config, Eligibility, Extrapolation, FoldGrouping, Masses, Outliers, Plausibility,
-    Screen, Shrinkage, Validation,
+    Promised, Screen, Shrinkage, Validation,
 };
 pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;

@@ -378,6 +378,13 @@ fn at_use(f: &mut std::fmt::Formatter<'_>, a: &crate::report::AtUse) -> std::fmt
         a.model_rms_mm,
         100.0 * a.resolution
     )?;
+    if let Some(p) = a.promised_rms_mm {
+        let against = a.measured_rms_mm.map_or(String::new(), |m| format!(": measured {:.2} × of it", m / p));
+        writeln!(
+            f,
+            "  the plan promised {p:.4} mm there at this residual scale (its figure at the tracker's noise, scaled by the scale found){against}"
+        )?;
+    }
     if let Some(m) = a.measured_rms_mm {
         let ratio = m / a.predicted_rms_mm;
         let reading = if (ratio - 1.0).abs() <= 2.0 * a.resolution {

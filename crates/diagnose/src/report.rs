@@ -392,6 +392,10 @@ pub struct AtUse {
     /// The hold-out set's RMS (registration and tool refitted on it), when its poses are the poses of
     /// use, mm.
     pub measured_rms_mm: Option<f64>,
+    /// What the plan of these poses promised there ([`crate::Config::promised`]), restated at the
+    /// residual scale this fit found: the plan's figure times `residual_scale_mm / its noise` (the
+    /// promise scales with the noise it was stated at), mm.
+    pub promised_rms_mm: Option<f64>,
 }
 
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.

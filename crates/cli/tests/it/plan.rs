@@ -149,7 +149,8 @@ fn the_planners_inputs_are_read_as_carefully_as_the_diagnosiss() {
 /// `plan --for` and `diagnose --for` on the real WAM: the plan chosen for the 20 random poses' joints
 /// says what it promises there against random draws (JSON and text), `--poses auto` says where it stopped
 /// and why, and the diagnosis of the planned poses' measurements predicts its own error at those poses
-/// and sets the hold-out set's beside it. A poses-of-use file with a joint missing is refused by name.
+/// and sets the hold-out set's and the plan's promise (`--plan`, its JSON) beside it. A poses-of-use file
+/// with a joint missing is refused by name.
 #[test]
 fn plan_and_diagnose_for_the_poses_of_use() {
     let wam = ["--robot", "fixtures/real/jacobi-wam/wam.urdf", "--frame", "tracker", "--tool", "unknown"];
@@ -199,6 +200,8 @@ fn plan_and_diagnose_for_the_poses_of_use() {
         "fixtures/real/jacobi-wam/wam-random.csv",
         "--for",
         "fixtures/real/jacobi-wam/wam-random.csv",
+        "--plan",
+        json.to_str().unwrap(),
         "--quiet",
     ]);
     let o = thermokin(&args);
@@ -206,6 +209,7 @@ fn plan_and_diagnose_for_the_poses_of_use() {
     let text = stdout(&o);
     assert!(text.contains("predicted at the 20 poses of use"), "{text}");
     assert!(text.contains("the hold-out set holds these poses: measured"), "{text}");
+    assert!(text.contains("the plan promised"), "{text}");
     // A poses-of-use file one joint short.
     let short = tmp("plan-for-short.csv");
     std::fs::write(&short, "q1,q2,q3,q4,q5,q6\n0,0,0,90,0,0\n").unwrap();

@@ -10,7 +10,7 @@
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use thermokin_chain::{Chain, Dataset, ErrorParams};
-use thermokin_diagnose::{Config, Validation, diagnose};
+use thermokin_diagnose::{Config, Promised, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::{error_mm_deg, measured_point, random_q};
 
@@ -49,6 +49,7 @@ fn the_hold_out_error_at_the_poses_of_use_is_what_the_fit_predicts() {
         tool: ToolMode::Unknown,
         validation: Validation::SelectionOnly,
         poses_of_use: test.measurements.iter().map(|m| m.q.clone()).collect(),
+        promised: Some(Promised { rms_mm: 0.04, noise_mm: 0.02 }),
         ..Config::default()
     };
     let report = diagnose(&robot, &data, Some(&test), &config).unwrap();
@@ -61,6 +62,11 @@ fn the_hold_out_error_at_the_poses_of_use_is_what_the_fit_predicts() {
     // registration and the probe.
     assert!((at.residual_scale_mm / 0.02 - 1.0).abs() < 0.15, "{at:?}");
     assert_eq!(at.refitted, 9);
+    // A plan's promise restated at the residual scale found: it scales with the noise it was stated at.
+    assert_eq!(at.promised_rms_mm, Some(0.04 * at.residual_scale_mm / 0.02));
+    // A promise needs the poses of use it was made for.
+    let alone = Config { poses_of_use: Vec::new(), ..config.clone() };
+    assert!(diagnose(&robot, &data, None, &alone).is_err());
     // Printed, with the measured figure beside it.
     assert!(report.text().to_string().contains("predicted at the 120 poses of use"));
 }
