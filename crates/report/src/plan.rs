@@ -27,6 +27,7 @@ pub fn plan_page(plan: &Plan, context: &PageContext) -> String {
         },
         plan.noise_mm
     );
+    said(&mut body, plan);
     comparison(&mut body, plan);
     workspace(&mut body, plan);
     coverage(&mut body, plan);
@@ -38,6 +39,37 @@ pub fn plan_page(plan: &Plan, context: &PageContext) -> String {
         env!("CARGO_PKG_VERSION")
     );
     document(&title, &body)
+}
+
+/// What the plan says before its tables: where the poses of use leave the candidates' arcs, and why an
+/// automatic count stopped where it did.
+fn said(out: &mut String, plan: &Plan) {
+    if !plan.beyond_candidates.is_empty() {
+        let joints: Vec<String> = plan
+            .beyond_candidates
+            .iter()
+            .map(|b| {
+                format!(
+                    "q{} {:.0}…{:.0}° (candidates {:.0}…{:.0}°)",
+                    b.joint, b.use_arc[0], b.use_arc[1], b.candidates_arc[0], b.candidates_arc[1]
+                )
+            })
+            .collect();
+        let _ = write!(
+            out,
+            "<p class=\"warn\">The poses of use leave the candidates' arcs — {}: there the model is extrapolated, and no variance bounds its error.</p>",
+            escape(&joints.join(", "))
+        );
+    }
+    if let Some(c) = &plan.count {
+        let why = match c.stopped {
+            Some([gain, resolution]) => format!(
+                "one more would lower the predicted held-out RMS by {gain:.2e} mm, below the {resolution:.2e} mm a test at the poses of use can show"
+            ),
+            None => format!("the most allowed ({})", c.at_most),
+        };
+        let _ = write!(out, "<p>{} poses: {}.</p>", plan.poses.len(), escape(&why));
+    }
 }
 
 /// The plan against random draws of the same pool.

@@ -154,7 +154,7 @@ fn the_planners_inputs_are_read_as_carefully_as_the_diagnosiss() {
 #[test]
 fn plan_and_diagnose_for_the_poses_of_use() {
     let wam = ["--robot", "fixtures/real/jacobi-wam/wam.urdf", "--frame", "tracker", "--tool", "unknown"];
-    let (out, json) = (tmp("plan-for.csv"), tmp("plan-for.json"));
+    let (out, json, page) = (tmp("plan-for.csv"), tmp("plan-for.json"), tmp("plan-for.html"));
     let mut args = vec!["plan"];
     args.extend(wam);
     args.extend([
@@ -168,11 +168,16 @@ fn plan_and_diagnose_for_the_poses_of_use() {
         out.to_str().unwrap(),
         "--json",
         json.to_str().unwrap(),
+        "--html",
+        page.to_str().unwrap(),
     ]);
     let o = thermokin(&args);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
     assert!(text.contains("chosen for the prediction (I-optimal)"), "{text}");
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains("predicted held-out RMS at the 20 poses of use"), "the page's promise row");
+    assert!(html.contains("a test at the poses of use can show"), "the page's count rule");
     assert!(text.contains("Predicted held-out RMS at the 20 poses of use given"), "{text}");
     assert!(text.contains("a test at the poses of use can show"), "{text}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
