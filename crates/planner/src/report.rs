@@ -128,6 +128,17 @@ pub struct Beyond {
     pub candidates_arc: [f64; 2],
 }
 
+impl std::fmt::Display for Beyond {
+    /// `q3 -125…125 (candidates 0…133)`: degrees, mm for a prismatic joint.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "q{} {:.0}…{:.0} (candidates {:.0}…{:.0})",
+            self.joint, self.use_arc[0], self.use_arc[1], self.candidates_arc[0], self.candidates_arc[1]
+        )
+    }
+}
+
 /// Why `--poses auto` planned the count it did.
 #[derive(Clone, Debug, Serialize)]
 pub struct CountRule {
@@ -288,16 +299,7 @@ impl Plan {
             100.0 * p.resolution
         );
         if !self.beyond_candidates.is_empty() {
-            let joints: Vec<String> = self
-                .beyond_candidates
-                .iter()
-                .map(|b| {
-                    format!(
-                        "q{} {:.0}…{:.0} (candidates {:.0}…{:.0})",
-                        b.joint, b.use_arc[0], b.use_arc[1], b.candidates_arc[0], b.candidates_arc[1]
-                    )
-                })
-                .collect();
+            let joints: Vec<String> = self.beyond_candidates.iter().map(ToString::to_string).collect();
             out.push_str(&format!(
                 "warning: the poses of use leave the candidates' arcs — {}: there the model is extrapolated, its error there is not what any variance promises, and a model that is not the robot may do worse than the promise; candidates that cover those arcs would measure it\n",
                 joints.join(", ")

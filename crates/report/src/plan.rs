@@ -45,16 +45,7 @@ pub fn plan_page(plan: &Plan, context: &PageContext) -> String {
 /// automatic count stopped where it did.
 fn said(out: &mut String, plan: &Plan) {
     if !plan.beyond_candidates.is_empty() {
-        let joints: Vec<String> = plan
-            .beyond_candidates
-            .iter()
-            .map(|b| {
-                format!(
-                    "q{} {:.0}…{:.0}° (candidates {:.0}…{:.0}°)",
-                    b.joint, b.use_arc[0], b.use_arc[1], b.candidates_arc[0], b.candidates_arc[1]
-                )
-            })
-            .collect();
+        let joints: Vec<String> = plan.beyond_candidates.iter().map(ToString::to_string).collect();
         let _ = write!(
             out,
             "<p class=\"warn\">The poses of use leave the candidates' arcs — {}: there the model is extrapolated, and no variance bounds its error.</p>",
