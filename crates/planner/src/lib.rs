@@ -34,7 +34,8 @@ pub use candidates::{Candidates, DEFAULT_SAMPLES};
 pub use error::PlanError;
 pub use params::{Criterion, Params, Poses, Region, WorkspaceBox};
 pub use report::{
-    Beyond, Comparison, CountRule, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose, Promise,
+    Beyond, Comparison, CountRule, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose, PosesOfUse,
+    Promise,
 };
 pub use select::RIDGE;
 
@@ -52,19 +53,17 @@ pub fn plan(robot: &Robot, candidates: &Candidates, measured: &[Vec<f64>], param
     for (i, q) in measured.iter().enumerate() {
         candidates::check(robot, q, "measured pose", i + 1)?;
     }
-    let wanted = match params.poses {
-        Poses::Exactly(n) => n,
-        Poses::Auto { at_most } => at_most.min(candidates.len()),
+    // An automatic count plans at most every candidate.
+    let count = match params.poses {
+        Poses::Exactly(n) => Poses::Exactly(n),
+        Poses::Auto { at_most } => Poses::Auto { at_most: at_most.min(candidates.len()) },
     };
+    let wanted = count.at_most();
     if wanted > candidates.len() {
         let copies = candidates.copies().len();
         return Err(PlanError::TooFewCandidates { poses: wanted, candidates: candidates.len(), copies });
     }
     let design = Design::new(robot, candidates.joints(), measured, params)?;
-    let count = match params.poses {
-        Poses::Exactly(n) => Poses::Exactly(n),
-        Poses::Auto { .. } => Poses::Auto { at_most: wanted },
-    };
     let select::Chosen { rows: selected, stop } =
         select::choose(&design, count, params.criterion).ok_or(PlanError::Singular)?;
     let planned = precision(&design, &selected);
@@ -173,8 +172,8 @@ fn promise(design: &Design, params: &Params, planned: &Precision, random: &[Prec
     let rms = |v: f64| params.noise_mm * select::heldout_rms(design, v);
     Promise {
         region: match params.region {
-            Region::Candidates => "candidates",
-            Region::Poses(_) => "given",
+            Region::Candidates => PosesOfUse::Candidates,
+            Region::Poses(_) => PosesOfUse::Given,
         },
         poses_of_use: design.region_poses,
         refitted: design.refitted,

@@ -97,8 +97,8 @@ pub struct Comparison {
 /// that is not the robot) measures more, in proportion.
 #[derive(Clone, Debug, Serialize)]
 pub struct Promise {
-    /// What the poses of use are: `"candidates"` or `"given"` (`--for`).
-    pub region: &'static str,
+    /// What the poses of use are: the candidates, or the poses given (`--for`).
+    pub region: PosesOfUse,
     /// How many poses of use.
     pub poses_of_use: usize,
     /// Frame parameters fitted again on the poses of use (registration, unknown tool).
@@ -115,6 +115,16 @@ pub struct Promise {
     /// The standard error of a held-out RMS measured at the poses of use, as a fraction of it
     /// (`1/√(2(3u − k))`): differences below it a test there cannot show.
     pub resolution: f64,
+}
+
+/// Where a plan's poses of use came from ([`Promise::region`]; `"candidates"` or `"given"` in JSON).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PosesOfUse {
+    /// The candidates themselves ([`crate::Region::Candidates`]).
+    Candidates,
+    /// The poses given ([`crate::Region::Poses`], `--for`).
+    Given,
 }
 
 /// A joint along which the poses of use leave the candidates' arc.
@@ -281,8 +291,8 @@ impl Plan {
     fn promise_text(&self) -> String {
         let p = &self.promise;
         let region = match p.region {
-            "given" => format!("the {} poses of use given", p.poses_of_use),
-            _ => format!("the {} candidates (the poses of use: no --for)", p.poses_of_use),
+            PosesOfUse::Given => format!("the {} poses of use given", p.poses_of_use),
+            PosesOfUse::Candidates => format!("the {} candidates (the poses of use: no --for)", p.poses_of_use),
         };
         let frame = if p.refitted > 0 {
             format!(", the {} frame parameters a test fits there refitted", p.refitted)

@@ -69,8 +69,8 @@ fn comparison(out: &mut String, plan: &Plan) {
     out.push_str("<h2>Against random poses</h2>");
     let promise = &plan.promise;
     let at = match promise.region {
-        "given" => format!("the {} poses of use", promise.poses_of_use),
-        _ => format!("the {} candidates", promise.poses_of_use),
+        thermokin_planner::PosesOfUse::Given => format!("the {} poses of use", promise.poses_of_use),
+        thermokin_planner::PosesOfUse::Candidates => format!("the {} candidates", promise.poses_of_use),
     };
     let mut rows = vec![vec![
         cell(&format!("predicted held-out RMS at {at} [mm]")),
