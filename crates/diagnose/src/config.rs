@@ -47,7 +47,7 @@ pub struct Config {
     /// Bounds on fitted values beyond which a candidate is refused as implausible ([`Plausibility`]).
     pub plausibility: Plausibility,
     /// How many candidates a forward step fits in full after ranking all by a linearised step
-    /// ([`Screen`]; `Screen { keep: 0 }` fits every one).
+    /// ([`Screen`]; `keep: 0` fits every one).
     pub screen: Screen,
     /// Whether the selection ends by completing the geometry ([`Completion`]).
     pub completion: Completion,
@@ -424,6 +424,20 @@ pub struct Screen {
     /// Candidates kept for the full scoring, best linearised held-out error first; 0 keeps every
     /// candidate (the exhaustive selection, for comparisons).
     pub keep: usize,
+    /// Which of those are fitted on every fold.
+    pub fitted: Fitted,
+}
+
+/// Which of a forward step's shortlisted candidates are fitted in full on every fold.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+pub enum Fitted {
+    /// Those a forecast from the current model's own fold fits puts within reach of the step's choice
+    /// (one Gauss–Newton step per fold, `thermokin_diagnose`'s `linearised` module): the others could
+    /// not be chosen. Every one when the forecast does not exist.
+    #[default]
+    InReach,
+    /// Every one (the selection before forecasts, for comparisons).
+    Every,
 }
 
 impl Default for Screen {
@@ -433,6 +447,6 @@ impl Default for Screen {
     /// 4 in one, never lower (9 were exponential drifts, scored outside the screen). Four keeps them all;
     /// three would have changed one step.
     fn default() -> Self {
-        Self { keep: 4 }
+        Self { keep: 4, fitted: Fitted::InReach }
     }
 }

@@ -7,12 +7,12 @@
 use rayon::prelude::*;
 use thermokin_identify::{DriftShape, Effect, JointIndex};
 
-use crate::config::Config;
+use crate::config::{Config, Fitted};
 use crate::drifts::{keeps_its_law, rising_in_fit};
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, implausible};
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::{Candidate, Scored, Selection, score, unsettled};
+use crate::selection::{Candidate, Scored, Selection, adds_nothing, score, unsettled};
 
 fn is_exponential(c: &Effect) -> bool {
     matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential))
@@ -31,24 +31,29 @@ pub(crate) fn forward(
     // effect joins and a linearised step puts them within bounds (`refuse`, `wake`).
     let mut resting = Vec::new();
     while sel.chosen().len() < config.max_effects && !pool.is_empty() {
-        let mut results = score_round(scorer, config, sel, &mut pool, &mut resting)?;
+        let (mut results, mut deferred) = score_round(scorer, config, sel, &mut pool, &mut resting)?;
         // The best candidate that passes every check joins. Where every block within parsimony of the
         // best gain was a drift that forward chaining rejects (a later drift fitted on early minutes
         // that still lack an earlier one), the next best are tried: on a warm-up rising over its first
         // minutes, a slow row's drift ranks first and cannot carry forward until the fast one joined.
+        // Where candidates that pass the gate are all turned down (their values, the information
+        // criterion, forward chaining), those the forecast left out are fitted and the step is tried
+        // again: the forecast foresees the gain, not those checks.
         let chosen = loop {
-            let Some(best) =
-                results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)).cloned()
-            else {
-                break None;
-            };
-            if !significantly_better(&sel.errors, &best.errors, config.gate_standard_errors, &scorer.blocks) {
-                break None;
-            }
+            let best = results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)).cloned();
+            let passing = best
+                .filter(|b| significantly_better(&sel.errors, &b.errors, config.gate_standard_errors, &scorer.blocks));
+            let Some(best) = passing else { break None };
             match choose(scorer, config, sel, &results, &best, &mut pool, &mut resting)? {
                 Choice::Joins(c, b, theta) => break Some((*c, b, theta)),
                 Choice::OnlyNotForward(tried) => results.retain(|r| !tried.contains(&r.effect)),
-                Choice::None => break None,
+                Choice::None if deferred.is_empty() => break None,
+                Choice::None => {
+                    let later = std::mem::take(&mut deferred);
+                    let mut fitted = score_listed(scorer, config, sel, &later, &mut pool, &mut resting)?;
+                    results.retain(|r| pool.contains(&r.effect));
+                    results.append(&mut fitted);
+                }
             }
         };
         let Some((c, b, theta)) = chosen else { break };
@@ -162,35 +167,68 @@ fn wake(
     Ok(())
 }
 
-/// One round's scored candidates: the screen's shortlist of the linear candidates, then the exponential
-/// drifts whose linear twin earns half the best gain. Candidates every fold finds implausible are
-/// refused and leave the pool (for their size, to rest: `refuse`); those that add nothing identifiable
-/// are recorded as skipped; the pool keeps the others.
+/// One round's scored candidates: the screen's shortlist of the linear candidates (those of them a
+/// forecast from the current model's fold fits puts out of reach deferred, [`crate::linearised`]), then
+/// the exponential drifts whose linear twin earns half the best gain. Candidates every fold finds
+/// implausible are refused and leave the pool (for their size, to rest: `refuse`); those that add
+/// nothing identifiable are recorded as skipped; the pool keeps the others, the deferred ones too.
 fn score_round(
     scorer: &Scorer<'_>,
     config: &Config,
     sel: &mut Selection,
     pool: &mut Vec<Effect>,
     resting: &mut Vec<Effect>,
-) -> Result<Vec<Candidate>, DiagnoseError> {
+) -> Result<(Vec<Candidate>, Vec<Effect>), DiagnoseError> {
     let linear: Vec<Effect> = pool.iter().copied().filter(|c| !is_exponential(c)).collect();
     let effects = sel.effects.clone();
     // Score before you fit: the candidates ranked by a linearised step, the shortlist fitted in full.
-    let first = crate::screen::shortlist(scorer, &effects, &sel.theta, &linear, config.screen)?;
+    let shortlisted = crate::screen::shortlist(scorer, &effects, &sel.theta, &linear, config.screen)?;
+    let forecasts = match config.screen.fitted {
+        Fitted::InReach => crate::linearised::forecasts(scorer, &effects, &shortlisted)?,
+        Fitted::Every => None,
+    };
     let score_all = |list: &[Effect]| -> Result<Vec<(Effect, Scored)>, DiagnoseError> {
         list.par_iter().map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?))).collect()
     };
-    let mut scored = score_all(&first)?;
+    let current = sel.current.heldout_rms_mm;
+    let (mut scored, first, deferred, forecast_gain) = match &forecasts {
+        Some(f) => {
+            let passing = crate::linearised::passing(f, &sel.errors, config.gate_standard_errors, &scorer.blocks);
+            // The best forecast fitted first; its fitted gain sets which others are within reach.
+            let mut scored = score_all(&passing.iter().take(1).map(|f| f.effect).collect::<Vec<_>>())?;
+            let reference = match (scored.first(), passing.first()) {
+                (Some((_, Scored::Candidate(c))), _) if c.runaway.is_none() && !c.unsettled => {
+                    current - c.stats.heldout_rms_mm
+                }
+                (_, Some(lead)) => current - lead.stats.heldout_rms_mm,
+                _ => 0.0,
+            };
+            let reach = crate::linearised::in_reach(&passing, current, reference, config.parsimony);
+            let rest: Vec<Effect> = reach.iter().copied().filter(|c| !scored.iter().any(|(s, _)| s == c)).collect();
+            scored.extend(score_all(&rest)?);
+            let first: Vec<Effect> = scored.iter().map(|(c, _)| *c).collect();
+            let deferred: Vec<Effect> = shortlisted.iter().copied().filter(|c| !first.contains(c)).collect();
+            let gains: Vec<(Effect, f64)> = f.iter().map(|f| (f.effect, current - f.stats.heldout_rms_mm)).collect();
+            (scored, first, deferred, gains)
+        }
+        None => (score_all(&shortlisted)?, shortlisted.clone(), Vec::new(), Vec::new()),
+    };
     let gain = |s: &Scored| match s {
         Scored::Candidate(s) => Some(sel.current.heldout_rms_mm - s.stats.heldout_rms_mm),
-        Scored::AddsNothing(_) => None,
+        Scored::AddsNothing(_) | Scored::ForecastBeyond(_) => None,
     };
-    let best_gain = scored.iter().filter_map(|(_, s)| gain(s)).fold(0.0, f64::max);
+    // A deferred linear drift's gain is its forecast's.
+    let gains: Vec<(Effect, f64)> = scored
+        .iter()
+        .filter_map(|(c, s)| gain(s).map(|g| (*c, g)))
+        .chain(forecast_gain.iter().copied().filter(|(c, _)| deferred.contains(c)))
+        .collect();
+    let best_gain = gains.iter().map(|(_, g)| *g).fold(0.0, f64::max);
     let linear_gain = |j: Option<JointIndex>| {
-        scored
+        gains
             .iter()
             .filter(|(c, _)| matches!(c, Effect::ThermalDrift(_, DriftShape::Linear)) && c.joint() == j)
-            .filter_map(|(_, s)| gain(s))
+            .map(|(_, g)| *g)
             .fold(f64::NEG_INFINITY, f64::max)
     };
     let second: Vec<Effect> = pool
@@ -204,10 +242,83 @@ fn score_round(
         .copied()
         .filter(|c| (is_exponential(c) && !second.contains(c)) || (!is_exponential(c) && !first.contains(c)))
         .collect();
+    // A deferred candidate that adds nothing identifiable is said so and leaves the pool, as when fitted,
+    // in the shortlist's order.
+    let mut later = Vec::with_capacity(deferred.len());
+    for c in deferred {
+        match adds_nothing(scorer, &effects, c)? {
+            Some(reason) => {
+                still.retain(|e| *e != c);
+                scored.push((c, Scored::AddsNothing(reason)));
+            }
+            None => match forecast_runaway(scorer, config, forecasts.as_deref(), c) {
+                // Beyond the plausible in every fold's forecast, as a fitted candidate beyond it in every
+                // fold's fit: refused (or resting) the same way, said as forecast.
+                Some(why) => {
+                    still.retain(|e| *e != c);
+                    scored.push((c, Scored::ForecastBeyond(why)));
+                }
+                None => later.push(c),
+            },
+        }
+    }
+    let rank = |c: &Effect| shortlisted.iter().position(|s| s == c).unwrap_or(usize::MAX);
+    scored.sort_by_key(|(c, _)| rank(c));
+    let results = keep_scored(sel, scored, &mut still, resting);
+    *pool = still;
+    Ok((results, later))
+}
+
+/// Why the forecast of candidate `c` is beyond the plausible in every fold, where it is.
+fn forecast_runaway(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    forecasts: Option<&[crate::linearised::Forecast]>,
+    c: Effect,
+) -> Option<Implausible> {
+    let f = forecasts?.iter().find(|f| f.effect == c)?;
+    let reasons: Vec<Option<Implausible>> =
+        f.values.iter().map(|v| implausible(&scorer.scale, v, c, &config.plausibility)).collect();
+    if reasons.is_empty() || reasons.iter().any(Option::is_none) {
+        return None;
+    }
+    reasons.into_iter().flatten().next()
+}
+
+/// The deferred candidates `list` scored in full (a round whose fitted candidates were all turned down).
+fn score_listed(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    list: &[Effect],
+    pool: &mut Vec<Effect>,
+    resting: &mut Vec<Effect>,
+) -> Result<Vec<Candidate>, DiagnoseError> {
+    let effects = sel.effects.clone();
+    let scored: Vec<(Effect, Scored)> = list
+        .par_iter()
+        .map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?)))
+        .collect::<Result<_, DiagnoseError>>()?;
+    let mut still: Vec<Effect> = pool.iter().copied().filter(|c| !list.contains(c)).collect();
+    let results = keep_scored(sel, scored, &mut still, resting);
+    *pool = still;
+    Ok(results)
+}
+
+/// What scoring found, recorded: a candidate that adds nothing is skipped, one implausible on every fold
+/// refused (or resting), one that never settles refused; the others return to the pool (`still`) and
+/// are the round's results.
+fn keep_scored(
+    sel: &mut Selection,
+    scored: Vec<(Effect, Scored)>,
+    still: &mut Vec<Effect>,
+    resting: &mut Vec<Effect>,
+) -> Vec<Candidate> {
     let mut results = Vec::new();
     for (c, s) in scored {
         match s {
             Scored::AddsNothing(reason) => sel.skip(c, reason),
+            Scored::ForecastBeyond(why) => refuse(sel, c, &why, Judged::ForecastOnEveryFold, resting),
             Scored::Candidate(s) => match &s.runaway {
                 Some(why) => refuse(sel, c, why, Judged::FittedOnEveryFold, resting),
                 None if s.unsettled => sel.refused.push(unsettled(c)),
@@ -220,8 +331,7 @@ fn score_round(
             },
         }
     }
-    *pool = still;
-    Ok(results)
+    results
 }
 
 /// The candidate that joins, with its information criterion and its parameters fitted on all data.

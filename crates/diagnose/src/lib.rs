@@ -29,6 +29,7 @@ mod error;
 mod extrapolation;
 mod folds;
 mod forward;
+mod linearised;
 mod masses;
 mod outliers;
 mod pairs;
@@ -53,8 +54,8 @@ mod validation;
 mod verdict;
 
 pub use config::{
-    Accelerometer, Completion, Config, Eligibility, Extrapolation, FoldGrouping, Masses, Outliers, Plausibility,
-    Promised, Screen, Shrinkage, Validation,
+    Accelerometer, Completion, Config, Eligibility, Extrapolation, Fitted, FoldGrouping, Masses, Outliers,
+    Plausibility, Promised, Screen, Shrinkage, Validation,
 };
 pub use diagnosis::{Progress, diagnose, diagnose_profiled, diagnose_with_progress};
 pub use error::DiagnoseError;

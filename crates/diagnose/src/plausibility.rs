@@ -242,6 +242,9 @@ pub(crate) enum Judged {
     Fitted,
     /// Fitted on every fold of the selection.
     FittedOnEveryFold,
+    /// Forecast on every fold of the selection, by one Gauss–Newton step from the model's fit there
+    /// (not fitted: [`crate::linearised`]).
+    ForecastOnEveryFold,
 }
 
 impl Implausible {
@@ -256,21 +259,25 @@ impl Implausible {
 
     /// The reason in words.
     pub(crate) fn reason(&self, judged: Judged) -> String {
-        let every = if judged == Judged::FittedOnEveryFold { " in the fit of every fold" } else { "" };
+        let (fitted, every) = match judged {
+            Judged::Fitted => ("fitted", ""),
+            Judged::FittedOnEveryFold => ("fitted", " in the fit of every fold"),
+            Judged::ForecastOnEveryFold => ("forecast", " by one Gauss–Newton step on every fold from the model's fit"),
+        };
         match self {
             Implausible::Beyond { what, value, bound, unit, scale } => {
-                format!("{what} fitted at {value:.4}{unit}{every}, beyond the plausible {bound:.4}{unit} ({scale})")
+                format!("{what} {fitted} at {value:.4}{unit}{every}, beyond the plausible {bound:.4}{unit} ({scale})")
             }
             Implausible::Rising { k_deg_per_nm, deflection_deg } => format!(
-                "the compliance fitted at {k_deg_per_nm:.3e} °/N·m{every}: the joint would rise under its load, not sag ({deflection_deg:.2e}° at its largest gravity torque)"
+                "the compliance {fitted} at {k_deg_per_nm:.3e} °/N·m{every}: the joint would rise under its load, not sag ({deflection_deg:.2e}° at its largest gravity torque)"
             ),
             Implausible::Steep { slope } => format!(
-                "its slope fitted at {slope:.3}{every} (the joint value would change by {:.0}% of the joint's own motion): not a correction of the joint — a robot model bounds one at {:.0}%",
+                "its slope {fitted} at {slope:.3}{every} (the joint value would change by {:.0}% of the joint's own motion): not a correction of the joint — a robot model bounds one at {:.0}%",
                 100.0 * slope,
                 100.0 * MAX_CORRECTION_SLOPE
             ),
             Implausible::Instant { tau_min, during } => format!(
-                "its time constant fitted at {tau_min:.3} min{every}: the drift is over (95 % of it) after {:.3} min, before all but {during} of the poses — indistinguishable from a static deviation in these data",
+                "its time constant {fitted} at {tau_min:.3} min{every}: the drift is over (95 % of it) after {:.3} min, before all but {during} of the poses — indistinguishable from a static deviation in these data",
                 3.0 * tau_min
             ),
         }

@@ -25,7 +25,7 @@ type StartKey = (Vec<usize>, bool, bool);
 
 /// One model's fits on the folds, fold by fold: its parameters, which of them were free, and whether
 /// the fit ended by its own test.
-type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>, bool)>>;
+pub(crate) type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>, bool)>>;
 
 /// One fold's fit, scored on the fold's test poses.
 struct FoldFit {
@@ -269,6 +269,12 @@ impl<'a> Scorer<'a> {
             m.insert(key, Arc::new(fits.collect()));
         }
         Ok((HeldOut { stats: Stats::of(&errors), errors, thetas, free, settled }, stopped))
+    }
+
+    /// The least-squares fold fits of `effects` on the selection's folds, when that model has been scored
+    /// there ([`crate::linearised`] steps from them).
+    pub(crate) fn kept_fold_fits(&self, effects: &[Effect]) -> Option<FoldFits> {
+        self.scored.lock().ok().and_then(|m| m.get(&(effects.to_vec(), 0f64.to_bits())).cloned())
     }
 
     /// The model of `effects` fitted on `rows` with the prior of strength `lambda` ([`prior`]; 0: the

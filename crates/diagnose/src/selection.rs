@@ -8,7 +8,7 @@ use crate::config::Plausibility;
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, implausible};
 use crate::report::{Refusal, Skipped, TableRow};
-use crate::scoring::Scorer;
+use crate::scoring::{Addition, Scorer};
 use crate::stats::Stats;
 
 /// A candidate scored on the selection's folds.
@@ -34,6 +34,8 @@ pub(crate) enum Scored {
     Candidate(Candidate),
     /// It adds nothing identifiable to the model (the reason names the block a parameter duplicates).
     AddsNothing(String),
+    /// Not fitted: its forecast on every fold is beyond the plausible, why ([`crate::linearised`]).
+    ForecastBeyond(Implausible),
 }
 
 /// An effect's step in the additive table: the selection's held-out RMS before and after it joined
@@ -170,9 +172,7 @@ pub(crate) fn score(
 ) -> Result<Scored, DiagnoseError> {
     let addition = scorer.new_free(effects, c)?;
     if addition.new_free == 0 {
-        let reason =
-            addition.fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone());
-        return Ok(Scored::AddsNothing(reason));
+        return Ok(Scored::AddsNothing(nothing_added(&addition)));
     }
     let mut with = effects.to_vec();
     with.push(c);
@@ -209,6 +209,23 @@ pub(crate) fn score(
         runaway,
         unsettled,
     }))
+}
+
+/// Why a candidate with no identifiable parameter beside the model adds nothing: the block its first
+/// parameter duplicates.
+fn nothing_added(addition: &Addition) -> String {
+    addition.fixed.first().map_or_else(|| "adds nothing identifiable".to_string(), |f| f.reason.clone())
+}
+
+/// Why `c` adds nothing identifiable beside `effects`, when it does not: what [`score`] finds before
+/// any fit, for a candidate the round does not fit ([`crate::linearised`]).
+pub(crate) fn adds_nothing(
+    scorer: &Scorer<'_>,
+    effects: &[Effect],
+    c: Effect,
+) -> Result<Option<String>, DiagnoseError> {
+    let addition = scorer.new_free(effects, c)?;
+    Ok((addition.new_free == 0).then(|| nothing_added(&addition)))
 }
 
 /// `effects` without its `k`-th (the model a removal step scores).

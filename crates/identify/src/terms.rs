@@ -75,6 +75,11 @@ pub struct PoseTerms {
 }
 
 impl PoseTerms {
+    /// Whether the fit weights the position rows by the tracker's stated standard deviations.
+    pub fn is_weighted(&self) -> bool {
+        self.weights.is_some()
+    }
+
     /// Residual rows per measurement: 3 (position) or 6 (position and weighted rotation).
     pub fn stride(&self) -> usize {
         if self.lever_mm.is_some() { 6 } else { 3 }

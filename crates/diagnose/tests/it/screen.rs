@@ -4,7 +4,7 @@
 
 use thermokin_chain::{Chain, ErrorParams};
 use thermokin_chain::{Dataset, Robot};
-use thermokin_diagnose::{Config, Report, Screen, Validation, diagnose};
+use thermokin_diagnose::{Config, Fitted, Report, Screen, Validation, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::{error_mm_deg, workspace};
 
@@ -26,7 +26,7 @@ fn compare(name: &str, robot: &Robot, data: &Dataset, config: Config) {
         robot,
         data,
         None,
-        &Config { validation: Validation::SelectionOnly, screen: Screen { keep: 0 }, ..config },
+        &Config { validation: Validation::SelectionOnly, screen: Screen { keep: 0, fitted: Fitted::Every }, ..config },
     )
     .unwrap();
     let (a, b) = (choices(&screened), choices(&exhaustive));
