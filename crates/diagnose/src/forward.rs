@@ -36,9 +36,8 @@ pub(crate) fn forward(
         // best gain was a drift that forward chaining rejects (a later drift fitted on early minutes
         // that still lack an earlier one), the next best are tried: on a warm-up rising over its first
         // minutes, a slow row's drift ranks first and cannot carry forward until the fast one joined.
-        // Where candidates that pass the gate are all turned down (their values, the information
-        // criterion, forward chaining), those the forecast left out are fitted and the step is tried
-        // again: the forecast foresees the gain, not those checks.
+        // The candidates the forecast left out (their gain short of the parsimony's reach) join those
+        // next best once the ones tried are set aside: they are fitted then.
         let chosen = loop {
             let best = results.iter().min_by(|a, b| a.stats.heldout_rms_mm.total_cmp(&b.stats.heldout_rms_mm)).cloned();
             let passing = best
@@ -46,14 +45,15 @@ pub(crate) fn forward(
             let Some(best) = passing else { break None };
             match choose(scorer, config, sel, &results, &best, &mut pool, &mut resting)? {
                 Choice::Joins(c, b, theta) => break Some((*c, b, theta)),
-                Choice::OnlyNotForward(tried) => results.retain(|r| !tried.contains(&r.effect)),
-                Choice::None if deferred.is_empty() => break None,
-                Choice::None => {
+                Choice::OnlyNotForward(tried) => {
+                    results.retain(|r| !tried.contains(&r.effect));
                     let later = std::mem::take(&mut deferred);
-                    let mut fitted = score_listed(scorer, config, sel, &later, &mut pool, &mut resting)?;
-                    results.retain(|r| pool.contains(&r.effect));
-                    results.append(&mut fitted);
+                    if !later.is_empty() {
+                        let mut fitted = score_listed(scorer, config, sel, &later, &mut pool, &mut resting)?;
+                        results.append(&mut fitted);
+                    }
                 }
+                Choice::None => break None,
             }
         };
         let Some((c, b, theta)) = chosen else { break };
@@ -285,7 +285,8 @@ fn forecast_runaway(
     reasons.into_iter().flatten().next()
 }
 
-/// The deferred candidates `list` scored in full (a round whose fitted candidates were all turned down).
+/// The deferred candidates `list` scored in full (a round whose best were drifts that forward chaining
+/// turned down: the next best are tried, the deferred ones among them).
 fn score_listed(
     scorer: &Scorer<'_>,
     config: &Config,
