@@ -128,9 +128,13 @@ fn complete_geometry(
             Judgement::Unseen(unseen) => rows.retain(|r| *r != unseen),
             Judgement::Implausible(refused) => {
                 for (e, why) in refused {
+                    let trade = match (why.excess(), model.effects().iter().position(|x| *x == e)) {
+                        (Some(_), Some(k)) => scorer.traded_with(&model, &full.theta, &scorer.all(), k)?,
+                        _ => None,
+                    };
                     // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
                     sel.refused.retain(|r| r.effect != e.label());
-                    sel.refused.push(why.refusal(e, Judged::Fitted));
+                    sel.refused.push(why.refused_trading(e, Judged::Fitted, trade.as_ref()));
                     rows.retain(|r| *r != e);
                 }
             }

@@ -10,7 +10,7 @@ use thermokin_identify::{DriftShape, Effect, JointIndex};
 use crate::config::{Config, Fitted};
 use crate::drifts::{keeps_its_law, rising_in_fit};
 use crate::error::DiagnoseError;
-use crate::plausibility::{Implausible, Judged, implausible};
+use crate::plausibility::{Implausible, Judged, Trade, implausible};
 use crate::scoring::{Scorer, significantly_better};
 use crate::selection::{Candidate, Scored, Selection, adds_nothing, score, unsettled};
 
@@ -117,8 +117,14 @@ fn refine_to_exponential(
 /// other effects have joined ([`wake`]); so does an exponential drift over before the poses in a model
 /// without its row's static deviation ([`holds_static_row`]); a refusal in kind (a joint rising under its
 /// load, a drift over before the poses beside its row, a slope no joint correction has) is final.
-fn refuse(sel: &mut Selection, c: Effect, why: &Implausible, judged: Judged, resting: &mut Vec<Effect>) {
-    let refusal = why.refusal(c, judged);
+fn refuse(
+    sel: &mut Selection,
+    c: Effect,
+    (why, trade): (&Implausible, Option<&Trade>),
+    judged: Judged,
+    resting: &mut Vec<Effect>,
+) {
+    let refusal = why.refused_trading(c, judged, trade);
     sel.refused.retain(|r| r.effect != refusal.effect);
     sel.refused.push(refusal);
     let stands_in_for_its_row = matches!(why, Implausible::Instant { .. }) && !holds_static_row(&sel.effects, c);
@@ -319,9 +325,9 @@ fn keep_scored(
     for (c, s) in scored {
         match s {
             Scored::AddsNothing(reason) => sel.skip(c, reason),
-            Scored::ForecastBeyond(why) => refuse(sel, c, &why, Judged::ForecastOnEveryFold, resting),
+            Scored::ForecastBeyond(why) => refuse(sel, c, (&why, None), Judged::ForecastOnEveryFold, resting),
             Scored::Candidate(s) => match &s.runaway {
-                Some(why) => refuse(sel, c, why, Judged::FittedOnEveryFold, resting),
+                Some(why) => refuse(sel, c, (why, s.trade.as_ref()), Judged::FittedOnEveryFold, resting),
                 None if s.unsettled => sel.refused.push(unsettled(c)),
                 None => {
                     // Plausible in this model: an earlier refusal for its size no longer holds.
@@ -387,7 +393,11 @@ fn choose(
         let o = model.offsets()[model.offsets().len() - 1];
         let values = &full.theta[o..o + cand.effect.len()];
         if let Some(why) = implausible(&scorer.scale, values, cand.effect, &config.plausibility) {
-            refuse(sel, cand.effect, &why, Judged::Fitted, resting);
+            let trade = match why.excess() {
+                Some(_) => scorer.traded_with(&model, &full.theta, &scorer.all(), model.effects().len() - 1)?,
+                None => None,
+            };
+            refuse(sel, cand.effect, (&why, trade.as_ref()), Judged::Fitted, resting);
             pool.retain(|c| *c != cand.effect);
             continue;
         }

@@ -283,6 +283,16 @@ impl Implausible {
         }
     }
 
+    /// The refusal of `effect` for this value, with what was measured and what to do — and, for a value
+    /// beyond its size, what the fit traded it with where that was measured ([`Trade`]).
+    pub(crate) fn refused_trading(&self, effect: Effect, judged: Judged, trade: Option<&Trade>) -> Refusal {
+        let mut r = self.refusal(effect, judged);
+        if let (Some(t), Some(_)) = (trade, self.excess()) {
+            r.reason = format!("{}; {}", r.reason, t.words());
+        }
+        r
+    }
+
     /// The refusal of `effect` for this value, with what was measured and what to do.
     pub(crate) fn refusal(&self, effect: Effect, judged: Judged) -> Refusal {
         let remedy = match self {
@@ -304,6 +314,50 @@ impl Implausible {
             }
         };
         Refusal { effect: effect.label(), reason: self.reason(judged), remedy }
+    }
+}
+
+/// What a fitted value beyond its size traded with: of the displacement the candidate's fitted values
+/// give the measurements (`J_c (θ_c − θ_c⁰)` over the poses fitted), the share that lies in the
+/// directions of the model's block most aligned with it (`‖P_b d‖² / ‖d‖²`), and in all the others
+/// together ([`crate::scoring::Scorer::traded_with`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Trade {
+    /// The block most aligned with the displacement.
+    pub(crate) with: Effect,
+    /// Its share of the displacement, 0–1.
+    pub(crate) share: f64,
+    /// The share of every other block together, 0–1.
+    pub(crate) rest: f64,
+}
+
+/// A share from which a block is said to be what a value traded with.
+const TRADED: f64 = 0.5;
+
+impl Trade {
+    /// The trade in words: with one block, with several together, or with none (the value is the
+    /// candidate's own).
+    pub(crate) fn words(&self) -> String {
+        let pct = |x: f64| 100.0 * x;
+        if self.share >= TRADED {
+            format!(
+                "the fit traded it with {}: {:.0} % of the displacement its values give the poses lies in that block's directions",
+                self.with.label(),
+                pct(self.share)
+            )
+        } else if self.rest >= TRADED {
+            format!(
+                "the fit traded it with several blocks together: {:.0} % of the displacement its values give the poses lies in the model's other directions, at most {:.0} % in one ({})",
+                pct(self.rest),
+                pct(self.share),
+                self.with.label()
+            )
+        } else {
+            format!(
+                "it traded with no block: {:.0} % at most of the displacement its values give the poses lies in the model's other directions — the poses show a displacement this large of this kind",
+                pct(self.rest)
+            )
+        }
     }
 }
 

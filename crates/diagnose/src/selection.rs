@@ -6,7 +6,7 @@ use thermokin_identify::{Effect, GiveUp, MAX_ITERATIONS};
 
 use crate::config::Plausibility;
 use crate::error::DiagnoseError;
-use crate::plausibility::{Implausible, implausible};
+use crate::plausibility::{Implausible, Trade, implausible};
 use crate::report::{Refusal, Skipped, TableRow};
 use crate::scoring::{Addition, Scorer};
 use crate::stats::Stats;
@@ -26,6 +26,8 @@ pub(crate) struct Candidate {
     /// Its fit stopped at the iteration limit in every fold, still moving: refused when first scored
     /// ([`unsettled`]).
     pub(crate) unsettled: bool,
+    /// Where it runs beyond its size: what the first fold's fit traded it with.
+    pub(crate) trade: Option<Trade>,
 }
 
 /// What scoring a candidate found.
@@ -201,6 +203,17 @@ pub(crate) fn score(
         None
     };
     let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
+    // What a value beyond its size traded with, in the first fold's fit that reached one.
+    let trade = match runaway.as_ref().and_then(Implausible::excess) {
+        Some(_) => match scorer.folds.iter().zip(&held.thetas).find(|(_, t)| values(t)) {
+            Some(((train, _), theta)) => {
+                let model = scorer.model(&with, train)?;
+                scorer.traded_with(&model, theta, train, with.len() - 1)?
+            }
+            None => None,
+        },
+        None => None,
+    };
     Ok(Scored::Candidate(Candidate {
         effect: c,
         new_free: addition.new_free,
@@ -208,6 +221,7 @@ pub(crate) fn score(
         errors: held.errors,
         runaway,
         unsettled,
+        trade,
     }))
 }
 
