@@ -6,19 +6,23 @@
 //!
 //! `[AᵀA AᵀB; BᵀA BᵀB] (δ_A, δ_B) = (Aᵀr, Bᵀr)`,
 //!
-//! is the candidate's least-squares fit on that fold to second order in its values — the Schur
-//! complement `BᵀB − BᵀA(AᵀA)⁻¹AᵀB` of the model's normal equations, one factorisation per fold shared by
-//! every candidate of a round — and the test part's residuals `r − A δ_A − B δ_B` are its held-out
-//! errors. One evaluation of the Jacobian per fold replaces a nonlinear fit per fold and candidate
-//! (about four evaluations each, measured on the real UR10).
+//! is the candidate's least-squares fit on that fold to second order in its values (the model's own
+//! part of `Aᵀr` is nearly zero at its optimum: the step is the Schur complement's,
+//! `δ_B = (BᵀB − BᵀA(AᵀA)⁻¹AᵀB)⁻¹ Bᵀ(I − P_A) r`), and the test part's residuals `r − A δ_A − B δ_B` are its
+//! held-out errors. The normal equations of the model and every shortlisted candidate are formed once
+//! per fold, from one evaluation of their Jacobian; each candidate's bordered system is then a small
+//! factorisation. That replaces a nonlinear fit per fold and candidate (about four evaluations of the
+//! Jacobian each, measured on the real UR10).
 //!
 //! Where this differs from the fit: the fit starts cold, at the nominal robot, and stops once a step
 //! moves its parameters by less than a tenth of their standard deviations; along a nearly flat valley
 //! (a block trading with the registration) it may stop elsewhere than the step from `θ̂ₖ` points. The
 //! step is therefore a *forecast*, used only to leave out of a round's full scoring the candidates that
-//! could not be chosen ([`in_reach`]) — never as a figure. A candidate that is chosen is fitted in full,
-//! fold by fold, as before, and so is every candidate whenever the forecast does not exist (the model's
-//! fold fits are not kept, the poses carry per-axis weights the step does not apply).
+//! could not be chosen ([`in_reach`]) — never as a figure. A candidate left out is judged on its
+//! forecast where a fit would have judged it before any gain counts (beyond the plausible in every
+//! fold's step: refused, and said to be forecast); one that is chosen is fitted in full, fold by fold,
+//! as before, and so is every candidate whenever the forecast does not exist (the model's fold fits are
+//! not kept, the poses carry per-axis weights the step does not apply).
 
 use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
