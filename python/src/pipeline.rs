@@ -396,9 +396,11 @@ impl PyReport {
 /// each sensor's link, 0 the base — its columns `NAME_x`, `NAME_y`, `NAME_z` of a measurements file read
 /// as the link's tilt, as `--accelerometer NAME=LINK`), `region` (the poses of use, `(M, n)` degrees, as
 /// `--for`: the report's `at_use` predicts the final model's held-out error there from its fit, beside a
-/// `holdout` of those poses). Runs without the GIL.
+/// `holdout` of those poses), `plan` (the `Plan` these poses were measured by, made for the poses of use
+/// `region`, as `--plan`: its promise there restated at the residual scale the fit found, beside the
+/// prediction and the hold-out's measured error). Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None, accelerometers=None, region=None))]
+#[pyo3(signature = (robot, data, xyz=None, *, time_min=None, temps=None, holdout=None, noise_mm=None, folds=None, folds_by=None, frame=None, tool=None, orientation_lever_mm=None, orientation_noise_deg=None, outliers=None, shrinkage=None, extrapolation=None, masses=None, order=None, lateral=None, accelerometers=None, region=None, plan=None))]
 #[allow(clippy::too_many_arguments)] // Python's keyword arguments, one per setting.
 pub fn diagnose(
     py: Python<'_>,
@@ -423,6 +425,7 @@ pub fn diagnose(
     lateral: Option<&str>,
     accelerometers: Option<HashMap<String, usize>>,
     region: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    plan: Option<&crate::planning::PyPlan>,
 ) -> PyResult<PyReport> {
     let measurements: PyMeasurements = match (data.cast::<PyMeasurements>(), xyz) {
         (Ok(m), None) => {
@@ -470,6 +473,11 @@ pub fn diagnose(
             .map(|r| crate::planning::configurations(robot, &r, "region"))
             .transpose()?
             .unwrap_or_default(),
+        promised: plan.map(|p| thermokin_diagnose::Promised {
+            rms_mm: p.plan.promise.planned_rms_mm,
+            noise_mm: p.plan.promise.noise_mm,
+            poses: p.plan.promise.poses_of_use,
+        }),
         ..defaults
     };
     config.validate().map_err(setting_error)?;

@@ -15,7 +15,7 @@ use crate::robot::PyRobot;
 /// A measurement plan: the poses in measuring order and what they are predicted to give.
 #[pyclass(module = "thermokin", name = "Plan", frozen)]
 pub struct PyPlan {
-    plan: Plan,
+    pub(crate) plan: Plan,
     /// The robot's name and what the candidates were, for the page.
     robot: String,
     candidates: String,

@@ -448,3 +448,24 @@ def test_diagnose_predicts_its_error_at_the_poses_of_use(irb140):
     assert at_use["measured_rms_mm"] == pytest.approx(report.to_dict()["holdout"]["selected"]["heldout_rms_mm"])
     assert at_use["predicted_rms_mm"] > 0
     assert thermokin.diagnose(irb140, data.q[:80], data.xyz[:80]).to_dict()["at_use"] is None
+
+
+def test_diagnose_restates_the_promise_of_the_plan_it_measured(irb140):
+    """`diagnose(..., plan=)` as `diagnose --plan`: the plan's promise at its poses of use, restated at the
+    residual scale the fit found (its figure at the plan's noise, scaled); a plan made for other poses of
+    use is refused."""
+    data = thermokin.simulate(irb140, ["joint_offset:2=0.05"], poses=120, minutes=0)
+    use = data.q[80:]
+    plan = thermokin.plan(irb140, data.q[:80], poses=30, region=use, noise_mm=0.005, seed=1)
+    promise = plan.to_dict()["promise"]
+    assert promise["poses_of_use"] == 40
+    held = thermokin.Measurements(irb140, data.q[80:], data.xyz[80:])
+    report = thermokin.diagnose(
+        irb140, data.q[:80], data.xyz[:80], holdout=held, region=use, plan=plan, noise_mm=0.005
+    )
+    at_use = report.to_dict()["at_use"]
+    scaled = promise["planned_rms_mm"] * at_use["residual_scale_mm"] / promise["noise_mm"]
+    assert at_use["promised_rms_mm"] == pytest.approx(scaled, rel=1e-12)
+    other = thermokin.plan(irb140, data.q[:80], poses=30, region=use[:12], noise_mm=0.005, seed=1)
+    with pytest.raises(Exception, match="promised.poses"):
+        thermokin.diagnose(irb140, data.q[:80], data.xyz[:80], region=use, plan=other, noise_mm=0.005)

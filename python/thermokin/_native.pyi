@@ -240,6 +240,7 @@ def diagnose(
     lateral: str | None = None,
     accelerometers: dict[str, int] | None = None,
     region: _Array | None = None,
+    plan: Plan | None = None,
 ) -> Report: ...
 def plan(
     robot: Robot,

@@ -142,7 +142,7 @@ fn promised(path: &Path, poses: usize) -> Result<thermokin_diagnose::Promised, F
             path.display()
         )));
     }
-    Ok(thermokin_diagnose::Promised { rms_mm: field("planned_rms_mm")?, noise_mm: field("noise_mm")? })
+    Ok(thermokin_diagnose::Promised { rms_mm: field("planned_rms_mm")?, noise_mm: field("noise_mm")?, poses: made_for })
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {

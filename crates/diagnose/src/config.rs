@@ -93,6 +93,9 @@ pub struct Promised {
     pub rms_mm: f64,
     /// The noise per axis it was stated at, mm.
     pub noise_mm: f64,
+    /// How many poses of use it was made for: [`crate::Config::poses_of_use`] must hold as many (the
+    /// promise is of those poses, not of others).
+    pub poses: usize,
 }
 
 /// An accelerometer or inclinometer declared on a link (`--accelerometer NAME=LINK`): its columns
@@ -328,6 +331,13 @@ impl Config {
                 if !(v.is_finite() && v > 0.0) {
                     return bad(setting, v, "must be a positive number of millimetres");
                 }
+            }
+            if p.poses != self.poses_of_use.len() {
+                return bad(
+                    "promised.poses",
+                    p.poses as f64,
+                    "must be the number of poses of use given: the promise is of the poses the plan was made for",
+                );
             }
         }
         if let Some(n) = self.noise_mm
