@@ -279,10 +279,7 @@ mod tests {
     /// cold fit stops short along the flat direction — it only makes the round fit more.)
     #[test]
     fn a_forecast_is_the_fit_it_stands_for() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let text = std::fs::read_to_string(root.join("fixtures/urdf/ur10.urdf")).unwrap();
-        let options = thermokin_urdf::ImportOptions { base: None, tip: Some("tool0".into()) };
-        let robot = thermokin_urdf::import_urdf(&text, "ur10.urdf", &options).unwrap().robot;
+        let robot = crate::simulate::test_ur10();
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let hidden = [
             HiddenEffect { effect: Effect::JointOffset(joint(2)), values: vec![0.03f64.to_radians()] },

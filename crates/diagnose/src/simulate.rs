@@ -268,3 +268,13 @@ pub fn simulate(robot: &Robot, hidden: &[HiddenEffect], config: &SimulationConfi
     data.approach = approach;
     Ok(data)
 }
+
+/// The UR10 of the repository's fixtures (its URDF, flange `tool0`), for the crate's unit tests.
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+pub(crate) fn test_ur10() -> Robot {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    let text = std::fs::read_to_string(root.join("fixtures/urdf/ur10.urdf")).unwrap();
+    let options = thermokin_urdf::ImportOptions { base: None, tip: Some("tool0".into()) };
+    thermokin_urdf::import_urdf(&text, "ur10.urdf", &options).unwrap().robot
+}

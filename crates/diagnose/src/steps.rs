@@ -381,10 +381,7 @@ mod tests {
     /// middle; tested as equally noisy, they gave 41 and 86 steps (316 at 100,000 poses).
     #[test]
     fn a_drift_is_not_read_as_steps_of_the_frame() {
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let text = std::fs::read_to_string(root.join("fixtures/urdf/ur10.urdf")).unwrap();
-        let options = thermokin_urdf::ImportOptions { base: None, tip: Some("tool0".into()) };
-        let robot = thermokin_urdf::import_urdf(&text, "ur10.urdf", &options).unwrap().robot;
+        let robot = crate::simulate::test_ur10();
         let joint = |j| JointIndex::of(&robot, j).unwrap();
         let hidden = [
             HiddenEffect { effect: Effect::JointOffset(joint(1)), values: vec![0.03f64.to_radians()] },
