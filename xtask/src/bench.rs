@@ -204,6 +204,12 @@ pub(crate) fn bench(json: bool, baseline: Option<&str>) -> Result<()> {
             10.0,
         ),
         (
+            "diagnose_ur10_100k_ms_per_pose",
+            scale["100000"]["ms_per_pose"].as_f64(),
+            "its time per pose, ms (12,000 poses: diagnose_ur10_12k_s / 12,000)",
+            f64::NAN,
+        ),
+        (
             "diagnose_ur10_100k_peak_mib",
             scale["100000"]["peak_rss_mib"].as_f64(),
             "peak memory of the process after 100,000 poses, MiB (issue #60: at most 1,024)",

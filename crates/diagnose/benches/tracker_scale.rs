@@ -48,12 +48,16 @@ fn main() {
         let seconds = t0.elapsed().as_secs_f64();
         let rss = thermokin_testdata::peak_rss_mib();
         let chosen: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
+        // Per pose: what linear growth keeps constant.
+        let ms_per_pose = 1e3 * seconds / poses as f64;
         println!(
-            "diagnose_scale {poses} poses: {seconds:.1} s nested, peak RSS {} MiB; chose {chosen:?}",
+            "diagnose_scale {poses} poses: {seconds:.1} s nested ({ms_per_pose:.2} ms per pose), peak RSS {} MiB; chose {chosen:?}",
             rss.map_or("n/a".into(), |m| format!("{m:.1}"))
         );
-        results
-            .insert(format!("{poses}"), serde_json::json!({"seconds": seconds, "peak_rss_mib": rss, "chosen": chosen}));
+        results.insert(
+            format!("{poses}"),
+            serde_json::json!({"seconds": seconds, "ms_per_pose": ms_per_pose, "peak_rss_mib": rss, "chosen": chosen}),
+        );
     }
     if full {
         for (name, urdf, tip, train, test) in [
