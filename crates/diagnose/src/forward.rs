@@ -264,7 +264,12 @@ fn score_round(
                     still.retain(|e| *e != c);
                     scored.push((c, Scored::ForecastBeyond(why)));
                 }
-                None => later.push(c),
+                // Plausible in this model's forecast: an earlier refusal for its size no longer holds,
+                // as for a fitted candidate.
+                None => {
+                    sel.refused.retain(|r| r.effect != c.label());
+                    later.push(c);
+                }
             },
         }
     }
