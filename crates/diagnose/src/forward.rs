@@ -248,36 +248,44 @@ fn score_round(
         .copied()
         .filter(|c| (is_exponential(c) && !second.contains(c)) || (!is_exponential(c) && !first.contains(c)))
         .collect();
-    // A deferred candidate that adds nothing identifiable is said so and leaves the pool, as when fitted,
-    // in the shortlist's order.
-    let mut later = Vec::with_capacity(deferred.len());
-    for c in deferred {
-        match adds_nothing(scorer, &effects, c)? {
-            Some(reason) => {
-                still.retain(|e| *e != c);
-                scored.push((c, Scored::AddsNothing(reason)));
-            }
-            None => match forecast_runaway(scorer, config, forecasts.as_deref(), c) {
-                // Beyond the plausible in every fold's forecast, as a fitted candidate beyond it in every
-                // fold's fit: refused (or resting) the same way, said as forecast.
-                Some(why) => {
-                    still.retain(|e| *e != c);
-                    scored.push((c, Scored::ForecastBeyond(why)));
-                }
-                // Plausible in this model's forecast: an earlier refusal for its size no longer holds,
-                // as for a fitted candidate.
-                None => {
-                    sel.refused.retain(|r| r.effect != c.label());
-                    later.push(c);
-                }
-            },
-        }
-    }
+    let later = judge_deferred(scorer, config, sel, forecasts.as_deref(), deferred, &mut scored, &mut still)?;
     let rank = |c: &Effect| shortlisted.iter().position(|s| s == c).unwrap_or(usize::MAX);
     scored.sort_by_key(|(c, _)| rank(c));
     let results = keep_scored(sel, scored, &mut still, resting);
     *pool = still;
     Ok((results, later))
+}
+
+/// The deferred candidates judged as a fit would judge them before any gain counts: one that adds
+/// nothing identifiable is said so and leaves the pool, as when fitted; one beyond the plausible in
+/// every fold's forecast is refused (or rests) as one beyond it in every fold's fit, said as forecast;
+/// one plausible there lifts an earlier refusal for its size, as a fitted one does. Their verdicts join
+/// `scored` (the round orders them by the shortlist), they leave `still` where they leave the pool; the
+/// others are returned, deferred still.
+fn judge_deferred(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    sel: &mut Selection,
+    forecasts: Option<&[crate::linearised::Forecast]>,
+    deferred: Vec<Effect>,
+    scored: &mut Vec<(Effect, Scored)>,
+    still: &mut Vec<Effect>,
+) -> Result<Vec<Effect>, DiagnoseError> {
+    let effects = sel.effects.clone();
+    let mut later = Vec::with_capacity(deferred.len());
+    for c in deferred {
+        if let Some(reason) = adds_nothing(scorer, &effects, c)? {
+            still.retain(|e| *e != c);
+            scored.push((c, Scored::AddsNothing(reason)));
+        } else if let Some(why) = forecast_runaway(scorer, config, forecasts, c) {
+            still.retain(|e| *e != c);
+            scored.push((c, Scored::ForecastBeyond(why)));
+        } else {
+            sel.refused.retain(|r| r.effect != c.label());
+            later.push(c);
+        }
+    }
+    Ok(later)
 }
 
 /// Why the forecast of candidate `c` is beyond the plausible in every fold, where it is.
