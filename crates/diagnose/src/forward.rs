@@ -193,9 +193,7 @@ fn score_round(
         Fitted::InReach => crate::linearised::forecasts(scorer, &effects, &shortlisted)?,
         Fitted::Every => None,
     };
-    let score_all = |list: &[Effect]| -> Result<Vec<(Effect, Scored)>, DiagnoseError> {
-        list.par_iter().map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?))).collect()
-    };
+    let score_all = |list: &[Effect]| score_each(scorer, config, &effects, list);
     let current = sel.current.heldout_rms_mm;
     let (mut scored, first, deferred, forecast_gain) = match &forecasts {
         Some(f) => {
@@ -304,6 +302,16 @@ fn forecast_runaway(
     reasons.into_iter().flatten().next()
 }
 
+/// Each candidate of `list` beside `effects`, scored on the selection's folds (in parallel).
+fn score_each(
+    scorer: &Scorer<'_>,
+    config: &Config,
+    effects: &[Effect],
+    list: &[Effect],
+) -> Result<Vec<(Effect, Scored)>, DiagnoseError> {
+    list.par_iter().map(|&c| Ok((c, score(scorer, effects, c, &config.plausibility)?))).collect()
+}
+
 /// The deferred candidates `list` scored in full (a round whose best were drifts that forward chaining
 /// turned down: the next best are tried, the deferred ones among them).
 fn score_listed(
@@ -314,11 +322,7 @@ fn score_listed(
     pool: &mut Vec<Effect>,
     resting: &mut Vec<Effect>,
 ) -> Result<Vec<Candidate>, DiagnoseError> {
-    let effects = sel.effects.clone();
-    let scored: Vec<(Effect, Scored)> = list
-        .par_iter()
-        .map(|&c| Ok((c, score(scorer, &effects, c, &config.plausibility)?)))
-        .collect::<Result<_, DiagnoseError>>()?;
+    let scored = score_each(scorer, config, &sel.effects, list)?;
     let mut still: Vec<Effect> = pool.iter().copied().filter(|c| !list.contains(c)).collect();
     let results = keep_scored(sel, scored, &mut still, resting);
     *pool = still;

@@ -24,19 +24,14 @@
 //! as before, and so is every candidate whenever the forecast does not exist (the model's fold fits are
 //! not kept, the poses carry per-axis weights the step does not apply).
 
-use faer::linalg::matmul::matmul;
-use faer::prelude::Solve;
-use faer::{Accum, Mat, Par};
+use faer::Mat;
 use rayon::prelude::*;
 use thermokin_identify::{Effect, Model, norms, residuals_and_jacobian};
 
 use crate::error::DiagnoseError;
-use crate::scoring::{Scorer, significantly_better};
+use crate::scoring::{Scorer, add_normal_equations, significantly_better, unit_ridged_step};
 use crate::stats::Stats;
 
-/// Ridge on the unit-scaled normal equations: a candidate column that duplicates a current one (no
-/// gain, singular equations) stays solvable without moving the others (as in the screen).
-const RIDGE: f64 = 1e-9;
 /// Columns below this fraction of the largest norm move nothing at the linearisation point.
 const NEGLIGIBLE_COLUMN: f64 = 1e-12;
 /// Poses per block when the normal equations are accumulated (a week's training part with every
@@ -118,9 +113,7 @@ impl Normal {
         let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
         for rows in train.chunks(CHUNK_POSES) {
             let (r, j) = residuals_and_jacobian(scorer.robot, model, at, scorer.data, rows, &scorer.terms)?;
-            matmul(n.as_mut(), Accum::Add, j.as_ref().transpose(), j.as_ref(), 1.0, Par::Seq);
-            let rv = faer::ColRef::from_slice(&r);
-            matmul(g.as_mut(), Accum::Add, j.as_ref().transpose(), rv.as_mat(), 1.0, Par::Seq);
+            add_normal_equations(&mut n, &mut g, &j, &r);
         }
         let norm: Vec<f64> = (0..p).map(|c| n[(c, c)].max(0.0).sqrt()).collect();
         Ok(Self { n, g, norm })
@@ -197,7 +190,7 @@ fn fold_forecast(
             let idx: Vec<usize> =
                 current.iter().copied().chain((o..o + c.len()).filter(|&k| normal.moves(k))).collect();
             let rhs: Vec<f64> = idx.iter().map(|&c| normal.g[(c, 0)]).collect();
-            solve(&normal, &idx, &rhs).map(|delta| Step { idx, delta })
+            unit_ridged_step(&normal.n, &idx, &rhs).map(|delta| Step { idx, delta })
         })
         .collect();
     let values = candidates.iter().zip(offsets).zip(&steps).map(|((c, &o), step)| {
@@ -213,20 +206,6 @@ fn fold_forecast(
     });
     let errors = test_errors(scorer, &model, &at, test, &steps)?;
     Ok(Some(errors.into_iter().zip(values).collect()))
-}
-
-/// The step `δ` (in the parameters' own units) on columns `idx` of `n δ = rhs` (`rhs` on those columns),
-/// solved on unit columns with [`RIDGE`]; `None` when not solvable.
-fn solve(normal: &Normal, idx: &[usize], rhs: &[f64]) -> Option<Vec<f64>> {
-    let q = idx.len();
-    let scale = |i: usize| normal.norm[idx[i]];
-    let sub = Mat::<f64>::from_fn(q, q, |i, k| {
-        normal.n[(idx[i], idx[k])] / (scale(i) * scale(k)) + if i == k { RIDGE } else { 0.0 }
-    });
-    let rhs = Mat::<f64>::from_fn(q, 1, |i, _| rhs[i] / scale(i));
-    let llt = sub.llt(faer::Side::Lower).ok()?;
-    let step = llt.solve(&rhs);
-    Some((0..q).map(|i| step[(i, 0)] / scale(i)).collect())
 }
 
 /// How far short of the fit a forecast gain may fall and the candidate still be left out, as a fraction

@@ -338,8 +338,8 @@ impl<'a> Scorer<'a> {
 
     /// What the block at `k` of `model`, fitted at `theta` on the poses `rows`, traded with ([`Trade`]):
     /// the displacement its values give those poses, `d = J_k (θ_k − θ_k⁰)` (the Jacobian at the fit), and
-    /// the share of it each other block's columns span, by least squares on their unit columns (ridged
-    /// as the screen's steps); `None` where it gives no displacement or the model has no other block.
+    /// the share of it each other block's columns span, by least squares on their unit columns
+    /// ([`unit_ridged_step`]); `None` where it gives no displacement or the model has no other block.
     pub(crate) fn traded_with(
         &self,
         model: &Model,
@@ -357,40 +357,20 @@ impl<'a> Scorer<'a> {
         if dd.is_nan() || dd <= 0.0 {
             return Ok(None);
         }
+        // Every block's Gram matrix and inner products with `d` at once; a block's share is `gᵀx`,
+        // `x` its least-squares coefficients (‖P d‖² of the projection).
+        let p = model.len();
+        let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
+        add_normal_equations(&mut n, &mut g, &jac, &d);
         let share = |cols: &[usize]| -> f64 {
-            let norms: Vec<f64> = cols.iter().map(|&c| jac.col(c).norm_l2()).collect();
-            let used: Vec<usize> = (0..cols.len()).filter(|&i| norms[i] > 0.0).collect();
-            if used.is_empty() {
-                return 0.0;
+            let idx: Vec<usize> = cols.iter().copied().filter(|&c| n[(c, c)] > 0.0).collect();
+            let rhs: Vec<f64> = idx.iter().map(|&c| g[(c, 0)]).collect();
+            match unit_ridged_step(&n, &idx, &rhs) {
+                Some(x) if !idx.is_empty() => {
+                    (rhs.iter().zip(&x).map(|(a, b)| a * b).sum::<f64>() / dd).clamp(0.0, 1.0)
+                }
+                _ => 0.0,
             }
-            let q = used.len();
-            let a = Mat::<f64>::from_fn(jac.nrows(), q, |r, i| jac[(r, cols[used[i]])] / norms[used[i]]);
-            let mut n = Mat::<f64>::zeros(q, q);
-            faer::linalg::matmul::matmul(
-                n.as_mut(),
-                faer::Accum::Replace,
-                a.transpose(),
-                a.as_ref(),
-                1.0,
-                faer::Par::Seq,
-            );
-            for i in 0..q {
-                n[(i, i)] += 1e-9;
-            }
-            let mut g = Mat::<f64>::zeros(q, 1);
-            let dv = faer::ColRef::from_slice(&d);
-            faer::linalg::matmul::matmul(
-                g.as_mut(),
-                faer::Accum::Replace,
-                a.transpose(),
-                dv.as_mat(),
-                1.0,
-                faer::Par::Seq,
-            );
-            let Ok(llt) = n.llt(faer::Side::Lower) else { return 0.0 };
-            let x = faer::prelude::Solve::solve(&llt, &g);
-            // ‖P d‖² = gᵀ x for the least-squares projection.
-            ((0..q).map(|i| g[(i, 0)] * x[(i, 0)]).sum::<f64>() / dd).clamp(0.0, 1.0)
         };
         let others: Vec<usize> = (0..model.effects().len()).filter(|&i| i != k).collect();
         let best = others
@@ -442,6 +422,34 @@ impl<'a> Scorer<'a> {
         let k = f.free.iter().filter(|&&x| x).count() as f64;
         m * (f.ssr / m).max(1e-300).ln() + k * m.ln()
     }
+}
+
+/// Ridge on unit-scaled normal equations ([`unit_ridged_step`]): a column that duplicates another (no
+/// gain, singular equations) stays solvable without moving the others.
+pub(crate) const RIDGE: f64 = 1e-9;
+
+/// `JᵀJ` and `Jᵀr` of the Jacobian `j` and residuals `r`, added into `n` and `g` (one product each; a
+/// block of poses at a time, the sum over blocks is all of them).
+pub(crate) fn add_normal_equations(n: &mut Mat<f64>, g: &mut Mat<f64>, j: &Mat<f64>, r: &[f64]) {
+    let rv = faer::ColRef::from_slice(r);
+    faer::linalg::matmul::matmul(n.as_mut(), faer::Accum::Add, j.transpose(), j.as_ref(), 1.0, faer::Par::Seq);
+    faer::linalg::matmul::matmul(g.as_mut(), faer::Accum::Add, j.transpose(), rv.as_mat(), 1.0, faer::Par::Seq);
+}
+
+/// The step `δ` (in the parameters' own units) on columns `idx` of the normal equations `n δ = rhs`
+/// (`rhs` on those columns), solved on unit columns — each scaled by `√n_cc`, so that mm, radians and
+/// minutes weigh alike — with [`RIDGE`] on their unit diagonal; `None` when not solvable. Every column
+/// of `idx` must move something (`n_cc > 0`).
+pub(crate) fn unit_ridged_step(n: &Mat<f64>, idx: &[usize], rhs: &[f64]) -> Option<Vec<f64>> {
+    let q = idx.len();
+    let scale = |i: usize| n[(idx[i], idx[i])].max(0.0).sqrt();
+    let sub = Mat::<f64>::from_fn(q, q, |i, k| {
+        n[(idx[i], idx[k])] / (scale(i) * scale(k)) + if i == k { RIDGE } else { 0.0 }
+    });
+    let rhs = Mat::<f64>::from_fn(q, 1, |i, _| rhs[i] / scale(i));
+    let llt = sub.llt(faer::Side::Lower).ok()?;
+    let step = faer::prelude::Solve::solve(&llt, &rhs);
+    Some((0..q).map(|i| step[(i, 0)] / scale(i)).collect())
 }
 
 /// Whether model `b` has a lower held-out mean squared error than model `a`, by more than `z` standard

@@ -24,19 +24,15 @@
 //! compares the screened selection with the exhaustive one (`Screen { keep: 0 }`) on simulated sets and
 //! on the real Rokae and UR10 sets — the same choices, the same held-out figures.
 
-use faer::linalg::matmul::matmul;
+use faer::Mat;
 use faer::prelude::Solve;
-use faer::{Accum, Mat, Par};
 
 use thermokin_identify::{Effect, residuals_and_jacobian};
 
 use crate::config::Screen;
 use crate::error::DiagnoseError;
-use crate::scoring::Scorer;
+use crate::scoring::{RIDGE, Scorer, add_normal_equations};
 
-/// Ridge on the scaled normal equations, relative to their unit diagonal: keeps a candidate that
-/// duplicates a current column (no gain, singular equations) solvable without moving the others.
-const RIDGE: f64 = 1e-9;
 /// Columns whose norm is below this fraction of the largest carry no information at the linearisation
 /// point (an exponential drift's τ at zero amplitude) and are left out.
 const NEGLIGIBLE_COLUMN: f64 = 1e-12;
@@ -189,10 +185,8 @@ pub(crate) fn linearised_values(
 /// `JᵀJ` and `Jᵀr`.
 fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Mat<f64>) {
     let p = j.ncols();
-    let mut n = Mat::<f64>::zeros(p, p);
-    matmul(n.as_mut(), Accum::Replace, j.as_ref().transpose(), j.as_ref(), 1.0, Par::Seq);
-    let mut g = Mat::<f64>::zeros(p, 1);
-    matmul(g.as_mut(), Accum::Replace, j.as_ref().transpose(), faer::ColRef::from_slice(r).as_mat(), 1.0, Par::Seq);
+    let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
+    add_normal_equations(&mut n, &mut g, j, r);
     (n, g)
 }
 
