@@ -5,6 +5,7 @@ mod at_use;
 mod branches;
 mod catalogue;
 mod causes;
+mod column;
 mod export;
 mod frames;
 mod golden;
