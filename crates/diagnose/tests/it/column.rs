@@ -69,6 +69,8 @@ fn a_construction_robot_measured_height_by_height_reads_its_settling_from_its_se
     }
     let chosen: Vec<&str> = read.effects.iter().map(|e| e.label.as_str()).collect();
     assert!(chosen.contains(&"tilt[1] (measured by acc_base)"), "{chosen:?}");
+    // The robot the diagnosis writes, given the other session's raw readings, is the model it scored.
+    crate::tracker::export_given_the_columns(&robot, &read, &other, "tilt = { sensor = \"acc_base\"");
     // At the noise within a fifth; what the settling costs without the sensors; drivers no worse.
     assert!(read_mm < 1.2 * NOISE_MEAN_MM, "{read_mm}");
     assert!(none_mm > 1.5 * read_mm, "{none_mm} vs {read_mm}");
