@@ -40,7 +40,7 @@ use thermokin_identify::{Effect, Fit, JointIndex, Model};
 
 use crate::config::{Completion, Config};
 use crate::error::DiagnoseError;
-use crate::plausibility::{Implausible, Judged, implausible};
+use crate::plausibility::{Implausible, Judged, Trade, implausible};
 use crate::scoring::{Scorer, significantly_better};
 use crate::selection::{Completed, Joined, Selection, Step};
 use crate::shrinkage::completion_strength;
@@ -127,11 +127,21 @@ fn complete_geometry(
         match judge(scorer, config, &model, &full, &rows) {
             Judgement::Unseen(unseen) => rows.retain(|r| *r != unseen),
             Judgement::Implausible(refused) => {
+                let mut judged = Vec::new();
                 for (e, why) in refused {
                     let trade = match (why.excess(), model.effects().iter().position(|x| *x == e)) {
                         (Some(_), Some(k)) => scorer.traded_with(&model, &full.theta, &scorer.all(), k)?,
                         _ => None,
                     };
+                    // A value beyond its size that traded with no block is the poses' own: it stays.
+                    if !trade.as_ref().is_some_and(Trade::stands) {
+                        judged.push((e, why, trade));
+                    }
+                }
+                if judged.is_empty() {
+                    break (effects, lambda, held.1.stats, held.1.errors);
+                }
+                for (e, why, trade) in worst_beyond(judged) {
                     // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
                     sel.refused.retain(|r| r.effect != e.label());
                     sel.refused.push(why.refused_trading(e, Judged::Fitted, trade.as_ref()));
@@ -209,16 +219,24 @@ fn judge(scorer: &Scorer<'_>, config: &Config, model: &Model, full: &Fit, rows: 
     if let Some((unseen, _)) = least_seen {
         return Judgement::Unseen(unseen);
     }
-    let mut refused: Vec<(Effect, Implausible)> = proposed()
+    let refused: Vec<(Effect, Implausible)> = proposed()
         .filter_map(|(&e, &o)| {
             implausible(&scorer.scale, &full.theta[o..o + e.len()], e, &config.plausibility).map(|why| (e, why))
         })
         .collect();
-    let worst = refused.iter().filter_map(|(e, why)| why.excess().map(|x| (*e, x))).max_by(|a, b| a.1.total_cmp(&b.1));
-    if let Some((worst, _)) = worst {
-        refused.retain(|(e, why)| why.excess().is_none() || *e == worst);
-    }
     if refused.is_empty() { Judgement::Joins } else { Judgement::Implausible(refused) }
+}
+
+/// Of the rows judged implausible, those refused at once: every one wrong in kind, and of those beyond
+/// their size only the worst — the others' values may be what it traded with, and come back within
+/// their bounds once it is gone.
+fn worst_beyond(mut judged: Vec<(Effect, Implausible, Option<Trade>)>) -> Vec<(Effect, Implausible, Option<Trade>)> {
+    let worst =
+        judged.iter().filter_map(|(e, why, _)| why.excess().map(|x| (*e, x))).max_by(|a, b| a.1.total_cmp(&b.1));
+    if let Some((worst, _)) = worst {
+        judged.retain(|(e, why, _)| why.excess().is_none() || *e == worst);
+    }
+    judged
 }
 
 #[cfg(test)]

@@ -255,8 +255,9 @@ fn score_round(
 }
 
 /// The deferred candidates judged as a fit would judge them before any gain counts: one that adds
-/// nothing identifiable is said so and leaves the pool, as when fitted; one beyond the plausible in
-/// every fold's forecast is refused (or rests) as one beyond it in every fold's fit, said as forecast;
+/// nothing identifiable is said so and leaves the pool, as when fitted; one beyond the plausible in kind
+/// in every fold's forecast is refused as one beyond it in every fold's fit, said as forecast (one beyond
+/// its size is fitted: whether the fit traded the value with another block decides);
 /// one plausible there lifts an earlier refusal for its size, as a fitted one does. Their verdicts join
 /// `scored` (the round orders them by the shortlist), they leave `still` where they leave the pool; the
 /// others are returned, deferred still.
@@ -277,7 +278,12 @@ fn judge_deferred(
             scored.push((c, Scored::AddsNothing(reason)));
         } else if let Some(why) = forecast_runaway(scorer, config, forecasts, c) {
             still.retain(|e| *e != c);
-            scored.push((c, Scored::ForecastBeyond(why)));
+            match why.excess() {
+                // Beyond its size: whether the value is traded or the poses' own takes a fit to tell
+                // (`Trade::stands`), as a fitted candidate's is told.
+                Some(_) => scored.extend(score_each(scorer, config, &effects, &[c])?),
+                None => scored.push((c, Scored::ForecastBeyond(why))),
+            }
         } else {
             sel.refused.retain(|r| r.effect != c.label());
             later.push(c);
@@ -350,7 +356,7 @@ fn keep_scored(
                     // Plausible in this model: an earlier refusal for its size no longer holds.
                     sel.refused.retain(|r| r.effect != c.label());
                     still.push(c);
-                    results.push(s);
+                    results.push(*s);
                 }
             },
         }
@@ -414,9 +420,11 @@ fn choose(
                 Some(_) => scorer.traded_with(&model, &full.theta, &scorer.all(), model.effects().len() - 1)?,
                 None => None,
             };
-            refuse(sel, cand.effect, (&why, trade.as_ref()), Judged::Fitted, resting);
-            pool.retain(|c| *c != cand.effect);
-            continue;
+            if !trade.as_ref().is_some_and(Trade::stands) {
+                refuse(sel, cand.effect, (&why, trade.as_ref()), Judged::Fitted, resting);
+                pool.retain(|c| *c != cand.effect);
+                continue;
+            }
         }
         let b = scorer.bic_of(&full);
         if b >= *sel.bic.last().unwrap_or(&f64::INFINITY) {

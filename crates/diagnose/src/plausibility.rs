@@ -329,12 +329,32 @@ pub(crate) struct Trade {
     pub(crate) share: f64,
     /// The share of every other block together, 0–1.
     pub(crate) rest: f64,
+    /// How many poses carry half of the displacement (`‖d‖²` summed over the poses it is largest at),
+    /// and of how many.
+    pub(crate) half_in: (usize, usize),
+    /// The block's parameters.
+    pub(crate) parameters: usize,
 }
 
 /// A share from which a block is said to be what a value traded with.
 const TRADED: f64 = 0.5;
 
 impl Trade {
+    /// Whether a value beyond its size bound is the poses' own and stands: no block, nor the others
+    /// together, spans half the displacement it gives the poses, and that displacement is not carried
+    /// by a few poses — half of it in more poses than the block has parameters (a block of `p` can bend
+    /// itself to any `p` poses; a gravity sag spreads over the workspace). The size bounds are an
+    /// industrial arm's (a row, a deflection, a share of the arm's extent): an elastic robot's joints
+    /// sag by degrees, and a value the fit did not trade with another block is what the poses show.
+    pub(crate) fn stands(&self) -> bool {
+        self.share < TRADED && self.rest < TRADED && !self.chases()
+    }
+
+    /// Whether half the displacement lies in no more poses than the block has parameters.
+    fn chases(&self) -> bool {
+        self.half_in.0 <= self.parameters
+    }
+
     /// The trade in words: with one block, with several together, or with none (the value is the
     /// candidate's own).
     pub(crate) fn words(&self) -> String {
@@ -351,6 +371,14 @@ impl Trade {
                 pct(self.rest),
                 pct(self.share),
                 self.with.label()
+            )
+        } else if self.chases() {
+            format!(
+                "it traded with no block ({:.0} % at most of the displacement its values give the poses lies in the model's other directions), but half of that displacement lies in {} of the {} poses, no more than its {} parameters: it chases a few",
+                pct(self.rest),
+                self.half_in.0,
+                self.half_in.1,
+                self.parameters
             )
         } else {
             format!(

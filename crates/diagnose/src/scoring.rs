@@ -379,7 +379,13 @@ impl<'a> Scorer<'a> {
             .max_by(|a, b| a.1.total_cmp(&b.1));
         let Some((with, best_share)) = best else { return Ok(None) };
         let rest: Vec<usize> = others.iter().flat_map(|&i| block(i)).collect();
-        Ok(Some(Trade { with, share: best_share, rest: share(&rest) }))
+        Ok(Some(Trade {
+            with,
+            share: best_share,
+            rest: share(&rest),
+            half_in: half_carried_by(&d, self.terms.stride()),
+            parameters: model.effects()[k].len(),
+        }))
     }
 
     /// The parameters of `candidate` that stay identifiable next to `effects`, on all data.
@@ -641,9 +647,49 @@ fn within_span(a: &[Vec<f64>], b: &[Vec<f64>]) -> bool {
     })
 }
 
+/// How many poses carry half of a displacement `d` (`stride` rows per pose), of how many: its poses'
+/// squared norms summed from the largest down until they reach half the total.
+fn half_carried_by(d: &[f64], stride: usize) -> (usize, usize) {
+    let mut energy: Vec<f64> = d.chunks(stride.max(1)).map(|r| r.iter().map(|x| x * x).sum()).collect();
+    let (poses, total) = (energy.len(), energy.iter().sum::<f64>());
+    if poses == 0 || total.is_nan() || total <= 0.0 {
+        return (0, poses);
+    }
+    energy.sort_by(|a, b| b.total_cmp(a));
+    let mut sum = 0.0;
+    let count = energy.iter().take_while(|&&e| {
+        let below = sum < 0.5 * total;
+        sum += e;
+        below
+    });
+    (count.count(), poses)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Half a displacement's `‖d‖²` counted over the poses it is largest at: one pose holding most of it
+    /// is one pose; equal poses take half of them; none moved, none.
+    #[test]
+    fn half_of_a_displacement_is_counted_from_its_largest_poses() {
+        let mut d = vec![0.01; 30];
+        d[3] = 5.0;
+        assert_eq!(half_carried_by(&d, 3), (1, 10));
+        assert_eq!(half_carried_by(&[1.0; 30], 3), (5, 10));
+        assert_eq!(half_carried_by(&[0.0; 6], 3), (0, 2));
+        // A value stands when no block spans half of it and more poses than its parameters carry half.
+        let trade = |share, rest, half, parameters| Trade {
+            with: Effect::Registration,
+            share,
+            rest,
+            half_in: (half, 100),
+            parameters,
+        };
+        assert!(trade(0.2, 0.4, 12, 10).stands());
+        assert!(!trade(0.6, 0.6, 12, 10).stands() && !trade(0.2, 0.55, 12, 10).stands());
+        assert!(!trade(0.2, 0.4, 10, 10).stands());
+    }
 
     #[test]
     fn single_pose_blocks_give_the_paired_standard_error() {

@@ -8,7 +8,7 @@ use crate::config::Plausibility;
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Trade, implausible};
 use crate::report::{Refusal, Skipped, TableRow};
-use crate::scoring::{Addition, Scorer};
+use crate::scoring::{Addition, HeldOut, Scorer};
 use crate::stats::Stats;
 
 /// A candidate scored on the selection's folds.
@@ -33,7 +33,7 @@ pub(crate) struct Candidate {
 /// What scoring a candidate found.
 pub(crate) enum Scored {
     /// Scored on the folds.
-    Candidate(Candidate),
+    Candidate(Box<Candidate>),
     /// It adds nothing identifiable to the model (the reason names the block a parameter duplicates).
     AddsNothing(String),
     /// Not fitted: its forecast on every fold is beyond the plausible, why ([`crate::linearised`]).
@@ -190,7 +190,40 @@ pub(crate) fn score(
             values(t) && implausible(&bounds.0, &t[o..o + c.len()], c, &bounds.1).is_some()
         }),
     };
-    let (held, _) = scorer.heldout_fits_unless(&with, &scorer.folds, &give_up)?;
+    let (mut held, _) = scorer.heldout_fits_unless(&with, &scorer.folds, &give_up)?;
+    let (mut runaway, mut trade) = runaway_and_trade(scorer, &with, &held, plausibility)?;
+    if trade.as_ref().is_some_and(Trade::stands) {
+        // The fits stopped at a value the poses show, traded with no block: fitted to their end, and
+        // judged there.
+        held = scorer.heldout_fits(&with, &scorer.folds)?;
+        (runaway, trade) = runaway_and_trade(scorer, &with, &held, plausibility)?;
+        if trade.as_ref().is_some_and(Trade::stands) {
+            runaway = None;
+        }
+    }
+    let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
+    Ok(Scored::Candidate(Box::new(Candidate {
+        effect: c,
+        new_free: addition.new_free,
+        stats: held.stats,
+        errors: held.errors,
+        runaway,
+        unsettled,
+        trade,
+    })))
+}
+
+/// The candidate's (the last of `with`) value beyond the bounds in every fold's fit of `held`, if it is,
+/// and, for a value beyond its size, what it traded with in the first fold's fit that reached one.
+fn runaway_and_trade(
+    scorer: &Scorer<'_>,
+    with: &[Effect],
+    held: &HeldOut,
+    plausibility: &Plausibility,
+) -> Result<(Option<Implausible>, Option<Trade>), DiagnoseError> {
+    let Some((&c, effects)) = with.split_last() else { return Ok((None, None)) };
+    let o: usize = effects.iter().map(Effect::len).sum();
+    let values = |t: &[f64]| t.len() >= o + c.len();
     let reasons: Vec<Option<Implausible>> = held
         .thetas
         .iter()
@@ -202,27 +235,17 @@ pub(crate) fn score(
     } else {
         None
     };
-    let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
-    // What a value beyond its size traded with, in the first fold's fit that reached one.
     let trade = match runaway.as_ref().and_then(Implausible::excess) {
         Some(_) => match scorer.folds.iter().zip(&held.thetas).find(|(_, t)| values(t)) {
             Some(((train, _), theta)) => {
-                let model = scorer.model(&with, train)?;
+                let model = scorer.model(with, train)?;
                 scorer.traded_with(&model, theta, train, with.len() - 1)?
             }
             None => None,
         },
         None => None,
     };
-    Ok(Scored::Candidate(Candidate {
-        effect: c,
-        new_free: addition.new_free,
-        stats: held.stats,
-        errors: held.errors,
-        runaway,
-        unsettled,
-        trade,
-    }))
+    Ok((runaway, trade))
 }
 
 /// Why a candidate with no identifiable parameter beside the model adds nothing: the block its first

@@ -130,6 +130,23 @@ fn carries(t: &[TreeJoint], a: usize, l: usize) -> bool {
 /// gravity torque about it of every link it carries (the left arm's too, when the torso's joints carry
 /// it); the left arm's five joints logged as columns `left_1` … `left_5` in degrees. No time column.
 pub fn two_armed_torso_session(n: usize, seed: u64, noise_mm: f64) -> Dataset {
+    elastic_torso_session(n, seed, noise_mm, Elastic { joints: 1.0, torso_bearing: 0.0 })
+}
+
+/// How elastic the two-armed torso is: its joints' compliances scaled by `joints`, and the torso's turning
+/// bearing tilting under the gravity moment across its axis of everything it carries (rad per N·m).
+#[derive(Clone, Copy, Debug)]
+pub struct Elastic {
+    /// The factor on every joint's compliance.
+    pub joints: f64,
+    /// The torso bearing's lateral compliance, rad per N·m.
+    pub torso_bearing: f64,
+}
+
+/// [`two_armed_torso_session`] of a torso `elastic` as given: the sag of every joint scaled, and the
+/// torso's bearing tilting everything above it about the bearing's centre by its compliance times the
+/// horizontal gravity moment of every link of the tree (both arms) about that centre.
+pub fn elastic_torso_session(n: usize, seed: u64, noise_mm: f64, elastic: Elastic) -> Dataset {
     let t = tree();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let g = Vector3::new(0.0, 0.0, -9.80665);
@@ -157,11 +174,23 @@ pub fn two_armed_torso_session(n: usize, seed: u64, noise_mm: f64) -> Dataset {
                     axis.dot(&(centre - oa).cross(&(g * t[l].mass.0)))
                 })
                 .sum();
-            sagged[a] += t[a].compliance * torque;
+            sagged[a] += elastic.joints * t[a].compliance * torque;
         }
         let seen = frames(&t, &sagged);
         let (r, p) = seen[MEASURED[6]];
-        let tool_mm = (p + r * Vector3::from(TOOL)) * 1000.0;
+        let mut tool = p + r * Vector3::from(TOOL);
+        if elastic.torso_bearing != 0.0 {
+            let centre = seen[0].1;
+            let moment: Vector3<f64> = (0..t.len())
+                .map(|l| {
+                    let (rl, ol) = seen[l];
+                    (ol + rl * Vector3::from(t[l].mass.1) - centre).cross(&(g * t[l].mass.0))
+                })
+                .sum();
+            let tilt = Rotation3::from_scaled_axis(Vector3::new(moment.x, moment.y, 0.0) * elastic.torso_bearing);
+            tool = centre + tilt * (tool - centre);
+        }
+        let tool_mm = tool * 1000.0;
         let measured_q: Vec<f64> = MEASURED.iter().map(|&i| q[i]).collect();
         data.measurements.push(measured_point(measured_q, tool_mm, noise_mm, &mut rng));
         data.sensor_values.push(LOGGED.iter().map(|&i| q[i].to_degrees()).collect());
