@@ -219,7 +219,7 @@ fn score_round(
     };
     let gain = |s: &Scored| match s {
         Scored::Candidate(s) => Some(sel.current.heldout_rms_mm - s.stats.heldout_rms_mm),
-        Scored::AddsNothing(_) | Scored::ForecastBeyond(_) => None,
+        Scored::AddsNothing(_) | Scored::ForecastBeyond(..) => None,
     };
     // A deferred linear drift's gain is its forecast's.
     let gains: Vec<(Effect, f64)> = scored
@@ -257,7 +257,7 @@ fn score_round(
 /// The deferred candidates judged as a fit would judge them before any gain counts: one that adds
 /// nothing identifiable is said so and leaves the pool, as when fitted; one beyond the plausible in kind
 /// in every fold's forecast is refused as one beyond it in every fold's fit, said as forecast (one beyond
-/// its size is fitted: whether the fit traded the value with another block decides);
+/// its size only where the forecast traded the value with another block, [`forecast_trade`]);
 /// one plausible there lifts an earlier refusal for its size, as a fitted one does. Their verdicts join
 /// `scored` (the round orders them by the shortlist), they leave `still` where they leave the pool; the
 /// others are returned, deferred still.
@@ -276,13 +276,18 @@ fn judge_deferred(
         if let Some(reason) = adds_nothing(scorer, &effects, c)? {
             still.retain(|e| *e != c);
             scored.push((c, Scored::AddsNothing(reason)));
-        } else if let Some(why) = forecast_runaway(scorer, config, forecasts, c) {
-            still.retain(|e| *e != c);
-            match why.excess() {
-                // Beyond its size: whether the value is traded or the poses' own takes a fit to tell
-                // (`Trade::stands`), as a fitted candidate's is told.
-                Some(_) => scored.extend(score_each(scorer, config, &effects, &[c])?),
-                None => scored.push((c, Scored::ForecastBeyond(why))),
+        } else if let Some((why, forecast)) = forecast_runaway(scorer, config, forecasts, c) {
+            // Beyond its size, the value may be the poses' own (`Trade::stands`): told at the forecast as a
+            // fit's is told at the fit; it then stays deferred, as a plausible one.
+            let trade = match why.excess() {
+                Some(_) => forecast_trade(scorer, &effects, forecast)?,
+                None => None,
+            };
+            if trade.as_ref().is_some_and(Trade::stands) {
+                later.push(c);
+            } else {
+                still.retain(|e| *e != c);
+                scored.push((c, Scored::ForecastBeyond(why, trade)));
             }
         } else {
             sel.refused.retain(|r| r.effect != c.label());
@@ -292,20 +297,45 @@ fn judge_deferred(
     Ok(later)
 }
 
-/// Why the forecast of candidate `c` is beyond the plausible in every fold, where it is.
-fn forecast_runaway(
+/// What the forecast `f` of a candidate traded its value with, in the first fold it has values on: the
+/// current model at that fold's fit, the candidate at its forecast values ([`Scorer::traded_with`]).
+fn forecast_trade(
+    scorer: &Scorer<'_>,
+    effects: &[Effect],
+    f: &crate::linearised::Forecast,
+) -> Result<Option<Trade>, DiagnoseError> {
+    let Some(fits) = scorer.kept_fold_fits(effects) else { return Ok(None) };
+    let mut with = effects.to_vec();
+    with.push(f.effect);
+    let folds = scorer.folds.iter().zip(fits.iter()).zip(&f.values);
+    for (((train, _), (theta, ..)), values) in folds {
+        if theta.is_empty() || values.len() != f.effect.len() {
+            continue;
+        }
+        let model = scorer.model(&with, train)?;
+        let mut at = model.initial();
+        at[..theta.len()].copy_from_slice(theta);
+        let o = model.offsets()[effects.len()];
+        at[o..o + values.len()].copy_from_slice(values);
+        return scorer.traded_with(&model, &at, train, effects.len());
+    }
+    Ok(None)
+}
+
+/// Why the forecast of candidate `c` is beyond the plausible in every fold, where it is, and the forecast.
+fn forecast_runaway<'f>(
     scorer: &Scorer<'_>,
     config: &Config,
-    forecasts: Option<&[crate::linearised::Forecast]>,
+    forecasts: Option<&'f [crate::linearised::Forecast]>,
     c: Effect,
-) -> Option<Implausible> {
+) -> Option<(Implausible, &'f crate::linearised::Forecast)> {
     let f = forecasts?.iter().find(|f| f.effect == c)?;
     let reasons: Vec<Option<Implausible>> =
         f.values.iter().map(|v| implausible(&scorer.scale, v, c, &config.plausibility)).collect();
     if reasons.is_empty() || reasons.iter().any(Option::is_none) {
         return None;
     }
-    reasons.into_iter().flatten().next()
+    reasons.into_iter().flatten().next().map(|why| (why, f))
 }
 
 /// Each candidate of `list` beside `effects`, scored on the selection's folds (in parallel).
@@ -348,7 +378,9 @@ fn keep_scored(
     for (c, s) in scored {
         match s {
             Scored::AddsNothing(reason) => sel.skip(c, reason),
-            Scored::ForecastBeyond(why) => refuse(sel, c, (&why, None), Judged::ForecastOnEveryFold, resting),
+            Scored::ForecastBeyond(why, trade) => {
+                refuse(sel, c, (&why, trade.as_ref()), Judged::ForecastOnEveryFold, resting)
+            }
             Scored::Candidate(s) => match &s.runaway {
                 Some(why) => refuse(sel, c, (why, s.trade.as_ref()), Judged::FittedOnEveryFold, resting),
                 None if s.unsettled => sel.refused.push(unsettled(c)),

@@ -37,7 +37,8 @@ pub(crate) enum Scored {
     /// It adds nothing identifiable to the model (the reason names the block a parameter duplicates).
     AddsNothing(String),
     /// Not fitted: its forecast on every fold is beyond the plausible, why ([`crate::linearised`]).
-    ForecastBeyond(Implausible),
+    /// With what the forecast traded a value beyond its size, where it did.
+    ForecastBeyond(Implausible, Option<Trade>),
 }
 
 /// An effect's step in the additive table: the selection's held-out RMS before and after it joined
