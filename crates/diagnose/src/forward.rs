@@ -198,15 +198,27 @@ fn score_round(
     let (mut scored, first, deferred, forecast_gain) = match &forecasts {
         Some(f) => {
             let passing = crate::linearised::passing(f, &sel.errors, config.gate_standard_errors, &scorer.blocks);
-            // The best forecast fitted first; its fitted gain sets which others are within reach.
-            let mut scored = score_all(&passing.iter().take(1).map(|f| f.effect).collect::<Vec<_>>())?;
-            let reference = match (scored.first(), passing.first()) {
-                (Some((_, Scored::Candidate(c))), _) if c.runaway.is_none() && !c.unsettled => {
-                    current - c.stats.heldout_rms_mm
+            // The best forecast fitted first; its fitted gain sets which others are within reach. One the
+            // fit refuses (beyond the plausible on every fold, never settling) cannot be the step's choice
+            // and sets nothing: the next best is fitted, until one stands (an elastic torso's own lateral
+            // compliance, refused as traded with its bend, had set a reach that left out the link row the
+            // step then lacked, and the selection stopped a step short).
+            let mut scored = Vec::new();
+            let mut reference = 0.0;
+            for lead in &passing {
+                let lead_scored = score_all(&[lead.effect])?;
+                let stands = match lead_scored.first() {
+                    Some((_, Scored::Candidate(c))) if c.runaway.is_none() && !c.unsettled => {
+                        reference = current - c.stats.heldout_rms_mm;
+                        true
+                    }
+                    _ => false,
+                };
+                scored.extend(lead_scored);
+                if stands {
+                    break;
                 }
-                (_, Some(lead)) => current - lead.stats.heldout_rms_mm,
-                _ => 0.0,
-            };
+            }
             let reach = crate::linearised::in_reach(&passing, current, reference, config.parsimony);
             let rest: Vec<Effect> = reach.iter().copied().filter(|c| !scored.iter().any(|(s, _)| s == c)).collect();
             scored.extend(score_all(&rest)?);
