@@ -130,6 +130,68 @@ pub fn branch_load_basis_into(
     Ok(())
 }
 
+/// How many functions [`branch_lateral_basis_into`] gives for `branch` and joint `joint`: twice
+/// [`branch_load_basis_len`]'s — one set along each of the joint's two lateral directions.
+pub fn branch_lateral_basis_len(chain: &Chain, branch: &Branch, joint: usize) -> usize {
+    2 * branch_load_basis_len(chain, branch, joint)
+}
+
+/// The functions of the measured chain's joints `q` and the branch's `branch_q` whose weighted sums are
+/// the gravity moments across revolute joint `joint`'s axis of any masses on `branch`'s links, along the
+/// joint's two lateral directions `uₖ` ([`crate::lateral_directions`]), into `out` (length
+/// [`branch_lateral_basis_len`]; the first half along `u₁`, the second along `u₂`) — what a bearing
+/// tilts under when a second arm hangs beyond it. [`branch_load_basis_into`]'s derivation with
+/// `w = d × uₖ` for `d × aⱼ`, as [`crate::lateral_load_basis_into`] follows the chain's own; the terms of
+/// the branch's positions fold into that function's, used beside it.
+pub fn branch_lateral_basis_into(
+    chain: &Chain,
+    branch: &Branch,
+    q: &[f64],
+    branch_q: &[f64],
+    down: &Unit<Vector3<f64>>,
+    joint: usize,
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
+    out.clear();
+    if branch_lateral_basis_len(chain, branch, joint) == 0 {
+        return Ok(());
+    }
+    if branch_q.len() != branch.joints.len() {
+        return Err(ChainError::WrongJointCount { expected: branch.joints.len(), got: branch_q.len() });
+    }
+    if let Some(i) = branch_q.iter().position(|v| !v.is_finite()) {
+        return Err(ChainError::NonFiniteJoint { joint: i + 1 });
+    }
+    let directions = perpendiculars(&chain.joints()[joint].axis);
+    let mut w = [Vector3::zeros(); 2];
+    let mut hung_from = Matrix3::identity();
+    chain.visit_joint_frames(q, None, |i, parent: &Matrix3<f64>, rot: &Matrix3<f64>, _origin| {
+        if i == joint {
+            for (wk, u) in w.iter_mut().zip(&directions) {
+                *wk = down.cross(&(parent * u));
+            }
+        }
+        if i + 1 == branch.link {
+            hung_from = *rot;
+        }
+    })?;
+    for w in w {
+        let mut rot = hung_from;
+        for (b, &qb) in branch.joints.iter().zip(branch_q) {
+            match b.kind {
+                JointKind::Revolute => {
+                    rot *= Rotation3::from_axis_angle(&b.axis, qb + b.zero).into_inner();
+                    let rw = rot.transpose() * w;
+                    let [e1, e2] = perpendiculars(&b.axis);
+                    out.extend([e1.dot(&rw), e2.dot(&rw)]);
+                }
+                JointKind::Prismatic => out.push(qb * (rot * b.axis.into_inner()).dot(&w)),
+            }
+        }
+    }
+    Ok(())
+}
+
 /// `branches` checked against `chain`: each named, on a link from 0 to the joint count, with at least
 /// one joint, every joint name (the measured chain's and the branches') used once.
 pub(crate) fn check_branches(chain: &Chain, branches: &[Branch]) -> Result<(), ChainError> {
@@ -231,6 +293,62 @@ mod tests {
         assert_eq!(extra.len(), branch_load_basis_len(&chain, &arm, 1));
         assert!(residual(&rows_all) < 1e-9, "{}", residual(&rows_all));
         assert!(residual(&rows_own) > 0.05, "the chain's own functions alone: {}", residual(&rows_own));
+    }
+
+    /// The moments across the torso's bend of masses on the branch's links alone, computed by
+    /// [`crate::lateral_gravity_moments_into`] on the serial chain along the branch's path: along each
+    /// lateral direction, in the span of the chain's own lateral functions and the branch's (residual at
+    /// rounding), and not in the chain's alone.
+    #[test]
+    fn a_branchs_lateral_moments_lie_in_the_span_of_its_functions() {
+        let (chain, arm) = torso_and_arm();
+        let path: Vec<Joint> = chain.joints()[..arm.link].iter().cloned().chain(arm.joints.iter().cloned()).collect();
+        let along = Chain::new(FixedRow::identity(), path, FixedRow::identity()).unwrap();
+        let masses = vec![
+            None,
+            None,
+            Some(LinkMass { mass_kg: 4.0, com_mm: Vector3::new(10.0, 40.0, -20.0) }),
+            Some(LinkMass { mass_kg: 2.5, com_mm: Vector3::new(0.0, 5.0, -150.0) }),
+            Some(LinkMass { mass_kg: 1.5, com_mm: Vector3::new(30.0, 0.0, -120.0) }),
+        ];
+        let down = -Vector3::z_axis();
+        let (mut own, mut extra, mut moments) = (Vec::new(), Vec::new(), Vec::new());
+        let mut rows = [Vec::new(), Vec::new()];
+        let mut rows_own = [Vec::new(), Vec::new()];
+        let mut moment = [Vec::new(), Vec::new()];
+        let mut state = 11_u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 3.0 - 1.5
+        };
+        for _ in 0..80 {
+            let q = [next(), next(), next()];
+            let bq = [next(), next(), next()];
+            crate::lateral_load_basis_into(&chain, &q, None, &down, 1, &mut own).unwrap();
+            branch_lateral_basis_into(&chain, &arm, &q, &bq, &down, 1, &mut extra).unwrap();
+            let path_q = [q[0], q[1], bq[0], bq[1], bq[2]];
+            crate::lateral_gravity_moments_into(&along, &masses, &path_q, None, &down, &mut moments).unwrap();
+            let (h, e) = (own.len() / 2, extra.len() / 2);
+            for k in 0..2 {
+                rows_own[k].push(own[k * h..(k + 1) * h].to_vec());
+                rows[k].push(
+                    own[k * h..(k + 1) * h].iter().chain(&extra[k * e..(k + 1) * e]).copied().collect::<Vec<_>>(),
+                );
+                moment[k].push(moments[1][k]);
+            }
+        }
+        let residual = |rows: &[Vec<f64>], b: &[f64]| {
+            let a = DMatrix::from_fn(rows.len(), rows[0].len(), |r, c| rows[r][c]);
+            let b = DVector::from_vec(b.to_vec());
+            let x = a.clone().svd(true, true).solve(&b, 1e-12).unwrap();
+            (a * x - &b).norm() / b.norm()
+        };
+        assert_eq!(extra.len(), branch_lateral_basis_len(&chain, &arm, 1));
+        // The bend's axis is horizontal and the torso turns about the vertical: its second lateral direction
+        // stays vertical, along which gravity has no moment, and the functions vanish with it.
+        assert!(moment[1].iter().chain(rows[1].iter().flatten()).all(|v| v.abs() < 1e-9));
+        assert!(residual(&rows[0], &moment[0]) < 1e-9, "{}", residual(&rows[0], &moment[0]));
+        assert!(residual(&rows_own[0], &moment[0]) > 0.05, "{}", residual(&rows_own[0], &moment[0]));
     }
 
     /// A branch carried by no revolute joint below it has no functions; a joint above its link neither.

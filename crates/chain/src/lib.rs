@@ -21,7 +21,9 @@ mod trig;
 pub mod units;
 
 pub use bending::{lateral_directions, lateral_gravity_moments_into};
-pub use branches::{Branch, branch_load_basis_into, branch_load_basis_len};
+pub use branches::{
+    Branch, branch_lateral_basis_into, branch_lateral_basis_len, branch_load_basis_into, branch_load_basis_len,
+};
 pub use chain::{
     Chain, FixedRow, Joint, JointKind, JointLimits, ParameterLayout, ParameterRows, PoseAndJacobian, sin_cos,
 };

@@ -144,6 +144,10 @@ pub struct BranchLoad {
     pub branch: String,
     /// The weights, radians.
     pub weights: Vec<f64>,
+    /// Whether the load tilts the joint's row across its axis — a bearing under the branch's moment:
+    /// [`lumped_lateral_row_error`]'s one set over [`thermokin_chain::branch_lateral_basis_into`]'s
+    /// functions — rather than turning the joint about it.
+    pub lateral: bool,
 }
 
 /// The joint values of `branch` in `state`: each joint's reading by its name (or `temp_NAME`), converted
@@ -546,7 +550,11 @@ impl RobotModel {
                 let known: Vec<&str> = self.robot.branches().iter().map(|b| b.name.as_str()).collect();
                 return bad(format!("the robot has no branch `{}` (its branches: {})", l.branch, known.join(", ")));
             };
-            let expected = thermokin_chain::branch_load_basis_len(chain, branch, l.joint);
+            let expected = if l.lateral {
+                thermokin_chain::branch_lateral_basis_len(chain, branch, l.joint)
+            } else {
+                thermokin_chain::branch_load_basis_len(chain, branch, l.joint)
+            };
             if expected == 0 {
                 return bad(format!(
                     "branch `{}` loads only the revolute joints below its link {}",
@@ -696,7 +704,7 @@ impl RobotModel {
     pub fn corrects_joints(&self) -> bool {
         self.joints.iter().any(JointCorrection::moves_joint)
             || self.gravity_loads.iter().any(|l| !l.is_empty())
-            || !self.branch_loads.is_empty()
+            || self.branch_loads.iter().any(|l| !l.lateral)
     }
 
     /// `true` when some joint has a backlash: its value then depends on the direction it last moved in
@@ -708,7 +716,9 @@ impl RobotModel {
     /// `true` when some joint's row tilts with the configuration (a lateral compliance, a slide's
     /// straightness): the chain in force then depends on the joint values ([`RobotModel::chain_at_joints`]).
     pub fn bends(&self) -> bool {
-        self.joints.iter().any(JointCorrection::bends) || self.lateral_loads.iter().any(|l| !l.is_empty())
+        self.joints.iter().any(JointCorrection::bends)
+            || self.lateral_loads.iter().any(|l| !l.is_empty())
+            || self.branch_loads.iter().any(|l| l.lateral)
     }
 
     /// The drift rows.
@@ -828,12 +838,8 @@ impl RobotModel {
                 out.push(format!("joint {} ({}): gravity compliance without masses", j + 1, names[j]));
             }
             for l in self.branch_loads.iter().filter(|l| l.joint == j) {
-                out.push(format!(
-                    "joint {} ({}): the load of branch `{}` on its compliance",
-                    j + 1,
-                    names[j],
-                    l.branch
-                ));
+                let on = if l.lateral { "lateral compliance" } else { "compliance" };
+                out.push(format!("joint {} ({}): the load of branch `{}` on its {on}", j + 1, names[j], l.branch));
             }
             if c.lateral != [0.0; 6] {
                 out.push(format!("joint {} ({}): lateral compliance", j + 1, names[j]));
@@ -915,6 +921,18 @@ impl RobotModel {
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
         }
+        for l in self.branch_loads.iter().filter(|l| l.lateral) {
+            let Some(branch) = self.robot.branches().iter().find(|b| b.name == l.branch) else { continue };
+            let branch_q = branch_joint_values(branch, state)?;
+            let plain = self.robot.chain();
+            let (j, down) = (l.joint, &self.down);
+            thermokin_chain::branch_lateral_basis_into(plain, branch, commanded, &branch_q, down, j, &mut basis)?;
+            let Some(directions) = thermokin_chain::lateral_directions(plain, j) else { continue };
+            let axis = plain.joints()[j].axis.into_inner();
+            let bend = lumped_lateral_row_error(&basis, &l.weights, &directions, &axis, commanded[j]);
+            let row = chain.joints()[j].error.add(&bend);
+            chain.set_joint_error(j, row)?;
+        }
         Ok(chain)
     }
 
@@ -979,7 +997,7 @@ impl RobotModel {
             thermokin_chain::gravity_load_basis_into(chain, commanded, None, &self.down, j, &mut basis)?;
             actual[j] += basis.iter().zip(weights).map(|(f, w)| f * w).sum::<f64>();
         }
-        for l in &self.branch_loads {
+        for l in self.branch_loads.iter().filter(|l| !l.lateral) {
             let branch = self.robot.branches().iter().find(|b| b.name == l.branch);
             let Some(branch) = branch else { continue };
             let branch_q = branch_joint_values(branch, state)?;

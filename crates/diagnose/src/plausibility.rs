@@ -53,8 +53,9 @@ pub(crate) struct RobotScale {
     pub(crate) loads: Vec<LumpedLoads>,
     /// For each branch the data log (its joints' columns, [`thermokin_chain::Dataset::branch_columns`]) and
     /// each joint below it: the branch's load functions at every pose
-    /// ([`thermokin_chain::branch_load_basis_into`]), pose after pose — `(joint, branch, per pose, functions)`.
-    pub(crate) branch_loads: Vec<(usize, usize, usize, Vec<f64>)>,
+    /// ([`thermokin_chain::branch_load_basis_into`]; across the joint, [`thermokin_chain::branch_lateral_basis_into`]),
+    /// pose after pose — `(joint, branch, across, per pose, functions)`.
+    pub(crate) branch_loads: Vec<BranchFunctions>,
 }
 
 /// How far `Σ θ_b f_b` changes over the poses of `values` (`len` functions per pose; largest less
@@ -65,15 +66,22 @@ fn weighted_change(values: &[f64], len: usize, weights: &[f64]) -> f64 {
     if lo <= hi { hi - lo } else { 0.0 }
 }
 
-/// The load functions of each branch `data` logs on each revolute joint below it, at every pose
-/// ([`RobotScale::branch_loads`]).
-fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<(usize, usize, usize, Vec<f64>)> {
+/// A branch's load functions on one joint over the data: `(joint, branch, across the joint, functions per
+/// pose, the functions pose after pose)`.
+pub(crate) type BranchFunctions = (usize, usize, bool, usize, Vec<f64>);
+
+/// The load functions of each branch `data` logs on each revolute joint below it, about the joint and
+/// across it, at every pose ([`RobotScale::branch_loads`]).
+fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<BranchFunctions> {
     let (chain, down) = (robot.chain(), -nalgebra::Vector3::z_axis());
     let mut out = Vec::new();
     for columns in &data.branch_columns {
         let Some(branch) = robot.branches().get(columns.branch) else { continue };
-        for j in 0..chain.dof() {
-            let len = thermokin_chain::branch_load_basis_len(chain, branch, j);
+        for (j, across) in (0..chain.dof()).flat_map(|j| [(j, false), (j, true)]) {
+            let len = match across {
+                false => thermokin_chain::branch_load_basis_len(chain, branch, j),
+                true => thermokin_chain::branch_lateral_basis_len(chain, branch, j),
+            };
             if len == 0 {
                 continue;
             }
@@ -81,11 +89,15 @@ fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<(usize, usize, usize, V
             for (m, r) in data.measurements.iter().zip(&data.sensor_values) {
                 let Some(readings) = r.get(columns.column..columns.column + columns.len) else { continue };
                 let bq: Vec<f64> = readings.iter().enumerate().map(|(i, v)| branch.joint_value(i, *v)).collect();
-                if thermokin_chain::branch_load_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis).is_ok() {
+                let found = match across {
+                    false => thermokin_chain::branch_load_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
+                    true => thermokin_chain::branch_lateral_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
+                };
+                if found.is_ok() {
                     values.extend_from_slice(&basis);
                 }
             }
-            out.push((j, columns.branch, len, values));
+            out.push((j, columns.branch, across, len, values));
         }
     }
     out
@@ -498,7 +510,9 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
             let what = "the change of its deflection under gravity over the data";
             over(what, deg(deflection), deflection * lever, lever, "°")
         }
-        Effect::BranchLoad(j, _, at) => branch_load_bound(scale, v, j.index(), at.branch as usize, &over),
+        Effect::BranchLoad(j, _, at) => {
+            branch_load_bound(scale, v, (j.index(), at.branch as usize, at.lateral), lever_of(j), &over)
+        }
         Effect::JointOffset(j)
         | Effect::Backlash(j)
         | Effect::JointScale(j)
@@ -509,10 +523,30 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
 }
 
 /// A branch's load on joint `j` ([`Effect::BranchLoad`]): how far it moves the joint over the data's
-/// poses, at the joint's axis lever.
-fn branch_load_bound(scale: &RobotScale, v: &[f64], j: usize, branch: usize, over: &Over<'_>) -> Option<Implausible> {
+/// poses, at the joint's axis lever — or, across the joint, how far it tilts the row (the two directions'
+/// changes together), at the row's lever `row_lever`.
+fn branch_load_bound(
+    scale: &RobotScale,
+    v: &[f64],
+    (j, branch, across): (usize, usize, bool),
+    row_lever: f64,
+    over: &Over<'_>,
+) -> Option<Implausible> {
+    let (.., len, values) = scale.branch_loads.iter().find(|(k, b, a, ..)| *k == j && *b == branch && *a == across)?;
+    if across {
+        // The tilts along the two directions, each a half of the functions and the weights.
+        let half = (*len / 2).max(1);
+        let change = |k: usize| {
+            let dot =
+                |f: &[f64]| f[k * half..(k + 1) * half].iter().zip(&v[k * half..]).map(|(f, w)| f * w).sum::<f64>();
+            let (lo, hi) = crate::stats::span(values.chunks(*len).map(dot));
+            if lo <= hi { hi - lo } else { 0.0 }
+        };
+        let tilt = change(0).hypot(change(1));
+        let what = "the change of its tilt under the branch's load over the data";
+        return over(what, units::degrees(tilt), tilt * row_lever, row_lever, "°");
+    }
     let lever = scale.axis_lever_mm[j].max(1.0);
-    let (.., len, values) = scale.branch_loads.iter().find(|(k, b, ..)| *k == j && *b == branch)?;
     let deflection = weighted_change(values, *len, v);
     let what = "the change of the joint under the branch's load over the data";
     over(what, units::degrees(deflection), deflection * lever, lever, "°")

@@ -284,7 +284,7 @@ impl Setup {
         if !data.temperature_names.is_empty() {
             c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
         }
-        c.extend(sensor_candidates(robot, data, &joints));
+        c.extend(sensor_candidates(robot, data, &joints, self.lateral));
         Ok(c)
     }
 }
@@ -293,14 +293,15 @@ impl Setup {
 /// joint its link carries, with no gain to fit (a sensor on the last link carries no joint's row: nothing
 /// of it); any other sensor column that varies driving any row (a column's tilt, a base's, a load's
 /// bending).
-fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex]) -> Vec<Effect> {
+fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex], lateral: Lateral) -> Vec<Effect> {
     let mut c = Vec::new();
     let columns = |t: &thermokin_chain::TiltSensor| if t.below.is_some() { 6 } else { 3 };
     let declared = |k: usize| {
         data.tilt_sensors.iter().any(|t| (t.column..t.column + columns(t)).contains(&k))
             || data.branch_columns.iter().any(|b| b.holds(k))
     };
-    // A branch the set logs loads every revolute joint below its link (a torso carrying the other arm).
+    // A branch the set logs loads every revolute joint below its link (a torso carrying the other arm) —
+    // about its axis, and, with every joint's lateral compliance offered, across it.
     for b in &data.branch_columns {
         let (Some(branch), Some(first), Ok(index)) =
             (robot.branches().get(b.branch), SensorId::of(data, b.column), u8::try_from(b.branch))
@@ -308,9 +309,13 @@ fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex]) -> Ve
             continue;
         };
         for &j in joints {
-            let n = thermokin_chain::branch_load_basis_len(robot.chain(), branch, j.index());
-            if let Ok(count) = u8::try_from(n).map_err(|_| ()).and_then(|n| if n > 0 { Ok(n) } else { Err(()) }) {
-                c.push(Effect::BranchLoad(j, first, crate::effect::BranchAt { branch: index, count }));
+            let about = thermokin_chain::branch_load_basis_len(robot.chain(), branch, j.index());
+            let across = thermokin_chain::branch_lateral_basis_len(robot.chain(), branch, j.index());
+            let kinds = [(about, false), (if lateral == Lateral::Joints { across } else { 0 }, true)];
+            for (n, lateral) in kinds {
+                if let Ok(count) = u8::try_from(n).map_err(|_| ()).and_then(|n| if n > 0 { Ok(n) } else { Err(()) }) {
+                    c.push(Effect::BranchLoad(j, first, crate::effect::BranchAt { branch: index, count, lateral }));
+                }
             }
         }
     }

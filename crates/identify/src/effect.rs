@@ -253,6 +253,10 @@ pub struct BranchAt {
     pub branch: u8,
     /// How many weights the effect takes.
     pub count: u8,
+    /// Whether it tilts the joint's row across its axis (a bearing under the branch's moment: the
+    /// functions of [`thermokin_chain::branch_lateral_basis_into`], a half per lateral direction, beside
+    /// the joint's own lateral compliance without masses) rather than turning the joint about it.
+    pub lateral: bool,
 }
 
 /// What a measured tilt is taken over ([`Effect::Tilt`]).
@@ -484,6 +488,7 @@ impl Effect {
             Effect::FrameStep(_) => "frame_step",
             Effect::SensorDrift(..) => "sensor_drift",
             Effect::Tilt(..) => "tilt",
+            Effect::BranchLoad(.., at) if at.lateral => "lateral_branch_load",
             Effect::BranchLoad(..) => "branch_load",
         }
     }
@@ -498,7 +503,8 @@ impl Effect {
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
             Effect::BranchLoad(j, s, _) => {
-                return format!("branch_load[{}] (the branch from joint {}, no masses)", j.number(), s.name());
+                let kind = self.kind_name();
+                return format!("{kind}[{}] (the branch from joint {}, no masses)", j.number(), s.name());
             }
             Effect::Tilt(j, s, _) => {
                 // Its columns are `NAME.tilt_x`, …: the sensor's name.
@@ -523,6 +529,12 @@ impl Effect {
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::LumpedCompliance(_, n) => (1..=*n as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
+            Effect::BranchLoad(.., at) if at.lateral => {
+                let half = (at.count as usize / 2).max(1);
+                (0..at.count as usize)
+                    .map(|b| format!("{prefix}.tilt{}_load{:02}_deg", b / half + 1, b % half + 1))
+                    .collect()
+            }
             Effect::BranchLoad(.., at) => (1..=at.count as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
             Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
             Effect::LateralCompliance(_, n) => [

@@ -369,6 +369,7 @@ impl Model {
                 | Effect::ThermalDrift(j, _)
                 | Effect::SensorDrift(j, _)
                 | Effect::Tilt(j, ..)
+                | Effect::BranchLoad(j, _, crate::BranchAt { lateral: true, .. })
                 | Effect::LateralCompliance(j, _)
                 | Effect::LumpedLateralCompliance(j, ..)
                 | Effect::Straightness(j) => rows.joints[j.index()] = true,
@@ -412,6 +413,7 @@ fn branch_load(
         joint: j.index(),
         branch: robot.branches().get(at.branch as usize).map(|b| b.name.clone()).unwrap_or_default(),
         weights: theta[..at.count as usize].to_vec(),
+        lateral: at.lateral,
     }
 }
 

@@ -240,7 +240,18 @@ impl Model {
                 Effect::BranchLoad(j, first, at) => {
                     let (j, n) = (j.index(), at.count as usize);
                     branch_basis(cached, robot, at, first.index(), &m.q, inputs.sensors, j, o)?;
-                    q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
+                    if at.lateral {
+                        // The bearing's tilt under the branch's moment, as a lateral compliance's one set.
+                        let chain = robot.chain();
+                        let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
+                        let axis = chain.joints()[j].axis.into_inner();
+                        let basis = &cached.loads[o..o + n];
+                        let row =
+                            thermokin_deform::lumped_lateral_row_error(basis, &theta[o..o + n], &dirs, &axis, m.q[j]);
+                        add_to_row(&mut drift_rows, j, row);
+                    } else {
+                        q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
+                    }
                 }
                 Effect::ComplianceCoupling(j) => {
                     let j = j.index();
@@ -453,6 +464,9 @@ impl Model {
                     let scale = if chain.joints()[j].kind == JointKind::Revolute { cached.torques[j] } else { 0.0 };
                     copy(o, layout.zero(j), scale);
                 }
+                Effect::BranchLoad(j, _, BranchAt { lateral: true, .. }) => {
+                    bend_columns(*e, chain, pj, &layout, m.q[j.index()], cached, o, jac);
+                }
                 Effect::LumpedCompliance(j, n) | Effect::BranchLoad(j, _, BranchAt { count: n, .. }) => {
                     // ∂p/∂θ_b = ∂p/∂zero_j · f_b(q).
                     let zero = layout.zero(j.index());
@@ -534,17 +548,25 @@ fn bend_columns(
     let axis = chain.joints()[j].axis.into_inner();
     let row = layout.joint(j);
     let along = |r: usize, at: usize, v: &Vector3<f64>| (0..3).map(|c| pj[(r, row + at + c)] * v[c]).sum::<f64>();
+    // A lumped lateral load's weights and sets: a lateral compliance without masses', or a branch's load
+    // across the joint (a bearing's one set).
+    let lumped = match e {
+        Effect::LumpedLateralCompliance(_, n, support) => Some((n as usize, support.sets())),
+        Effect::BranchLoad(_, _, at) if at.lateral => Some((at.count as usize, 1)),
+        _ => None,
+    };
     match e {
-        Effect::LumpedLateralCompliance(_, n, support) => {
+        _ if lumped.is_some() => {
+            let (n, sets) = lumped.unwrap_or((0, 1));
             // Per set s, direction k, function b: the column of c (s = 0), c′ (1) or s (2) above at unit
             // moment, times fₖ,b(q) — ∂p/∂θ = ∂p/∂c · fₖ,b.
-            let half = n as usize / 2 / support.sets();
+            let half = n / 2 / sets;
             for (k, dir) in dirs.iter().enumerate() {
                 let across = dir.cross(&axis);
                 for r in 0..6 {
                     let (turn, shift) = (along(r, 3, dir), along(r, 0, &across));
                     let per_set = [turn, turn * d - shift * 0.5 * d * d, shift];
-                    for (s, v) in per_set.iter().enumerate().take(support.sets()) {
+                    for (s, v) in per_set.iter().enumerate().take(sets) {
                         for b in 0..half {
                             let col = o + s * 2 * half + k * half + b;
                             jac[(r, col)] = v * cached.loads[col];
@@ -642,7 +664,11 @@ fn branch_basis(
     };
     cached.branch_q.clear();
     cached.branch_q.extend(readings.iter().enumerate().map(|(i, r)| branch.joint_value(i, *r)));
-    thermokin_chain::branch_load_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
+    if at.lateral {
+        thermokin_chain::branch_lateral_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
+    } else {
+        thermokin_chain::branch_load_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
+    }
     let used = cached.basis.len().min(n);
     cached.loads[o..o + used].copy_from_slice(&cached.basis[..used]);
     Ok(())

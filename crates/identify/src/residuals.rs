@@ -219,7 +219,7 @@ mod tests {
         data.sensor_values = (0..data.len()).map(|_| vec![60.0 * gauss(&mut rng), 40.0 * gauss(&mut rng)]).collect();
         data.branch_columns = vec![thermokin_chain::BranchColumns { branch: 0, column: 0, len: 2 }];
         let joint = JointIndex::of(&robot, 1).unwrap();
-        let at = crate::BranchAt { branch: 0, count: 4 };
+        let at = crate::BranchAt { branch: 0, count: 4, lateral: false };
         let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
         let model =
             Model::new(&robot, vec![Effect::named(&robot, "joint_compliance", Some(1)).unwrap(), load]).unwrap();
@@ -227,6 +227,40 @@ mod tests {
         let theta: Vec<f64> = (0..model.len()).map(|k| 2e-4 * ((k as f64 * 0.9).cos() + 0.2)).collect();
         let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
         for k in model.len() - 4..model.len() {
+            assert!(jac.col(k).norm_max() > 1e-3, "column {k} is zero");
+        }
+    }
+
+    /// The analytic Jacobian of a branch's load across a joint (a bearing tilting under the branch's
+    /// moment: `BranchAt::lateral`, the same arm on the IRB 140's first joint, beside the joint's own lateral
+    /// compliance without masses) against central differences; every weight moves the poses.
+    #[test]
+    fn a_lateral_branch_loads_jacobian_is_the_finite_differences() {
+        let branch = thermokin_chain::Branch {
+            name: "second_arm".into(),
+            link: 2,
+            joints: vec![
+                thermokin_chain::Joint::revolute("b1", Vector3::new(0.0, 200.0, 100.0), Vector3::y_axis()),
+                thermokin_chain::Joint::revolute("b2", Vector3::new(0.0, 0.0, -300.0), Vector3::x_axis()),
+            ],
+        };
+        let robot = Robot::new("IRB 140", irb140_table9()).with_branches(vec![branch]).unwrap();
+        let mut data = eight_poses(11);
+        let mut rng = ChaCha8Rng::seed_from_u64(12);
+        data.sensor_names = vec!["b1".into(), "b2".into()];
+        data.sensor_values = (0..data.len()).map(|_| vec![60.0 * gauss(&mut rng), 40.0 * gauss(&mut rng)]).collect();
+        data.branch_columns = vec![thermokin_chain::BranchColumns { branch: 0, column: 0, len: 2 }];
+        let joint = JointIndex::of(&robot, 0).unwrap();
+        let count = thermokin_chain::branch_lateral_basis_len(robot.chain(), &robot.branches()[0], 0) as u8;
+        assert_eq!(count, 8);
+        let at = crate::BranchAt { branch: 0, count, lateral: true };
+        let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
+        let own = Effect::named(&robot, "lateral_compliance", Some(0)).unwrap();
+        let model = Model::new(&robot, vec![own, load]).unwrap();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let theta: Vec<f64> = (0..model.len()).map(|k| 2e-4 * ((k as f64 * 0.9).cos() + 0.2)).collect();
+        let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
+        for k in model.len() - count as usize..model.len() {
             assert!(jac.col(k).norm_max() > 1e-3, "column {k} is zero");
         }
     }

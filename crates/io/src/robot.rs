@@ -91,13 +91,17 @@ struct BranchJointSpec {
 }
 
 /// `[[branch_load]]`: branch `branch`'s load on joint `joint`'s (1-based) gravity compliance, the
-/// weights of `thermokin_chain::branch_load_basis_into`'s functions in degrees.
+/// weights of `thermokin_chain::branch_load_basis_into`'s functions in degrees — or, with `lateral =
+/// true`, on its lateral compliance (its bearing's tilt across the axis), the weights of
+/// `thermokin_chain::branch_lateral_basis_into`'s.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BranchLoadSpec {
     joint: usize,
     branch: String,
     load_deg: Vec<f64>,
+    #[serde(default)]
+    lateral: bool,
 }
 
 /// `[[accelerometer]]`: a sensor on a link, its columns `NAME_x`, `NAME_y`, `NAME_z`.
@@ -628,6 +632,7 @@ fn with_branch_loads(path: &Path, text: &str, file: &RobotFile, model: RobotMode
             joint: spec.joint - 1,
             branch: spec.branch.clone(),
             weights: spec.load_deg.iter().map(|&d| units::radians(d)).collect(),
+            lateral: spec.lateral,
         };
         branch_loads.push(load);
         let checked = model.clone().with_branch_loads(branch_loads[branch_loads.len() - 1..].to_vec());
@@ -1058,8 +1063,13 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
     }
     for l in model.branch_loads() {
         let deg: Vec<String> = l.weights.iter().map(|&w| format!("{:e}", units::degrees(w))).collect();
+        let (on, lateral) = if l.lateral {
+            ("lateral compliance (its bearing's tilt)", "lateral = true\n")
+        } else {
+            ("compliance", "")
+        };
         s.push_str(&format!(
-            "\n# The load of branch {b:?} on joint {j}'s compliance, without masses: the weights of its load functions (give the branch's joint positions at run time).\n[[branch_load]]\njoint = {j}\nbranch = {b:?}\nload_deg = [{}]\n",
+            "\n# The load of branch {b:?} on joint {j}'s {on}, without masses: the weights of its load functions (give the branch's joint positions at run time).\n[[branch_load]]\njoint = {j}\nbranch = {b:?}\n{lateral}load_deg = [{}]\n",
             deg.join(", "),
             b = l.branch,
             j = l.joint + 1

@@ -119,3 +119,32 @@ fn an_elastic_torsos_sag_beyond_an_arms_bounds_is_what_the_poses_show() {
     assert!(branch.0 < 1.25 * noise_mean && branch.1 < 1.25 * noise_mean, "{branch:?}");
     assert!(drivers.1 <= none.1 && none.1 > 2.0 * branch.1, "{drivers:?} {none:?} {branch:?}");
 }
+
+/// The elastic torso's bearing tilting under both arms (3e-4 rad per N·m, up to ~0.5°): with every
+/// joint's lateral compliance offered (`--lateral joints`), the left arm's joints give the moment of what
+/// hangs from the torso across its turning axis too — `lateral_branch_load[1]` is chosen and the other
+/// session is reached near the noise; the robot the diagnosis writes, given the left arm's joints, is the
+/// model it scored.
+#[test]
+fn an_elastic_torsos_bearing_tilts_under_the_other_arm_it_logs() {
+    let elastic = thermokin_testdata::Elastic { joints: 5.0, torso_bearing: 3e-4 };
+    let noise_mm = 0.5;
+    let train = thermokin_testdata::elastic_torso_session(400, 5941, noise_mm, elastic);
+    let other = thermokin_testdata::elastic_torso_session(100, 5942, noise_mm, elastic);
+    let config = Config {
+        frame: FrameMode::Tracker,
+        noise_mm: Some(noise_mm),
+        lateral: thermokin_identify::Lateral::Joints,
+        ..Config::default()
+    };
+    let two = robot(true);
+    let report = diagnose(&two, &train, Some(&other), &config).unwrap();
+    let chosen: Vec<&str> = report.effects.iter().map(|e| e.label.as_str()).collect();
+    let h = report.holdout.as_ref().unwrap();
+    let nested = report.nested.as_ref().unwrap().selected.heldout_mean_mm;
+    eprintln!("{chosen:?}; nested {nested:.4}, other session refitted {:.4} mm mean", h.selected.heldout_mean_mm);
+    assert!(chosen.iter().any(|c| c.starts_with("lateral_branch_load[1]")), "{chosen:?}");
+    let noise_mean = noise_mm * 1.595_769_121_6;
+    assert!(h.selected.heldout_mean_mm < 1.25 * noise_mean && nested < 1.25 * noise_mean, "{nested}");
+    crate::tracker::export_given_the_columns(&two, &report, &other, "lateral = true");
+}
