@@ -154,7 +154,7 @@ thermokin_chain::choices!(
         ("slides", "a column's bending under what it carries (with the file's masses)", Lateral::Slides),
         (
             "joints",
-            "every joint's bearing tilting under the moment across it too (loads lumped without masses)",
+            "every joint's bearing tilting under the moment across it too (loads lumped without masses; a logged branch's moment too)",
             Lateral::Joints
         ),
     ]
