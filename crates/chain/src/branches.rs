@@ -94,40 +94,7 @@ pub fn branch_load_basis_into(
     joint: usize,
     out: &mut Vec<f64>,
 ) -> Result<(), ChainError> {
-    out.clear();
-    if branch_load_basis_len(chain, branch, joint) == 0 {
-        return Ok(());
-    }
-    if branch_q.len() != branch.joints.len() {
-        return Err(ChainError::WrongJointCount { expected: branch.joints.len(), got: branch_q.len() });
-    }
-    if let Some(i) = branch_q.iter().position(|v| !v.is_finite()) {
-        return Err(ChainError::NonFiniteJoint { joint: i + 1 });
-    }
-    let joints = chain.joints();
-    let mut w = Vector3::zeros();
-    let mut hung_from = Matrix3::identity();
-    chain.visit_joint_frames(q, None, |i, _parent, rot: &Matrix3<f64>, _origin| {
-        if i == joint {
-            w = down.cross(&(rot * joints[i].axis.into_inner()));
-        }
-        if i + 1 == branch.link {
-            hung_from = *rot;
-        }
-    })?;
-    let mut rot = hung_from;
-    for (b, &qb) in branch.joints.iter().zip(branch_q) {
-        match b.kind {
-            JointKind::Revolute => {
-                rot *= Rotation3::from_axis_angle(&b.axis, qb + b.zero).into_inner();
-                let rw = rot.transpose() * w;
-                let [e1, e2] = perpendiculars(&b.axis);
-                out.extend([e1.dot(&rw), e2.dot(&rw)]);
-            }
-            JointKind::Prismatic => out.push(qb * (rot * b.axis.into_inner()).dot(&w)),
-        }
-    }
-    Ok(())
+    terms_along(chain, branch, (q, branch_q), down, (joint, false), out)
 }
 
 /// How many functions [`branch_lateral_basis_into`] gives for `branch` and joint `joint`: twice
@@ -152,8 +119,23 @@ pub fn branch_lateral_basis_into(
     joint: usize,
     out: &mut Vec<f64>,
 ) -> Result<(), ChainError> {
+    terms_along(chain, branch, (q, branch_q), down, (joint, true), out)
+}
+
+/// The functions of [`branch_load_basis_into`] (`across` false: `w = d × aⱼ`) or
+/// [`branch_lateral_basis_into`] (`across`: `w = d × uₖ` for each lateral direction, one set after the
+/// other) into `out`: per revolute branch joint `eₖ · (R_bᵀ w)` along its two perpendiculars, per slide
+/// its travel times its axis' component along `w`.
+fn terms_along(
+    chain: &Chain,
+    branch: &Branch,
+    (q, branch_q): (&[f64], &[f64]),
+    down: &Unit<Vector3<f64>>,
+    (joint, across): (usize, bool),
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
     out.clear();
-    if branch_lateral_basis_len(chain, branch, joint) == 0 {
+    if branch_load_basis_len(chain, branch, joint) == 0 {
         return Ok(());
     }
     if branch_q.len() != branch.joints.len() {
@@ -162,13 +144,16 @@ pub fn branch_lateral_basis_into(
     if let Some(i) = branch_q.iter().position(|v| !v.is_finite()) {
         return Err(ChainError::NonFiniteJoint { joint: i + 1 });
     }
-    let directions = perpendiculars(&chain.joints()[joint].axis);
-    let mut w = [Vector3::zeros(); 2];
+    let axis = chain.joints()[joint].axis;
+    let directions = perpendiculars(&axis);
+    let mut w: Vec<Vector3<f64>> = Vec::with_capacity(2);
     let mut hung_from = Matrix3::identity();
     chain.visit_joint_frames(q, None, |i, parent: &Matrix3<f64>, rot: &Matrix3<f64>, _origin| {
         if i == joint {
-            for (wk, u) in w.iter_mut().zip(&directions) {
-                *wk = down.cross(&(parent * u));
+            if across {
+                w.extend(directions.iter().map(|u| down.cross(&(parent * u))));
+            } else {
+                w.push(down.cross(&(rot * axis.into_inner())));
             }
         }
         if i + 1 == branch.link {
@@ -248,13 +233,17 @@ mod tests {
         (chain, arm)
     }
 
-    /// The torque about the torso's bend of masses on the branch's links alone, computed independently: by
-    /// [`Robot::gravity_torques`] on the serial chain along the branch's path (the torso's joints, then
-    /// the branch's), masses on the branch's links only. It lies in the span of the measured chain's own
-    /// functions and the branch's (residual at rounding), and not in the span of the chain's alone.
-    #[test]
-    fn a_branchs_gravity_torque_lies_in_the_span_of_its_functions() {
-        let (chain, arm) = torso_and_arm();
+    /// A seeded draw of angles uniform in ±1.5 rad (a linear congruential generator: no dependency).
+    fn uniform(mut state: u64) -> impl FnMut() -> f64 {
+        move || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 3.0 - 1.5
+        }
+    }
+
+    /// The serial chain along the branch's path (the torso's joints, then the branch's) and masses on the
+    /// branch's links only.
+    fn along_the_branch(chain: &Chain, arm: &Branch) -> (Chain, Vec<Option<LinkMass>>) {
         let path: Vec<Joint> = chain.joints()[..arm.link].iter().cloned().chain(arm.joints.iter().cloned()).collect();
         let along = Chain::new(FixedRow::identity(), path, FixedRow::identity()).unwrap();
         let masses = vec![
@@ -264,17 +253,24 @@ mod tests {
             Some(LinkMass { mass_kg: 2.5, com_mm: Vector3::new(0.0, 5.0, -150.0) }),
             Some(LinkMass { mass_kg: 1.5, com_mm: Vector3::new(30.0, 0.0, -120.0) }),
         ];
+        (along, masses)
+    }
+
+    /// The torque about the torso's bend of masses on the branch's links alone, computed independently: by
+    /// [`Robot::gravity_torques`] on the serial chain along the branch's path (the torso's joints, then
+    /// the branch's), masses on the branch's links only. It lies in the span of the measured chain's own
+    /// functions and the branch's (residual at rounding), and not in the span of the chain's alone.
+    #[test]
+    fn a_branchs_gravity_torque_lies_in_the_span_of_its_functions() {
+        let (chain, arm) = torso_and_arm();
+        let (along, masses) = along_the_branch(&chain, &arm);
         let along = Robot::new("along", along).with_masses(masses).unwrap();
         let down = -Vector3::z_axis();
         let (mut own, mut extra) = (Vec::new(), Vec::new());
         let mut rows_all = Vec::new();
         let mut rows_own = Vec::new();
         let mut torque = Vec::new();
-        let mut state = 7_u64;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 3.0 - 1.5
-        };
+        let mut next = uniform(7_u64);
         for _ in 0..60 {
             let q = [next(), next(), next()];
             let bq = [next(), next(), next()];
@@ -302,25 +298,13 @@ mod tests {
     #[test]
     fn a_branchs_lateral_moments_lie_in_the_span_of_its_functions() {
         let (chain, arm) = torso_and_arm();
-        let path: Vec<Joint> = chain.joints()[..arm.link].iter().cloned().chain(arm.joints.iter().cloned()).collect();
-        let along = Chain::new(FixedRow::identity(), path, FixedRow::identity()).unwrap();
-        let masses = vec![
-            None,
-            None,
-            Some(LinkMass { mass_kg: 4.0, com_mm: Vector3::new(10.0, 40.0, -20.0) }),
-            Some(LinkMass { mass_kg: 2.5, com_mm: Vector3::new(0.0, 5.0, -150.0) }),
-            Some(LinkMass { mass_kg: 1.5, com_mm: Vector3::new(30.0, 0.0, -120.0) }),
-        ];
+        let (along, masses) = along_the_branch(&chain, &arm);
         let down = -Vector3::z_axis();
         let (mut own, mut extra, mut moments) = (Vec::new(), Vec::new(), Vec::new());
         let mut rows = [Vec::new(), Vec::new()];
         let mut rows_own = [Vec::new(), Vec::new()];
         let mut moment = [Vec::new(), Vec::new()];
-        let mut state = 11_u64;
-        let mut next = || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 3.0 - 1.5
-        };
+        let mut next = uniform(11_u64);
         for _ in 0..80 {
             let q = [next(), next(), next()];
             let bq = [next(), next(), next()];

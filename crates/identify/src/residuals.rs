@@ -202,8 +202,9 @@ mod tests {
     /// The analytic Jacobian of a branch's load on a joint (`Effect::BranchLoad`: an arm of two joints
     /// hanging from the IRB 140's second link, its joints logged in degrees pose by pose) against central
     /// differences, beside the joint's own compliance without masses; every weight moves the poses.
-    #[test]
-    fn a_branch_loads_jacobian_is_the_finite_differences() {
+    /// The IRB 140 with an arm of two joints hanging from its second link, and eight poses (`seed`) with
+    /// the arm's joints logged in degrees pose by pose.
+    fn second_arm(seed: u64) -> (Robot, Dataset) {
         let branch = thermokin_chain::Branch {
             name: "second_arm".into(),
             link: 2,
@@ -213,11 +214,17 @@ mod tests {
             ],
         };
         let robot = Robot::new("IRB 140", irb140_table9()).with_branches(vec![branch]).unwrap();
-        let mut data = eight_poses(9);
-        let mut rng = ChaCha8Rng::seed_from_u64(10);
+        let mut data = eight_poses(seed);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed + 1);
         data.sensor_names = vec!["b1".into(), "b2".into()];
         data.sensor_values = (0..data.len()).map(|_| vec![60.0 * gauss(&mut rng), 40.0 * gauss(&mut rng)]).collect();
         data.branch_columns = vec![thermokin_chain::BranchColumns { branch: 0, column: 0, len: 2 }];
+        (robot, data)
+    }
+
+    #[test]
+    fn a_branch_loads_jacobian_is_the_finite_differences() {
+        let (robot, data) = second_arm(9);
         let joint = JointIndex::of(&robot, 1).unwrap();
         let at = crate::BranchAt { branch: 0, count: 4, lateral: false };
         let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
@@ -236,20 +243,7 @@ mod tests {
     /// compliance without masses) against central differences; every weight moves the poses.
     #[test]
     fn a_lateral_branch_loads_jacobian_is_the_finite_differences() {
-        let branch = thermokin_chain::Branch {
-            name: "second_arm".into(),
-            link: 2,
-            joints: vec![
-                thermokin_chain::Joint::revolute("b1", Vector3::new(0.0, 200.0, 100.0), Vector3::y_axis()),
-                thermokin_chain::Joint::revolute("b2", Vector3::new(0.0, 0.0, -300.0), Vector3::x_axis()),
-            ],
-        };
-        let robot = Robot::new("IRB 140", irb140_table9()).with_branches(vec![branch]).unwrap();
-        let mut data = eight_poses(11);
-        let mut rng = ChaCha8Rng::seed_from_u64(12);
-        data.sensor_names = vec!["b1".into(), "b2".into()];
-        data.sensor_values = (0..data.len()).map(|_| vec![60.0 * gauss(&mut rng), 40.0 * gauss(&mut rng)]).collect();
-        data.branch_columns = vec![thermokin_chain::BranchColumns { branch: 0, column: 0, len: 2 }];
+        let (robot, data) = second_arm(11);
         let joint = JointIndex::of(&robot, 0).unwrap();
         let count = thermokin_chain::branch_lateral_basis_len(robot.chain(), &robot.branches()[0], 0) as u8;
         assert_eq!(count, 8);

@@ -9,7 +9,7 @@
 use rand::SeedableRng;
 use rand::seq::SliceRandom;
 use thermokin_chain::{Dataset, Robot};
-use thermokin_diagnose::{Accelerometer, Config, Report, diagnose};
+use thermokin_diagnose::{Config, Report, diagnose};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_testdata::{Session, construction_robot_toml, construction_session};
 
@@ -33,13 +33,7 @@ fn sessions() -> (Dataset, Dataset) {
 fn configs() -> (Config, Config) {
     let base =
         Config { frame: FrameMode::Tracker, tool: ToolMode::Unknown, noise_mm: Some(NOISE_MM), ..Config::default() };
-    let declared = Config {
-        accelerometers: vec![
-            Accelerometer { name: "acc_base".into(), link: 0 },
-            Accelerometer { name: "acc_top".into(), link: 1 },
-        ],
-        ..base.clone()
-    };
+    let declared = crate::tilts::declared(&base);
     (base, declared)
 }
 

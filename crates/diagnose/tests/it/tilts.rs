@@ -21,14 +21,20 @@ fn lift() -> Robot {
 /// two accelerometers declared on the chassis (link 0) and the carriage (link 1).
 fn configs() -> (Config, Config) {
     let base = Config { frame: FrameMode::Tracker, validation: Validation::SelectionOnly, ..Config::default() };
-    let declared = Config {
+    let declared = declared(&base);
+    (base, declared)
+}
+
+/// `base` with the lift's two accelerometers declared: `acc_base` on the chassis (link 0), `acc_top` on
+/// the carriage (link 1).
+pub fn declared(base: &Config) -> Config {
+    Config {
         accelerometers: vec![
             Accelerometer { name: "acc_base".into(), link: 0 },
             Accelerometer { name: "acc_top".into(), link: 1 },
         ],
         ..base.clone()
-    };
-    (base, declared)
+    }
 }
 
 /// Declared, the two accelerometers name the chassis's tilt and the column's bend and take the other
