@@ -13,7 +13,7 @@ mod profile;
 pub use coppeliasim::{CoppeliaSimEdits, coppeliasim_euler_angles, coppeliasim_object_rotation};
 pub use model::{
     BranchLoad, DriftLaw, DriftRow, JointCorrection, MAX_CORRECTION_SLOPE, RobotModel, lateral_row_error,
-    lumped_lateral_row_error, lumped_lateral_weights_len, lumped_tilts, straightness_row_error,
+    lumped_lateral_row_error, lumped_lateral_row_on, lumped_lateral_weights_len, lumped_tilts, straightness_row_error,
 };
 pub use profile::{AfterStabilization, ProfileSpec, RowFactors, TemperatureLog, TimeProfile};
 

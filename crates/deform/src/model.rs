@@ -239,6 +239,16 @@ pub fn lumped_lateral_row_error(
     lateral_row_error(&[tilt[0], tilt[1], bend[0], bend[1], shift[0], shift[1]], directions, axis, [1.0; 2], d)
 }
 
+/// [`lumped_lateral_row_error`] of joint `joint` of `chain`, along its lateral directions
+/// ([`thermokin_chain::lateral_directions`]; none past the chain: no error) and axis, at its value `d`.
+pub fn lumped_lateral_row_on(chain: &Chain, joint: usize, basis: &[f64], weights: &[f64], d: f64) -> ErrorParams {
+    let (Some(directions), Some(j)) = (thermokin_chain::lateral_directions(chain, joint), chain.joints().get(joint))
+    else {
+        return ErrorParams::ZERO;
+    };
+    lumped_lateral_row_error(basis, weights, &directions, &j.axis.into_inner(), d)
+}
+
 /// The error a slide's straightness adds to its row (eq. 19's angles and the row's translation, in its
 /// parent's frame) at extension `d` (mm), `directions` `eₖ` its two lateral directions
 /// ([`thermokin_chain::lateral_directions`]), `axis` its unit axis `a`, `c = [κ₁, κ₂, ρ, σ₁, σ₂]`:
@@ -915,9 +925,7 @@ impl RobotModel {
         for (j, weights) in self.lateral_loads.iter().enumerate().filter(|(_, l)| !l.is_empty()) {
             let plain = self.robot.chain();
             thermokin_chain::lateral_load_basis_into(plain, commanded, None, &self.down, j, &mut basis)?;
-            let Some(directions) = thermokin_chain::lateral_directions(plain, j) else { continue };
-            let axis = plain.joints()[j].axis.into_inner();
-            let bend = lumped_lateral_row_error(&basis, weights, &directions, &axis, commanded[j]);
+            let bend = lumped_lateral_row_on(plain, j, &basis, weights, commanded[j]);
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
         }
@@ -927,9 +935,7 @@ impl RobotModel {
             let plain = self.robot.chain();
             let (j, down) = (l.joint, &self.down);
             thermokin_chain::branch_lateral_basis_into(plain, branch, commanded, &branch_q, down, j, &mut basis)?;
-            let Some(directions) = thermokin_chain::lateral_directions(plain, j) else { continue };
-            let axis = plain.joints()[j].axis.into_inner();
-            let bend = lumped_lateral_row_error(&basis, &l.weights, &directions, &axis, commanded[j]);
+            let bend = lumped_lateral_row_on(plain, j, &basis, &l.weights, commanded[j]);
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
         }

@@ -535,11 +535,9 @@ fn branch_load_bound(
     let (.., len, values) = scale.branch_loads.iter().find(|(k, b, a, ..)| *k == j && *b == branch && *a == across)?;
     if across {
         // The tilts along the two directions, each a half of the functions and the weights.
-        let half = (*len / 2).max(1);
+        let tilts: Vec<[f64; 2]> = values.chunks(*len).map(|f| thermokin_deform::lumped_tilts(f, v)).collect();
         let change = |k: usize| {
-            let dot =
-                |f: &[f64]| f[k * half..(k + 1) * half].iter().zip(&v[k * half..]).map(|(f, w)| f * w).sum::<f64>();
-            let (lo, hi) = crate::stats::span(values.chunks(*len).map(dot));
+            let (lo, hi) = crate::stats::span(tilts.iter().map(|t| t[k]));
             if lo <= hi { hi - lo } else { 0.0 }
         };
         let tilt = change(0).hypot(change(1));

@@ -242,12 +242,9 @@ impl Model {
                     branch_basis(cached, robot, at, first.index(), &m.q, inputs.sensors, j, o)?;
                     if at.lateral {
                         // The bearing's tilt under the branch's moment, as a lateral compliance's one set.
-                        let chain = robot.chain();
-                        let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
-                        let axis = chain.joints()[j].axis.into_inner();
                         let basis = &cached.loads[o..o + n];
                         let row =
-                            thermokin_deform::lumped_lateral_row_error(basis, &theta[o..o + n], &dirs, &axis, m.q[j]);
+                            thermokin_deform::lumped_lateral_row_on(robot.chain(), j, basis, &theta[o..o + n], m.q[j]);
                         add_to_row(&mut drift_rows, j, row);
                     } else {
                         q[j] += cached.loads[o..o + n].iter().zip(&theta[o..o + n]).map(|(f, t)| f * t).sum::<f64>();
@@ -283,11 +280,9 @@ impl Model {
                 Effect::LumpedLateralCompliance(j, n, support) => {
                     let (j, n) = (j.index(), n as usize);
                     load_basis(cached, *e, &m.q, inputs.sin_cos, o)?;
-                    let chain = robot.chain();
-                    let dirs = thermokin_chain::lateral_directions(chain, j).unwrap_or([Vector3::zeros(); 2]);
                     let basis = &cached.loads[o..o + n / support.sets()];
-                    let axis = chain.joints()[j].axis.into_inner();
-                    let row = thermokin_deform::lumped_lateral_row_error(basis, &theta[o..o + n], &dirs, &axis, m.q[j]);
+                    let row =
+                        thermokin_deform::lumped_lateral_row_on(robot.chain(), j, basis, &theta[o..o + n], m.q[j]);
                     add_to_row(&mut drift_rows, j, row);
                 }
                 Effect::Straightness(j) | Effect::LateralCompliance(j, _) => {
@@ -555,9 +550,8 @@ fn bend_columns(
         Effect::BranchLoad(_, _, at) if at.lateral => Some((at.count as usize, 1)),
         _ => None,
     };
-    match e {
-        _ if lumped.is_some() => {
-            let (n, sets) = lumped.unwrap_or((0, 1));
+    match (e, lumped) {
+        (_, Some((n, sets))) => {
             // Per set s, direction k, function b: the column of c (s = 0), c′ (1) or s (2) above at unit
             // moment, times fₖ,b(q) — ∂p/∂θ = ∂p/∂c · fₖ,b.
             let half = n / 2 / sets;
@@ -575,7 +569,7 @@ fn bend_columns(
                 }
             }
         }
-        Effect::LateralCompliance(_, n) => {
+        (Effect::LateralCompliance(_, n), None) => {
             let moments = cached.lateral.as_ref().map_or([0.0; 2], |l| l[j]);
             for (k, dir) in dirs.iter().enumerate() {
                 let across = dir.cross(&axis);
@@ -590,7 +584,7 @@ fn bend_columns(
                 }
             }
         }
-        Effect::Straightness(_) => {
+        (Effect::Straightness(_), None) => {
             let (b1, b2) = (dirs[0].cross(&axis), dirs[1].cross(&axis));
             for r in 0..6 {
                 jac[(r, o)] = along(r, 3, &dirs[0]) * d;
