@@ -91,7 +91,16 @@ pub fn diagnose_with_progress(
     progress: &mut (dyn FnMut(Progress) + Send),
 ) -> Result<Report, DiagnoseError> {
     let (main, outer) = (Clock::default(), Clock::default());
-    run(robot, data, holdout, config, progress, &main, &outer)
+    released(run(robot, data, holdout, config, progress, &main, &outer))
+}
+
+/// `result`, once every thread of the pool (and this one) has freed what its fits kept for the next
+/// ([`thermokin_identify::release_scratch`]): a diagnosis of a week holds a Jacobian of 100 MB and more
+/// per thread while it runs, and none after.
+fn released<T>(result: T) -> T {
+    rayon::broadcast(|_| thermokin_identify::release_scratch());
+    thermokin_identify::release_scratch();
+    result
 }
 
 /// [`diagnose`], with where its time went phase by phase ([`Profile`]: the benchmarks print it). The
@@ -104,7 +113,7 @@ pub fn diagnose_profiled(
 ) -> Result<(Report, Profile), DiagnoseError> {
     let (main, outer) = (Clock::default(), Clock::default());
     let t0 = std::time::Instant::now();
-    let report = run(robot, data, holdout, config, &mut |_| {}, &main, &outer)?;
+    let report = released(run(robot, data, holdout, config, &mut |_| {}, &main, &outer))?;
     Ok((report, profile(&main, &outer, t0.elapsed().as_secs_f64())))
 }
 

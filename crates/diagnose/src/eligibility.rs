@@ -313,7 +313,7 @@ fn worst_trade(
     let model = scorer.model(&effects, &scorer.all())?;
     let jac = scorer.jacobian_at_start(&model)?;
     let names = model.parameter_names();
-    let free = identifiable(&jac, &vec![true; model.len()]).free;
+    let free = identifiable(jac.as_ref(), &vec![true; model.len()]).free;
     let cols: Vec<usize> = (0..model.len()).filter(|&k| free[k]).collect();
     let start = model.offsets()[model.offsets().len() - 1];
     let m = jac.nrows();

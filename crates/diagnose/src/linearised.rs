@@ -29,14 +29,11 @@ use rayon::prelude::*;
 use thermokin_identify::{Effect, Model, norms, residuals_and_jacobian};
 
 use crate::error::DiagnoseError;
-use crate::scoring::{Scorer, add_normal_equations, significantly_better, unit_ridged_step};
+use crate::scoring::{CHUNK_POSES, Scorer, significantly_better, unit_ridged_step};
 use crate::stats::Stats;
 
 /// Columns below this fraction of the largest norm move nothing at the linearisation point.
 const NEGLIGIBLE_COLUMN: f64 = 1e-12;
-/// Poses per block when the normal equations are accumulated (a week's training part with every
-/// shortlisted candidate's columns, 80,000 poses × 3 rows × 70 columns, would be 134 MB at once).
-const CHUNK_POSES: usize = 1000;
 
 /// A candidate's forecast held-out errors on the selection's folds, in fold order (pairing with the
 /// current model's).
@@ -110,11 +107,7 @@ struct Normal {
 impl Normal {
     fn of(scorer: &Scorer<'_>, model: &Model, at: &[f64], train: &[usize]) -> Result<Self, DiagnoseError> {
         let p = model.len();
-        let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
-        for rows in train.chunks(CHUNK_POSES) {
-            let (r, j) = residuals_and_jacobian(scorer.robot, model, at, scorer.data, rows, &scorer.terms)?;
-            add_normal_equations(&mut n, &mut g, &j, &r);
-        }
+        let (n, g) = scorer.normal_equations(model, at, train)?;
         let norm: Vec<f64> = (0..p).map(|c| n[(c, c)].max(0.0).sqrt()).collect();
         Ok(Self { n, g, norm })
     }

@@ -283,10 +283,11 @@ fn screening_model(
     let model = Model::new(robot, full.clone())?.with_start(initial_frames(robot, data, &all, &full)?);
     let (_, jac) = residuals_and_jacobian(robot, &model, &model.initial(), data, &all, terms)?;
     let free: Vec<usize> = {
-        let decided = identifiable(&jac, &vec![true; model.len()]);
+        let decided = identifiable(jac.as_ref(), &vec![true; model.len()]);
         (0..model.len()).filter(|&c| decided.free[c]).collect()
     };
-    let unit = prior(&model, &jac, 1.0);
+    let squares: Vec<f64> = (0..model.len()).map(|c| jac.col(c).squared_norm_l2()).collect();
+    let unit = prior(&model, (&squares, jac.nrows()), 1.0);
     let p = free.len();
     let gram = Mat::from_fn(p, p, |i, k| jac.col(free[i]).transpose() * jac.col(free[k]));
     let budget = rows as f64 / MIN_REDUNDANCY as f64;

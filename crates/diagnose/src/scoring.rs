@@ -113,17 +113,18 @@ pub(crate) fn shrunk(e: Effect) -> bool {
     e.is_reported() && e.is_static()
 }
 
-/// The prior of strength `lambda` for `model` ([`crate::shrinkage`]), from its Jacobian `jac` at its initial values (the
-/// nominal robot); centred there (zero deviation).
-pub(crate) fn prior(model: &Model, jac: &Mat<f64>, lambda: f64) -> Prior {
-    let n = jac.nrows().max(1) as f64;
+/// The prior of strength `lambda` for `model` ([`crate::shrinkage`]), from the squared column norms of its
+/// Jacobian at its initial values (the nominal robot; `squares` over `rows` residual rows,
+/// [`Scorer::column_squares`]); centred there (zero deviation).
+pub(crate) fn prior(model: &Model, (squares, rows): (&[f64], usize), lambda: f64) -> Prior {
+    let n = rows.max(1) as f64;
     let mut weight = vec![0.0; model.len()];
     for (e, &o) in model.effects().iter().zip(model.offsets()) {
         if !shrunk(*e) {
             continue;
         }
         for k in o..o + e.len() {
-            weight[k] = (lambda * jac.col(k).squared_norm_l2() / n).sqrt();
+            weight[k] = (lambda * squares[k] / n).sqrt();
         }
     }
     Prior { centre: model.initial(), weight }
@@ -302,8 +303,8 @@ impl<'a> Scorer<'a> {
         let mut start = Start::new(initial, vec![true; model.len()]);
         start.give_up = give_up.cloned();
         if lambda > 0.0 {
-            let (_, jac) = residuals_and_jacobian(self.robot, &model, &start.theta, self.data, rows, &self.terms)?;
-            start.prior = Some(prior(&model, &jac, lambda));
+            let (squares, n) = self.column_squares(&model, &start.theta, rows)?;
+            start.prior = Some(prior(&model, (&squares, n), lambda));
         }
         let mut best = fit_from(self.robot, &model, self.data, rows, &self.terms, &start)?;
         // Two or more exponential drifts started at one time constant: their laws begin alike and the
@@ -394,7 +395,7 @@ impl<'a> Scorer<'a> {
         all_effects.push(candidate);
         let model = self.model(&all_effects, &self.all())?;
         let jac = self.jacobian_at_start(&model)?;
-        let decided = identifiable(&jac, &vec![true; model.len()]);
+        let decided = identifiable(jac.as_ref(), &vec![true; model.len()]);
         let start = model.offsets()[model.offsets().len() - 1];
         let new_free = (start..model.len()).filter(|&c| decided.free[c]).count();
         let fixed = model
@@ -433,6 +434,49 @@ impl<'a> Scorer<'a> {
 /// Ridge on unit-scaled normal equations ([`unit_ridged_step`]): a column that duplicates another (no
 /// gain, singular equations) stays solvable without moving the others.
 pub(crate) const RIDGE: f64 = 1e-9;
+
+/// Poses per block wherever a Jacobian is reduced to what its use needs (normal equations, column norms,
+/// predicted residuals): one block's Jacobian is alive at a time, so that memory and the cache it misses
+/// do not grow with the poses (a week's training part with every shortlisted candidate's columns,
+/// 80,000 poses × 3 rows × 70 columns, would be 134 MB at once; a block of 1,000 poses is 1.7 MB).
+pub(crate) const CHUNK_POSES: usize = 1000;
+
+impl Scorer<'_> {
+    /// `JᵀJ` and `Jᵀr` of `model` at `theta` on the measurements `rows` (the residuals and Jacobian of
+    /// [`residuals_and_jacobian`]), accumulated [`CHUNK_POSES`] poses at a time.
+    pub(crate) fn normal_equations(
+        &self,
+        model: &Model,
+        theta: &[f64],
+        rows: &[usize],
+    ) -> Result<(Mat<f64>, Mat<f64>), DiagnoseError> {
+        let p = model.len();
+        let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
+        for block in rows.chunks(CHUNK_POSES) {
+            let (r, j) = residuals_and_jacobian(self.robot, model, theta, self.data, block, &self.terms)?;
+            add_normal_equations(&mut n, &mut g, &j, &r);
+        }
+        Ok((n, g))
+    }
+
+    /// The squared norm of each column of the Jacobian of `model` at `theta` on `rows`, and its number of
+    /// rows, [`CHUNK_POSES`] poses at a time.
+    pub(crate) fn column_squares(
+        &self,
+        model: &Model,
+        theta: &[f64],
+        rows: &[usize],
+    ) -> Result<(Vec<f64>, usize), DiagnoseError> {
+        let mut squares = vec![0.0; model.len()];
+        for block in rows.chunks(CHUNK_POSES) {
+            let (_, j) = residuals_and_jacobian(self.robot, model, theta, self.data, block, &self.terms)?;
+            for (c, sq) in squares.iter_mut().enumerate() {
+                *sq += j.col(c).squared_norm_l2();
+            }
+        }
+        Ok((squares, rows.len() * self.terms.stride()))
+    }
+}
 
 /// `JᵀJ` and `Jᵀr` of the Jacobian `j` and residuals `r`, added into `n` and `g` (one product each; a
 /// block of poses at a time, the sum over blocks is all of them).

@@ -31,7 +31,7 @@ use thermokin_identify::{Effect, residuals_and_jacobian};
 
 use crate::config::Screen;
 use crate::error::DiagnoseError;
-use crate::scoring::{RIDGE, Scorer, add_normal_equations};
+use crate::scoring::{CHUNK_POSES, RIDGE, Scorer};
 
 /// Columns whose norm is below this fraction of the largest carry no information at the linearisation
 /// point (an exponential drift's τ at zero amplitude) and are left out.
@@ -80,13 +80,10 @@ fn linearised_heldout(
     at[..theta.len()].copy_from_slice(theta);
     let p = model.len();
     let folds: Vec<&Vec<usize>> = scorer.folds.iter().map(|(_, test)| test).filter(|t| !t.is_empty()).collect();
-    let test_part =
-        |test: &[usize]| residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, test, &scorer.terms);
     // Pass 1: each fold's test part's unscaled normal equations.
     let mut parts: Vec<(Mat<f64>, Mat<f64>)> = Vec::with_capacity(folds.len());
     for test in &folds {
-        let (r, j) = test_part(test)?;
-        parts.push(normal_equations(&j, &r));
+        parts.push(scorer.normal_equations(&model, &at, test)?);
     }
     let mut gram = Mat::<f64>::zeros(p, p);
     let mut grad = Mat::<f64>::zeros(p, 1);
@@ -114,19 +111,32 @@ fn linearised_heldout(
     for (test, (g_test, h_test)) in folds.iter().zip(&parts) {
         let n_f = &n_all - scaled(g_test);
         let g_f = &g_all - scaled_g(h_test);
-        let (r, j) = test_part(test)?;
-        for (k, cols) in own.iter().enumerate() {
-            let idx: Vec<usize> = current.iter().chain(cols).copied().collect();
-            let Some(step) = solve(&n_f, &g_f, &idx) else {
+        let steps: Vec<(Vec<usize>, Option<Vec<f64>>)> = own
+            .iter()
+            .map(|cols| {
+                let idx: Vec<usize> = current.iter().chain(cols).copied().collect();
+                let step = solve(&n_f, &g_f, &idx);
+                (idx, step)
+            })
+            .collect();
+        // The fold's sum per candidate, pose after pose over the blocks of its test part.
+        let mut fold_sse = vec![0.0; candidates.len()];
+        for block in test.chunks(CHUNK_POSES) {
+            let (r, j) = residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, block, &scorer.terms)?;
+            for (sum, (idx, step)) in fold_sse.iter_mut().zip(&steps) {
+                let Some(step) = step else { continue };
+                for row in 0..r.len() {
+                    let fitted: f64 = idx.iter().zip(step).map(|(&c, s)| j[(row, used[c])] / norms[used[c]] * s).sum();
+                    *sum += (r[row] - fitted).powi(2);
+                }
+            }
+        }
+        for (k, (_, step)) in steps.iter().enumerate() {
+            if step.is_some() {
+                sse[k] += fold_sse[k];
+            } else {
                 sse[k] = f64::INFINITY;
-                continue;
-            };
-            sse[k] += (0..r.len())
-                .map(|row| {
-                    let fitted: f64 = idx.iter().zip(&step).map(|(&c, s)| j[(row, used[c])] / norms[used[c]] * s).sum();
-                    (r[row] - fitted).powi(2)
-                })
-                .sum::<f64>();
+            }
         }
     }
     Ok(sse)
@@ -152,13 +162,12 @@ pub(crate) fn linearised_values(
         let model = scorer.model(&with, &all)?;
         let mut at = model.initial();
         at[..theta.len()].copy_from_slice(theta);
-        // All data's normal equations as the sum of the folds' test parts' (which partition it): never
-        // the whole Jacobian at once, as in `linearised_heldout`.
+        // All data's normal equations as the sum of the folds' test parts' (which partition it), as in
+        // `linearised_heldout`.
         let p = model.len();
         let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
         for (_, test) in scorer.folds.iter().filter(|(_, t)| !t.is_empty()) {
-            let (r, j) = residuals_and_jacobian(scorer.robot, &model, &at, scorer.data, test, &scorer.terms)?;
-            let (n_t, g_t) = normal_equations(&j, &r);
+            let (n_t, g_t) = scorer.normal_equations(&model, &at, test)?;
             n += &n_t;
             g += &g_t;
         }
@@ -180,14 +189,6 @@ pub(crate) fn linearised_values(
         out.push(values);
     }
     Ok(out)
-}
-
-/// `JᵀJ` and `Jᵀr`.
-fn normal_equations(j: &Mat<f64>, r: &[f64]) -> (Mat<f64>, Mat<f64>) {
-    let p = j.ncols();
-    let (mut n, mut g) = (Mat::<f64>::zeros(p, p), Mat::<f64>::zeros(p, 1));
-    add_normal_equations(&mut n, &mut g, j, r);
-    (n, g)
 }
 
 /// The step on columns `idx` of the normal equations `n δ = g`, ridged; `None` when not solvable.

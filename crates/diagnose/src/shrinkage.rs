@@ -53,7 +53,7 @@ use crate::config::{Config, Shrinkage};
 use crate::error::DiagnoseError;
 use crate::folds::Folds;
 use crate::plausibility::implausible;
-use crate::scoring::{HeldOut, Scorer, prior, shrunk, significantly_better};
+use crate::scoring::{CHUNK_POSES, HeldOut, Scorer, prior, shrunk, significantly_better};
 use crate::selection::{GIVE_UP_AFTER, Selection};
 
 /// The prior strengths tried, in rows of data per parameter (log-spaced; 0: no prior).
@@ -73,26 +73,18 @@ impl Scorer<'_> {
                     return Ok(vec![0.0; GRID.len()]);
                 }
                 let model = self.model(effects, train)?;
-                // One Jacobian alive at a time (each is poses × 3 × parameters: ~17 MB at 12,000 poses):
-                // the prior's weights at unit strength (a strength λ scales them by √λ), then the
-                // training part's normal equations, then the test part's Jacobian.
-                let unit = {
-                    let (_, j_initial) =
-                        residuals_and_jacobian(self.robot, &model, &model.initial(), self.data, train, &self.terms)?;
-                    prior(&model, &j_initial, 1.0)
-                };
+                // No Jacobian held whole ([`CHUNK_POSES`] poses at a time): the prior's weights at unit
+                // strength (a strength λ scales them by √λ), the training part's normal equations, then
+                // the test part's predicted residuals.
+                let (squares, n) = self.column_squares(&model, &model.initial(), train)?;
+                let unit = prior(&model, (&squares, n), 1.0);
                 let cols: Vec<usize> = (0..model.len()).filter(|&c| free[c]).collect();
                 let p = cols.len();
-                let (a, g) = {
-                    let (r_train, j_train) =
-                        residuals_and_jacobian(self.robot, &model, theta, self.data, train, &self.terms)?;
-                    let a = Mat::from_fn(p, p, |i, k| j_train.col(cols[i]).transpose() * j_train.col(cols[k]));
-                    let g: Vec<f64> =
-                        cols.iter().map(|&c| j_train.col(c).iter().zip(&r_train).map(|(x, y)| x * y).sum()).collect();
-                    (a, g)
-                };
-                let (r_test, j_test) = residuals_and_jacobian(self.robot, &model, theta, self.data, test, &self.terms)?;
-                GRID.iter()
+                let (n_train, g_train) = self.normal_equations(&model, theta, train)?;
+                let a = Mat::from_fn(p, p, |i, k| n_train[(cols[i], cols[k])]);
+                let g: Vec<f64> = cols.iter().map(|&c| g_train[(c, 0)]).collect();
+                let steps: Vec<Mat<f64>> = GRID
+                    .iter()
                     .map(|&lambda| {
                         let mut m = a.clone();
                         let mut rhs = Mat::zeros(p, 1);
@@ -101,21 +93,27 @@ impl Scorer<'_> {
                             m[(i, i)] += w2;
                             rhs[(i, 0)] = g[i] - w2 * (theta[c] - unit.centre[c]);
                         }
-                        let step = m.partial_piv_lu().solve(&rhs);
-                        let stride = self.terms.stride();
-                        let mut sum = 0.0;
-                        for pose in 0..test.len() {
+                        m.partial_piv_lu().solve(&rhs)
+                    })
+                    .collect();
+                let stride = self.terms.stride();
+                let mut sums = vec![0.0; GRID.len()];
+                for block in test.chunks(CHUNK_POSES) {
+                    let (r_test, j_test) =
+                        residuals_and_jacobian(self.robot, &model, theta, self.data, block, &self.terms)?;
+                    for (sum, step) in sums.iter_mut().zip(&steps) {
+                        for pose in 0..block.len() {
                             let mut sq = 0.0;
                             for row in pose * stride..(pose + 1) * stride {
                                 let moved: f64 =
                                     cols.iter().enumerate().map(|(i, &c)| j_test[(row, c)] * step[(i, 0)]).sum();
                                 sq += (r_test[row] - moved).powi(2);
                             }
-                            sum += sq;
+                            *sum += sq;
                         }
-                        Ok(sum)
-                    })
-                    .collect()
+                    }
+                }
+                Ok(sums)
             })
             .collect::<Result<_, DiagnoseError>>()?;
         Ok((0..GRID.len()).map(|i| per_fold.iter().map(|f| f[i]).sum()).collect())

@@ -198,6 +198,19 @@ fn ssr(r: &[f64]) -> f64 {
     r.iter().map(|x| x * x).sum::<f64>()
 }
 
+std::thread_local! {
+    /// The Jacobian of the last fit on this thread, its memory reused by the next: a week's Jacobian is
+    /// 100 MB or more, which the allocator maps afresh for each fit and the kernel then zeroes page by
+    /// page — a tenth of the CPU of a diagnosis of 100,000 poses went to that (issue #60).
+    static SPARE_JACOBIAN: std::cell::RefCell<Mat<f64>> = const { std::cell::RefCell::new(Mat::new()) };
+}
+
+/// Frees the memory this thread's fits keep for the next (the last [`fit_from`]'s Jacobian): a caller
+/// done fitting — a diagnosis returning — gives it back rather than hold a week's Jacobian per thread.
+pub fn release_scratch() {
+    SPARE_JACOBIAN.with(|spare| *spare.borrow_mut() = Mat::new());
+}
+
 /// [`fit`] from `start`, moving only its movable parameters (a transfer: the effects fitted on one
 /// file, only the frame and tool refitted on another).
 ///
@@ -230,7 +243,9 @@ pub fn fit_from(
     }
     let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref() };
     let rates = Rates { columns: model.time_constants() };
-    let mut jac = Mat::zeros(problem.rows(), model.len());
+    let mut jac = SPARE_JACOBIAN.with(|spare| std::mem::replace(&mut *spare.borrow_mut(), Mat::new()));
+    jac.truncate(0, 0);
+    jac.resize_with(problem.rows(), model.len(), |_, _| 0.0);
     let r = problem.residuals(&start.theta, Some(&mut jac))?;
     let mut it = Iterate { theta: start.theta.clone(), cost: ssr(&r), r, jac };
     let mut free = vec![false; model.len()];
@@ -248,9 +263,9 @@ pub fn fit_from(
         inert = (0..model.len()).any(|c| start.movable[c] && inert_now[c]);
         // Identifiable from the data alone: the prior's rows would make every column so.
         let decided = if problem.prior.is_some() {
-            identifiable(&it.jac.subrows(0, problem.data_rows()).to_owned(), &start.movable)
+            identifiable(it.jac.subrows(0, problem.data_rows()), &start.movable)
         } else {
-            identifiable(&it.jac, &start.movable)
+            identifiable(it.jac.as_ref(), &start.movable)
         };
         if decided.free == free {
             break;
@@ -284,6 +299,7 @@ pub fn fit_from(
     }
     let names = model.parameter_names();
     let (std, correlated) = uncertainty(&scaled, it.cost, problem.rows(), model.len(), &names);
+    SPARE_JACOBIAN.with(|spare| *spare.borrow_mut() = std::mem::replace(&mut it.jac, Mat::new()));
     Ok(Fit {
         std,
         fixed: model.fixed_parameters(&fixed),

@@ -35,7 +35,10 @@ pub use effect::{
     Support, TAU_RANGE_MIN, TiltOver,
 };
 pub use error::IdentifyError;
-pub use fit::{CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from};
+pub use fit::{
+    CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from,
+    release_scratch,
+};
 pub use identifiability::{
     DEPENDENT, Dependence, DependsOn, FixedParameter, Identifiable, Observability, identifiable, observability,
     project_out,

@@ -3,6 +3,7 @@
 
 use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::Solve;
+use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, Par};
 
 use crate::effect::TAU_RANGE_MIN;
@@ -47,6 +48,11 @@ pub(crate) fn converged_gain(cost: f64, prior_cost: f64, rows: usize, free: usiz
 /// few millionths of itself. The chord step's fixed point is still the zero of the gradient, so it
 /// converges to the same minimum; a chord step that fails refreshes the Jacobian first.
 pub(crate) const REUSE_JACOBIAN: f64 = 1e-4;
+
+/// Rows of the scaled Jacobian copied at a time into [`Lm::scaled_normal_matrix`]'s block (3,000 rows ×
+/// 60 columns: 1.4 MB), whatever the poses: a copy of the whole Jacobian was a week's largest allocation
+/// after the Jacobian itself.
+const NORMAL_BLOCK_ROWS: usize = 3000;
 
 /// The state of one Levenberg–Marquardt pass: the column-scaled normal matrix of the current Jacobian
 /// (unit columns, so that mm, radians and minutes weigh alike), its scales and the damping. The scaled
@@ -112,17 +118,22 @@ impl Lm {
         self.stale = false;
     }
 
-    /// `AᵀA` from the scaled columns themselves (one copy of them): the matrix the uncertainties invert.
-    /// Near-singular normal matrices (nearly dependent parameters, condition numbers of 1e15) are
-    /// factorised more reliably from unit columns than from `D·JᵀJ·D`, whose entries carry the rounding
-    /// of columns of very different sizes.
+    /// `AᵀA` from the scaled columns themselves, a block of [`NORMAL_BLOCK_ROWS`] rows copied at a time:
+    /// the matrix the uncertainties invert. Near-singular normal matrices (nearly dependent parameters,
+    /// condition numbers of 1e15) are factorised more reliably from unit columns than from `D·JᵀJ·D`,
+    /// whose entries carry the rounding of columns of very different sizes.
     pub(crate) fn scaled_normal_matrix(&self, jac: &Mat<f64>) -> Mat<f64> {
-        let mut a = Mat::<f64>::zeros(jac.nrows(), self.cols.len());
-        for (k, &c) in self.cols.iter().enumerate() {
-            a.col_mut(k).copy_from(jac.col(c) * (self.chain[k] / self.scale[k]));
+        let q = self.cols.len();
+        let mut ata = Mat::<f64>::zeros(q, q);
+        let mut a = Mat::<f64>::zeros(NORMAL_BLOCK_ROWS.min(jac.nrows()), q);
+        for start in (0..jac.nrows()).step_by(NORMAL_BLOCK_ROWS) {
+            let rows = NORMAL_BLOCK_ROWS.min(jac.nrows() - start);
+            let mut block = a.as_mut().subrows_mut(0, rows);
+            for (k, &c) in self.cols.iter().enumerate() {
+                block.rb_mut().col_mut(k).copy_from(jac.col(c).subrows(start, rows) * (self.chain[k] / self.scale[k]));
+            }
+            matmul(ata.as_mut(), Accum::Add, block.rb().transpose(), block.rb(), 1.0, Par::Seq);
         }
-        let mut ata = Mat::<f64>::zeros(self.cols.len(), self.cols.len());
-        matmul(ata.as_mut(), Accum::Replace, a.as_ref().transpose(), a.as_ref(), 1.0, Par::Seq);
         ata
     }
 

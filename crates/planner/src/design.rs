@@ -174,7 +174,7 @@ impl Design {
         let mut all = Mat::zeros(jac_pool.nrows() + jac_done.nrows(), model.len());
         all.as_mut().submatrix_mut(0, 0, jac_pool.nrows(), model.len()).copy_from(&jac_pool);
         all.as_mut().submatrix_mut(jac_pool.nrows(), 0, jac_done.nrows(), model.len()).copy_from(&jac_done);
-        let ident = identifiable(&all, &vec![true; model.len()]);
+        let ident = identifiable(all.as_ref(), &vec![true; model.len()]);
         let free: Vec<usize> = (0..model.len()).filter(|&c| ident.free[c]).collect();
         // Over the candidates and the measured poses: a column seen by the measured poses alone keeps a
         // finite scale (it is free, so its norm over all rows is not zero).

@@ -34,7 +34,7 @@ pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
         Some((d, b)) => (d, thermokin_identify::trace_of_product(&design.use_weight, &b)),
         None => (f64::NEG_INFINITY, f64::INFINITY),
     };
-    let ident = identifiable(&m, &vec![true; m.ncols()]);
+    let ident = identifiable(m.as_ref(), &vec![true; m.ncols()]);
     let cols: Vec<usize> = (0..m.ncols()).filter(|&c| ident.free[c]).collect();
     let mut sigma_per_mm = vec![None; m.ncols()];
     let sub = Mat::from_fn(m.nrows(), cols.len(), |r, k| m[(r, cols[k])]);
