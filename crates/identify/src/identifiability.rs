@@ -275,7 +275,7 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// Observability indices of the free columns (column-scaled): the singular values of the unit columns'
-/// R factor ([`unit_r_factor`], Householder reflections a block of rows at a time), which are theirs —
+/// R factor (`unit_r_factor`: Householder reflections a block of rows at a time), which are theirs —
 /// `A = QR` with `Q`'s columns orthonormal — without a copy of the Jacobian or an SVD of its height (a
 /// week's Jacobian is 100 MB and more).
 pub fn observability(jac: &Mat<f64>, free: &[bool]) -> Option<Observability> {
