@@ -8,7 +8,7 @@ use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
 use crate::identifiability::{FixedParameter, identifiable, inert_columns};
-use crate::lm::{Lm, REUSE_JACOBIAN, Rates, converged_gain};
+use crate::lm::{Lm, REUSE_JACOBIAN, Rates, SPECULATE, converged_gain};
 use crate::model::Model;
 use crate::residuals::weighted;
 use crate::terms::PoseTerms;
@@ -362,12 +362,42 @@ enum StepOutcome {
 
 /// One iteration: the damping raised until a step gains (the trial's residuals first; the Jacobian only
 /// for an accepted step), or the predicted gain says the fit has converged.
+///
+/// A trial predicted to gain [`SPECULATE`] times the gain that refreshes the Jacobian is evaluated with
+/// its Jacobian, into the iterate's own ([`Speculation`]): accepted, that is the refresh, one residual
+/// pass fewer. Any other outcome puts the Jacobian of the iterate's parameters back, evaluated as it was,
+/// so that every step and every reported uncertainty is the one evaluated without speculating.
 fn damped_step(
     problem: &Problem<'_>,
     rates: &Rates,
     lm: &mut Lm,
     it: &mut Iterate,
     g: &Mat<f64>,
+) -> Result<StepOutcome, IdentifyError> {
+    let mut speculation = Speculation::Intact;
+    let outcome = damped_trials(problem, rates, lm, it, g, &mut speculation);
+    if let Speculation::Spoiled { at } = speculation {
+        problem.residuals(&at, Some(&mut it.jac))?;
+    }
+    outcome
+}
+
+/// Whether the iterate's Jacobian is still that of the parameters it was evaluated at.
+enum Speculation {
+    /// It is (or a refresh made it that of the accepted parameters).
+    Intact,
+    /// A speculative trial overwrote it: it is to be evaluated again at `at`, where it was.
+    Spoiled { at: Vec<f64> },
+}
+
+/// The trials of [`damped_step`]; a speculative one records where the Jacobian is to be put back.
+fn damped_trials(
+    problem: &Problem<'_>,
+    rates: &Rates,
+    lm: &mut Lm,
+    it: &mut Iterate,
+    g: &Mat<f64>,
+    speculation: &mut Speculation,
 ) -> Result<StepOutcome, IdentifyError> {
     while lm.lambda < 1e12 {
         let Some((step, predicted)) = lm.step(g) else {
@@ -387,7 +417,13 @@ fn damped_step(
             trial[c] = rates.moved(c, it.theta[c], step[k] / lm.scale[k]);
         }
         let cost_before = it.cost;
-        let rt = problem.residuals(&trial, None)?;
+        let speculative = !lm.stale
+            && matches!(speculation, Speculation::Intact)
+            && predicted >= SPECULATE * REUSE_JACOBIAN * cost_before;
+        if speculative {
+            *speculation = Speculation::Spoiled { at: it.theta.clone() };
+        }
+        let rt = problem.residuals(&trial, speculative.then_some(&mut it.jac))?;
         let ct = ssr(&rt);
         if ct < it.cost {
             let gain = (it.cost - ct) / it.cost.max(1e-300);
@@ -401,7 +437,10 @@ fn damped_step(
             }
             // A small step keeps its Jacobian for the next (chord) step ([`REUSE_JACOBIAN`]).
             if gain >= REUSE_JACOBIAN {
-                problem.residuals(&it.theta, Some(&mut it.jac))?;
+                if !speculative {
+                    problem.residuals(&it.theta, Some(&mut it.jac))?;
+                }
+                *speculation = Speculation::Intact;
                 lm.refresh(&it.jac, &it.theta, rates);
             } else {
                 lm.stale = true;

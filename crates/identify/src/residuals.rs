@@ -134,6 +134,8 @@ mod tests {
     /// The analytic Jacobian of `model` at `theta` on every measurement of `data`, checked column by column
     /// against central differences of step `h` of the residuals (which are `measured − predicted`: the
     /// Jacobian is the prediction's, the negative of the residuals'), to 1e-5 of each column's largest entry.
+    /// The residuals evaluated beside the Jacobian are those evaluated alone, bit for bit: a fit takes a
+    /// trial's residuals from either pass (`fit::damped_step`'s speculation) and must step alike.
     fn jacobian_is_the_differences(
         robot: &Robot,
         model: &Model,
@@ -143,7 +145,12 @@ mod tests {
         h: f64,
     ) -> faer::Mat<f64> {
         let rows: Vec<usize> = (0..data.len()).collect();
-        let (_, jac) = residuals_and_jacobian(robot, model, theta, data, &rows, terms).unwrap();
+        let (with_jacobian, jac) = residuals_and_jacobian(robot, model, theta, data, &rows, terms).unwrap();
+        let alone = residuals(robot, model, theta, data, &rows, terms).unwrap();
+        assert!(
+            with_jacobian.iter().zip(&alone).all(|(a, b)| a.to_bits() == b.to_bits()),
+            "the residuals beside the Jacobian differ from those alone"
+        );
         for k in 0..theta.len() {
             let (mut plus, mut minus) = (theta.to_vec(), theta.to_vec());
             plus[k] += h;
