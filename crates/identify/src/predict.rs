@@ -443,9 +443,7 @@ impl Model {
         let mut drift = cached.drift_scale.iter();
         for (k, (e, &o)) in self.effects().iter().zip(self.offsets()).enumerate() {
             let mut copy = |dst: usize, src: usize, scale: f64| {
-                for r in 0..6 {
-                    jac[(r, dst)] = pj[(r, src)] * scale;
-                }
+                jac.column_mut(dst).zip_apply(&pj.column(src), |d, s| *d = s * scale);
             };
             match *e {
                 Effect::Registration | Effect::BaseFrame => (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0)),

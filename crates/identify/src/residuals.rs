@@ -73,10 +73,11 @@ fn evaluate(
             r.extend_from_slice(&[e.x, e.y, e.z]);
         }
         if let Some(jac) = jac.as_mut() {
-            for c in 0..model.len() {
+            // The pose's rows, column by column: the position rows as predicted, the rotation rows at the lever.
+            for (c, column) in block.column_iter().enumerate() {
+                let mut rows = jac.rb_mut().col_mut(c).subrows_mut(stride * k, stride);
                 for a in 0..stride {
-                    let w = if a < 3 { 1.0 } else { lever };
-                    jac[(stride * k + a, c)] = block[(a, c)] * w;
+                    rows[a] = if a < 3 { column[a] } else { column[a] * lever };
                 }
             }
         }
