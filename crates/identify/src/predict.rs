@@ -439,11 +439,14 @@ impl Model {
     ) {
         let pj = &cached.pj;
         let layout: ParameterLayout = cached.chain.parameter_layout();
-        jac.fill(0.0);
+        // One memset: nalgebra's `fill` steps an element iterator, which was two thirds of `predict`'s own time.
+        jac.as_mut_slice().fill(0.0);
         let mut drift = cached.drift_scale.iter();
         for (k, (e, &o)) in self.effects().iter().zip(self.offsets()).enumerate() {
+            // Column `dst` of `jac` is column `src` of `pj` times `scale` (both 6 rows, column-major).
             let mut copy = |dst: usize, src: usize, scale: f64| {
-                jac.column_mut(dst).zip_apply(&pj.column(src), |d, s| *d = s * scale);
+                let from = &pj.as_slice()[6 * src..6 * src + 6];
+                jac.as_mut_slice()[6 * dst..6 * dst + 6].iter_mut().zip(from).for_each(|(d, s)| *d = s * scale);
             };
             match *e {
                 Effect::Registration | Effect::BaseFrame => (0..6).for_each(|c| copy(o + c, layout.base() + c, 1.0)),
