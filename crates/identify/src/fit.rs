@@ -375,11 +375,11 @@ fn damped_step(
     g: &Mat<f64>,
 ) -> Result<StepOutcome, IdentifyError> {
     let mut speculation = Speculation::Intact;
-    let outcome = damped_trials(problem, rates, lm, it, g, &mut speculation);
+    let outcome = damped_trials(problem, rates, lm, it, g, &mut speculation)?;
     if let Speculation::Spoiled { at } = speculation {
         problem.residuals(&at, Some(&mut it.jac))?;
     }
-    outcome
+    Ok(outcome)
 }
 
 /// Whether the iterate's Jacobian is still that of the parameters it was evaluated at.

@@ -52,11 +52,11 @@ pub(crate) const REUSE_JACOBIAN: f64 = 1e-4;
 /// How many times [`REUSE_JACOBIAN`]'s gain a step must be predicted to gain for its trial to be
 /// evaluated with its Jacobian (speculatively: an accepted step that gains that much refreshes the
 /// Jacobian at once, and one pass along the poses then gives both). Two: a step gains about what the
-/// linearised model predicts near a minimum, and the trust region halves its prediction at worst for a
-/// step it keeps at the same damping (ρ > 1/2 in almost every step). Counted on the real UR10's series C
-/// with B held out (issue #60): of the 2,913 trials so evaluated, 2,866 were accepted with a refresh
-/// (each one residual pass saved) and 47 were not (each one Jacobian pass more, to put the iterate's
-/// back); of all 3,826 first trials of a step, 2,939 refreshed the Jacobian.
+/// linearised model predicts (the gain ratio ρ near 1 where Gauss–Newton works), so one predicted at
+/// twice the threshold nearly always clears it, and a miss costs one Jacobian pass. Counted on the real
+/// UR10's series C with B held out (issue #60): of the 2,913 trials so evaluated, 2,866 were accepted
+/// with a refresh (each one residual pass saved) and 47 were not (each one Jacobian pass more, to put
+/// the iterate's back); of all 3,826 first trials of a step, 2,939 refreshed the Jacobian.
 pub(crate) const SPECULATE: f64 = 2.0;
 
 /// Rows of the scaled Jacobian copied at a time into [`Lm::scaled_normal_matrix`]'s block (3,000 rows ×
