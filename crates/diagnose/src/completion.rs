@@ -142,9 +142,13 @@ fn complete_geometry(
                     break (effects, lambda, held.1.stats, held.1.errors);
                 }
                 for (e, why, trade) in worst_beyond(judged) {
-                    // Beside the complete geometry: the refusal of a partial model's fit gives way to this one.
-                    sel.refused.retain(|r| r.effect != e.label());
-                    sel.refused.push(why.refused_trading(e, Judged::Fitted, trade.as_ref()));
+                    // Beside the complete geometry: the refusal of a partial model's fit gives way to this
+                    // one — unless the completion's prior shrank the value this one quotes (`lambda` > 0) and
+                    // the selection refused the row on a least-squares value: that one is the poses' own.
+                    if lambda == 0.0 || !sel.refused.iter().any(|r| r.effect == e.label()) {
+                        sel.refused.retain(|r| r.effect != e.label());
+                        sel.refused.push(why.refused_trading(e, Judged::Fitted, trade.as_ref()));
+                    }
                     rows.retain(|r| *r != e);
                 }
             }

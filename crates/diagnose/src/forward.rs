@@ -12,7 +12,7 @@ use crate::drifts::{keeps_its_law, rising_in_fit};
 use crate::error::DiagnoseError;
 use crate::plausibility::{Implausible, Judged, Trade, implausible};
 use crate::scoring::{Scorer, significantly_better};
-use crate::selection::{Candidate, Scored, Selection, adds_nothing, score, unsettled};
+use crate::selection::{Candidate, Scored, Selection, StoppedQuote, adds_nothing, score, unsettled};
 
 fn is_exponential(c: &Effect) -> bool {
     matches!(c, Effect::ThermalDrift(_, DriftShape::Exponential))
@@ -394,7 +394,14 @@ fn keep_scored(
                 refuse(sel, c, (&why, trade.as_ref()), Judged::ForecastOnEveryFold, resting)
             }
             Scored::Candidate(s) => match &s.runaway {
-                Some(why) => refuse(sel, c, (why, s.trade.as_ref()), Judged::FittedOnEveryFold, resting),
+                Some(why) => {
+                    refuse(sel, c, (why, s.trade.as_ref()), Judged::FittedOnEveryFold, resting);
+                    if let (Some(fold), Some(refusal)) = (s.quoted_fold, sel.refused.last()) {
+                        let mut with = sel.effects.clone();
+                        with.push(c);
+                        sel.stopped_quotes.push(StoppedQuote { refusal: refusal.clone(), with, fold });
+                    }
+                }
                 None if s.unsettled => sel.refused.push(unsettled(c)),
                 None => {
                     // Plausible in this model: an earlier refusal for its size no longer holds.

@@ -76,6 +76,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
             theta: nominal_fit.theta,
             skipped: Vec::new(),
             refused,
+            stopped_quotes: Vec::new(),
             shrinkage: 0.0,
             fallback: None,
         };

@@ -6,7 +6,7 @@ use thermokin_identify::{Effect, GiveUp, MAX_ITERATIONS};
 
 use crate::config::Plausibility;
 use crate::error::DiagnoseError;
-use crate::plausibility::{Implausible, Trade, implausible};
+use crate::plausibility::{Implausible, Judged, Trade, implausible};
 use crate::report::{Refusal, Skipped, TableRow};
 use crate::scoring::{Addition, HeldOut, Scorer};
 use crate::stats::Stats;
@@ -28,6 +28,22 @@ pub(crate) struct Candidate {
     pub(crate) unsettled: bool,
     /// Where it runs beyond its size: what the first fold's fit traded it with.
     pub(crate) trade: Option<Trade>,
+    /// For a runaway: the fold whose fit its refusal quotes (the first holding its values) — a fit the
+    /// bounds may have stopped, run to its end only if the refusal is reported ([`requote`]).
+    pub(crate) quoted_fold: Option<usize>,
+}
+
+/// A refusal whose value comes from a fold fit the plausibility bounds may have stopped
+/// ([`GIVE_UP_AFTER`]): the model it was scored in and the fold, to run that fit to its end should the
+/// refusal be reported ([`requote`]).
+#[derive(Clone, Debug)]
+pub(crate) struct StoppedQuote {
+    /// The refusal as made.
+    pub(crate) refusal: Refusal,
+    /// The model the candidate was scored in, the candidate last.
+    pub(crate) with: Vec<Effect>,
+    /// The selection's fold whose fit the refusal quotes.
+    pub(crate) fold: usize,
 }
 
 /// What scoring a candidate found.
@@ -93,6 +109,8 @@ pub(crate) struct Selection {
     pub(crate) skipped: Vec<Skipped>,
     /// Candidates refused by eligibility or plausibility.
     pub(crate) refused: Vec<Refusal>,
+    /// The refusals that quote a fold fit the bounds may have stopped ([`requote`]).
+    pub(crate) stopped_quotes: Vec<StoppedQuote>,
     /// The prior's strength the model is fitted with (rows of data per parameter; 0: none —
     /// [`crate::shrinkage`]).
     pub(crate) shrinkage: f64,
@@ -160,7 +178,10 @@ impl Selection {
 /// passed them at their first or second step (a cold start's first steps overshoot while the frames
 /// settle); of the ~1,000 that passed at the third step or later, none came back — a candidate trading
 /// with another block (the UR10's `link_deviation[6]` against the probe) walks out along a flat valley,
-/// 20 to 70 steps in, until the iteration limit. Five leaves a margin of three steps.
+/// 20 to 70 steps in, until the iteration limit. Five leaves a margin of three steps. Surveyed again under
+/// Nielsen's damping (issue #60; UR10 C + B, the WAM grid → random, Rokae 6-D: ~1,250 watched fits run to
+/// their end under each rule): none came back within its bounds after passing them. A fit stopped here
+/// has not reached its end: a refusal quotes the fit run to its end ([`requote`]).
 pub(crate) const GIVE_UP_AFTER: usize = 5;
 
 /// Scores `c` added to `effects` on the selection's folds.
@@ -203,6 +224,7 @@ pub(crate) fn score(
         }
     }
     let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
+    let quoted_fold = runaway.as_ref().and_then(|_| held.thetas.iter().position(|t| values(t)));
     Ok(Scored::Candidate(Box::new(Candidate {
         effect: c,
         new_free: addition.new_free,
@@ -211,6 +233,7 @@ pub(crate) fn score(
         runaway,
         unsettled,
         trade,
+        quoted_fold,
     })))
 }
 
@@ -247,6 +270,42 @@ fn runaway_and_trade(
         None => None,
     };
     Ok((runaway, trade))
+}
+
+/// The reported refusals that quote a fold fit the plausibility bounds may have stopped, each quoting
+/// that fit run to its end instead: a fit stopped at its [`GIVE_UP_AFTER`]-th step holds the value it
+/// had reached by then, which says where it was walking, not where it ends (a 40 mm row stopped at 33 mm
+/// under a damping that lowers slowly). Run once, for the report, and only for the refusals it holds: a
+/// runaway's fit walks to the iteration limit, which is why scoring stops it. The decision stands — the
+/// stop rule was surveyed with every watched fit run to its end and none came back within its bounds;
+/// should one, its refusal keeps the stopped value.
+pub(crate) fn requote(
+    scorer: &Scorer<'_>,
+    sel: &mut Selection,
+    plausibility: &Plausibility,
+) -> Result<(), DiagnoseError> {
+    let quotes = std::mem::take(&mut sel.stopped_quotes);
+    for r in sel.refused.iter_mut() {
+        let Some(q) = quotes.iter().rev().find(|q| q.refusal.effect == r.effect) else { continue };
+        let (Some((&c, effects)), Some((train, _))) = (q.with.split_last(), scorer.folds.get(q.fold)) else {
+            continue;
+        };
+        if q.refusal != *r {
+            continue;
+        }
+        let o: usize = effects.iter().map(Effect::len).sum();
+        let (model, fit) = scorer.fit_shrunk(&q.with, train, 0.0)?;
+        let Some(why) = fit.theta.get(o..o + c.len()).and_then(|v| implausible(&scorer.scale, v, c, plausibility))
+        else {
+            continue;
+        };
+        let trade = match why.excess() {
+            Some(_) => scorer.traded_with(&model, &fit.theta, train, q.with.len() - 1)?,
+            None => None,
+        };
+        *r = why.refused_trading(c, Judged::FittedOnEveryFold, trade.as_ref());
+    }
+    Ok(())
 }
 
 /// Why a candidate with no identifiable parameter beside the model adds nothing: the block its first

@@ -16,7 +16,7 @@ use crate::report::{
 };
 use crate::scoring::{Relation, Scorer};
 use crate::select::Selected;
-use crate::selection::{Joined, Selection, without};
+use crate::selection::{Joined, Selection, requote, without};
 use crate::stats::Stats;
 
 /// What the selection reports of its choice: everything in a report but the validation of the whole
@@ -54,7 +54,8 @@ pub(crate) struct Tables {
 /// The tables of `selected` on the scorer's data.
 pub(crate) fn tables(scorer: &Scorer<'_>, config: &Config, selected: Selected) -> Result<Tables, DiagnoseError> {
     let (robot, data) = (scorer.robot, scorer.data);
-    let Selected { selection: sel, catalogue } = selected;
+    let Selected { selection: mut sel, catalogue } = selected;
+    requote(scorer, &mut sel, &config.plausibility)?;
     let effects = sel.effects.clone();
     let shrinkage = sel.shrinkage;
     let (model, final_fit) = scorer.fit_shrunk(&effects, &scorer.all(), shrinkage)?;

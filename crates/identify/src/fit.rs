@@ -452,8 +452,7 @@ fn damped_trials(
             lm.refresh(&it.jac, &it.theta, rates);
             return Ok(StepOutcome::NoGain);
         }
-        lm.lambda *= 10.0;
-        lm.raised = true;
+        lm.raise();
     }
     Ok(StepOutcome::NoGain)
 }

@@ -83,8 +83,8 @@ pub(crate) struct Lm {
     pub(crate) stale: bool,
     /// The Jacobian was refreshed after a failed chord step: the iteration is retried with it.
     pub(crate) refreshed: bool,
-    /// The damping was raised after a failed step since the last accepted one.
-    pub(crate) raised: bool,
+    /// The factor the next failed step raises the damping by ([`Lm::raise`]).
+    pub(crate) nu: f64,
 }
 
 impl Lm {
@@ -99,7 +99,7 @@ impl Lm {
             lambda: 1e-3,
             stale: false,
             refreshed: false,
-            raised: false,
+            nu: 2.0,
         }
     }
 
@@ -175,18 +175,27 @@ impl Lm {
         Some((delta, 2.0 * lin - quad))
     }
 
-    /// The damping after an accepted step, from how well the linearised model predicted its gain (`ρ`,
-    /// the trust-region rule): less damping when it did (ρ > 3/4) — unless this damping was just reached
-    /// from a failed step, when the smaller one is known to fail (a curved valley of nearly dependent
-    /// parameters, where alternating would waste every other evaluation) — more when the step gained
-    /// under a quarter of the prediction.
+    /// The damping after an accepted step, from how well the linearised model predicted its gain (`ρ`, the
+    /// gain ratio): Nielsen's continuous rule, `λ ← λ·max(1/3, 1 − (2ρ − 1)³)`, and the factor of the
+    /// next failure back to 2 (H. B. Nielsen, *Damping parameter in Marquardt's method*, IMM-REP-1999-05;
+    /// K. Madsen, H. B. Nielsen, O. Tingleff, *Methods for non-linear least squares problems*, 2004,
+    /// eq. 3.16). Why not the step rule it replaces (÷10 above ρ = 3/4, ×10 below 1/4 or on a failure,
+    /// and a damping reached from a failed step never lowered): in the flat valleys of nearly dependent
+    /// parameters — the complete geometry beside a tracker frame, a probe and compliances — the damping
+    /// at which steps gain lies between two powers of ten. The step rule alternated between them, failing
+    /// at the lower and crawling at the higher (on the UR10's series A a fit's gain shrank 0.86× a step
+    /// until the 100-iteration limit); the continuous rule settles where steps gain.
     pub(crate) fn adapt(&mut self, rho: f64) {
-        let raised = std::mem::take(&mut self.raised);
-        if rho > 0.75 && !raised {
-            self.lambda = (self.lambda * 0.1).max(1e-12);
-        } else if rho < 0.25 {
-            self.lambda *= 10.0;
-        }
+        let x = 2.0 * rho - 1.0;
+        self.lambda = (self.lambda * (1.0 / 3.0f64).max(1.0 - x * x * x)).max(1e-12);
+        self.nu = 2.0;
+    }
+
+    /// The damping after a failed step: raised by `ν`, which doubles with each failure in a row
+    /// ([`Lm::adapt`]'s rule).
+    pub(crate) fn raise(&mut self) {
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
     }
 
     /// Whether the iteration is to be repeated: the Jacobian was just refreshed after a failed chord
