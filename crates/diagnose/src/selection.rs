@@ -224,7 +224,7 @@ pub(crate) fn score(
         }
     }
     let unsettled = held.thetas.iter().zip(&held.settled).filter(|(t, _)| !t.is_empty()).all(|(_, s)| !s);
-    let quoted_fold = runaway.as_ref().and_then(|_| held.thetas.iter().position(|t| values(t)));
+    let (runaway, quoted_fold) = runaway.map_or((None, None), |(r, fold)| (Some(r), Some(fold)));
     Ok(Scored::Candidate(Box::new(Candidate {
         effect: c,
         new_free: addition.new_free,
@@ -237,14 +237,18 @@ pub(crate) fn score(
     })))
 }
 
+/// A candidate's value beyond the bounds in every fold's fit, and the first fold whose fit holds it.
+type Runaway = (Implausible, usize);
+
 /// The candidate's (the last of `with`) value beyond the bounds in every fold's fit of `held`, if it is,
-/// and, for a value beyond its size, what it traded with in the first fold's fit that reached one.
+/// with the first fold whose fit reached one (the fit a refusal quotes), and, for a value beyond its
+/// size, what it traded with in that fit.
 fn runaway_and_trade(
     scorer: &Scorer<'_>,
     with: &[Effect],
     held: &HeldOut,
     plausibility: &Plausibility,
-) -> Result<(Option<Implausible>, Option<Trade>), DiagnoseError> {
+) -> Result<(Option<Runaway>, Option<Trade>), DiagnoseError> {
     let Some((&c, effects)) = with.split_last() else { return Ok((None, None)) };
     let o: usize = effects.iter().map(Effect::len).sum();
     let values = |t: &[f64]| t.len() >= o + c.len();
@@ -254,19 +258,20 @@ fn runaway_and_trade(
         .filter(|t| values(t))
         .map(|t| implausible(&scorer.scale, &t[o..o + c.len()], c, plausibility))
         .collect();
-    let runaway = if !reasons.is_empty() && reasons.iter().all(Option::is_some) {
-        reasons.into_iter().flatten().next()
-    } else {
-        None
+    let first = held.thetas.iter().position(|t| values(t));
+    let runaway = match first {
+        Some(fold) if reasons.iter().all(Option::is_some) => reasons.into_iter().flatten().next().map(|r| (r, fold)),
+        _ => None,
     };
-    let trade = match runaway.as_ref().and_then(Implausible::excess) {
-        Some(_) => match scorer.folds.iter().zip(&held.thetas).find(|(_, t)| values(t)) {
-            Some(((train, _), theta)) => {
-                let model = scorer.model(with, train)?;
-                scorer.traded_with(&model, theta, train, with.len() - 1)?
-            }
-            None => None,
-        },
+    let traded_in = runaway.as_ref().filter(|(r, _)| r.excess().is_some()).and_then(|&(_, f)| {
+        let (train, _) = scorer.folds.get(f)?;
+        Some((train, held.thetas.get(f)?))
+    });
+    let trade = match traded_in {
+        Some((train, theta)) => {
+            let model = scorer.model(with, train)?;
+            scorer.traded_with(&model, theta, train, with.len() - 1)?
+        }
         None => None,
     };
     Ok((runaway, trade))
