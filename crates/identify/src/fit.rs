@@ -7,7 +7,7 @@ use serde::Serialize;
 use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
-use crate::identifiability::{FixedParameter, identifiable, inert_columns};
+use crate::identifiability::{FixedParameter, column_norms, identifiable, inert_columns};
 use crate::lm::{Lm, REUSE_JACOBIAN, Rates, SPECULATE, converged_gain};
 use crate::model::Model;
 use crate::residuals::weighted;
@@ -258,7 +258,7 @@ pub fn fit_from(
         if !inert {
             break;
         }
-        let norms: Vec<f64> = (0..model.len()).map(|c| it.jac.col(c).norm_l2()).collect();
+        let norms = column_norms(it.jac.as_ref());
         let inert_now = inert_columns(&norms);
         inert = (0..model.len()).any(|c| start.movable[c] && inert_now[c]);
         // Identifiable from the data alone: the prior's rows would make every column so.
