@@ -53,7 +53,7 @@ use crate::config::{Config, Shrinkage};
 use crate::error::DiagnoseError;
 use crate::folds::Folds;
 use crate::plausibility::implausible;
-use crate::scoring::{CHUNK_POSES, HeldOut, Scorer, prior, shrunk, significantly_better};
+use crate::scoring::{CHUNK_POSES, HeldOut, RowSet, Scorer, prior, shrunk, significantly_better};
 use crate::selection::{GIVE_UP_AFTER, Selection};
 
 /// The prior strengths tried, in rows of data per parameter (log-spaced; 0: no prior).
@@ -65,10 +65,12 @@ impl Scorer<'_> {
     /// unshrunk fit, as the phases before scored this model — not fitted again).
     fn linearised_grid(&self, effects: &[Effect], folds: &Folds, from: f64) -> Result<Vec<f64>, DiagnoseError> {
         let held = self.heldout_fits_with(effects, folds, from)?;
+        let own = std::ptr::eq(folds, &self.folds);
         let per_fold: Vec<Vec<f64>> = folds
             .par_iter()
             .zip(held.thetas.par_iter().zip(&held.free))
-            .map(|((train, test), (theta, free))| {
+            .enumerate()
+            .map(|(k, ((train, test), (theta, free)))| {
                 if train.is_empty() || test.is_empty() {
                     return Ok(vec![0.0; GRID.len()]);
                 }
@@ -76,7 +78,7 @@ impl Scorer<'_> {
                 // No Jacobian held whole ([`CHUNK_POSES`] poses at a time): the prior's weights at unit
                 // strength (a strength λ scales them by √λ), the training part's normal equations, then
                 // the test part's predicted residuals.
-                let (squares, n) = self.column_squares(&model, &model.initial(), train)?;
+                let (squares, n) = self.initial_squares(&model, train, own.then_some(RowSet::Train(k)))?;
                 let unit = prior(&model, (&squares, n), 1.0);
                 let cols: Vec<usize> = (0..model.len()).filter(|&c| free[c]).collect();
                 let p = cols.len();

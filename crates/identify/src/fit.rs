@@ -7,7 +7,7 @@ use serde::Serialize;
 use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
-use crate::identifiability::{FixedParameter, column_norms, identifiable, inert_columns};
+use crate::identifiability::{FixedParameter, Identifiable, column_norms, identifiable, inert_columns};
 use crate::lm::{Lm, REUSE_JACOBIAN, Rates, SPECULATE, converged_gain};
 use crate::model::Model;
 use crate::residuals::weighted;
@@ -35,6 +35,9 @@ pub struct Fit {
     /// Whether the fit stopped because [`Start::give_up`] held after a step: its parameters are where that
     /// step left them, not at a minimum.
     pub gave_up: bool,
+    /// The first pass's decision of which parameters the data identify at the start (what
+    /// [`Start::identified`] takes to skip deciding it again).
+    pub identified: Identifiable,
     /// Whether the iteration ended by its own test — the next step predicted or found to gain less than
     /// the convergence gain (a move under a tenth of the parameters' standard deviations, `lm::SETTLED`, or 1e-9 of the cost), or no step gaining at all — rather than by [`MAX_ITERATIONS`], after
     /// which the parameters are not at the least-squares minimum.
@@ -83,6 +86,10 @@ pub struct Start {
     /// A test of the parameters after every accepted step: when it holds, the fit stops there
     /// ([`Fit::gave_up`]). None by default.
     pub give_up: Option<GiveUp>,
+    /// Which parameters the data identify at `theta` — the first pass's decision ([`Fit::identified`] of
+    /// an earlier fit of the same model on the same rows from the same `theta` with the same `movable`
+    /// and a prior alike present or absent), taken instead of deciding it again. None by default: decided.
+    pub identified: Option<Identifiable>,
 }
 
 /// A test of a fit's parameters after each accepted step from the `after_steps`-th of a pass on
@@ -109,7 +116,7 @@ impl std::fmt::Debug for GiveUp {
 impl Start {
     /// From `theta`, moving the `movable` parameters, at most [`MAX_ITERATIONS`] per pass.
     pub fn new(theta: Vec<f64>, movable: Vec<bool>) -> Self {
-        Self { theta, movable, max_iterations: MAX_ITERATIONS, prior: None, give_up: None }
+        Self { theta, movable, max_iterations: MAX_ITERATIONS, prior: None, give_up: None, identified: None }
     }
 }
 
@@ -146,9 +153,12 @@ impl Problem<'_> {
         let n = self.data_rows();
         let priored: Vec<usize> = (0..theta.len()).filter(|&k| prior.weight[k] > 0.0).collect();
         // The data's rows written into the top of `jac` (no copy of a data Jacobian), the prior's below.
+        // `weighted` writes every column of every data row; only the prior's rows are cleared here (a
+        // week's Jacobian is a hundred megabytes: clearing it whole was a pass over memory per evaluation).
         let mut jac = jac;
         if let Some(jac) = jac.as_deref_mut() {
-            jac.fill(0.0);
+            let rows = jac.nrows() - n;
+            jac.as_mut().subrows_mut(n, rows).fill(0.0);
         }
         let top = jac.as_deref_mut().map(|j| j.as_mut().subrows_mut(0, n));
         let mut r = weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, top)?;
@@ -226,26 +236,16 @@ pub fn fit_from(
     terms: &PoseTerms,
     start: &Start,
 ) -> Result<Fit, IdentifyError> {
-    if let Some(p) = &start.prior
-        && (p.centre.len() != model.len() || p.weight.len() != model.len())
-    {
-        return Err(IdentifyError::PriorLength {
-            expected: model.len(),
-            centre: p.centre.len(),
-            weight: p.weight.len(),
-        });
-    }
-    if let Some(p) = &start.prior
-        && let Some(index) =
-            (0..p.weight.len()).find(|&k| !(p.weight[k] >= 0.0 && p.weight[k].is_finite() && p.centre[k].is_finite()))
-    {
-        return Err(IdentifyError::PriorValue { index, weight: p.weight[index], centre: p.centre[index] });
-    }
+    check_prior(model, start.prior.as_ref())?;
     let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref() };
     let rates = Rates { columns: model.time_constants() };
     let mut jac = SPARE_JACOBIAN.with(|spare| std::mem::replace(&mut *spare.borrow_mut(), Mat::new()));
-    jac.truncate(0, 0);
-    jac.resize_with(problem.rows(), model.len(), |_, _| 0.0);
+    // The first evaluation writes every entry (each data row whole, the prior's rows cleared and set):
+    // a Jacobian of the same shape is taken as it is, another one cleared to its shape.
+    if (jac.nrows(), jac.ncols()) != (problem.rows(), model.len()) {
+        jac.truncate(0, 0);
+        jac.resize_with(problem.rows(), model.len(), |_, _| 0.0);
+    }
     let r = problem.residuals(&start.theta, Some(&mut jac))?;
     let mut it = Iterate { theta: start.theta.clone(), cost: ssr(&r), r, jac };
     let mut free = vec![false; model.len()];
@@ -254,19 +254,24 @@ pub fn fit_from(
     let mut inert = true;
     let mut converged_every_pass = true;
     let mut gave_up = false;
-    for _pass in 0..2 {
+    let mut first: Option<Identifiable> = None;
+    for pass in 0..2 {
         if !inert {
             break;
         }
         let norms = column_norms(it.jac.as_ref());
         let inert_now = inert_columns(&norms);
         inert = (0..model.len()).any(|c| start.movable[c] && inert_now[c]);
-        // Identifiable from the data alone: the prior's rows would make every column so.
-        let decided = if problem.prior.is_some() {
-            identifiable(it.jac.subrows(0, problem.data_rows()), &start.movable)
-        } else {
-            identifiable(it.jac.as_ref(), &start.movable)
+        // Identifiable from the data alone: the prior's rows would make every column so. At the start,
+        // the decision a caller kept from a fit of the same model, rows and start, when it has one.
+        let decided = match (&start.identified, pass) {
+            (Some(known), 0) => known.clone(),
+            _ if problem.prior.is_some() => identifiable(it.jac.subrows(0, problem.data_rows()), &start.movable),
+            _ => identifiable(it.jac.as_ref(), &start.movable),
         };
+        if pass == 0 {
+            first = Some(decided.clone());
+        }
         if decided.free == free {
             break;
         }
@@ -309,7 +314,25 @@ pub fn fit_from(
         converged: converged_every_pass,
         gave_up,
         theta: it.theta,
+        identified: first.unwrap_or(Identifiable { free: vec![false; model.len()], fixed: Vec::new() }),
     })
+}
+
+/// A prior the fit can take: one mean and one weight per parameter of `model`, each weight finite and
+/// not negative, each mean finite.
+fn check_prior(model: &Model, prior: Option<&Prior>) -> Result<(), IdentifyError> {
+    let Some(p) = prior else { return Ok(()) };
+    if p.centre.len() != model.len() || p.weight.len() != model.len() {
+        return Err(IdentifyError::PriorLength {
+            expected: model.len(),
+            centre: p.centre.len(),
+            weight: p.weight.len(),
+        });
+    }
+    match (0..p.weight.len()).find(|&k| !(p.weight[k] >= 0.0 && p.weight[k].is_finite() && p.centre[k].is_finite())) {
+        Some(index) => Err(IdentifyError::PriorValue { index, weight: p.weight[index], centre: p.centre[index] }),
+        None => Ok(()),
+    }
 }
 
 /// How one pass of iterations ended.
@@ -618,5 +641,44 @@ mod prior {
         let o = model.offsets()[0];
         let found = Vector3::new(free.theta[o], free.theta[o + 1], free.theta[o + 2]);
         assert!((found.norm() - tool.norm()).abs() < 0.05, "{found:?}");
+    }
+
+    /// A fit takes the thread's spare Jacobian as it is when its shape is the fit's (`fit_from`; the
+    /// first evaluation writes every entry): the same fit, after one whose prior's rows sat in other
+    /// columns of a Jacobian of the same shape, lands on the same values to the bit as on a fresh
+    /// Jacobian. Fails if an entry of the last fit's Jacobian — a prior's weight left in a column the
+    /// next prior does not shrink — reaches the next fit.
+    #[test]
+    fn a_fit_is_the_same_whatever_the_last_fit_left_in_its_jacobian() {
+        let chain = irb140_table9();
+        let robot = Robot::new("IRB 140", chain.clone());
+        let mut rng = ChaCha8Rng::seed_from_u64(29);
+        let tool = Vector3::new(0.4, 0.2, -0.9);
+        let measurements: Vec<Measurement> = (0..40)
+            .map(|_| {
+                let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
+                let pose = chain.tool_pose(&q).unwrap();
+                measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
+            })
+            .collect();
+        let data = Dataset { measurements, ..Dataset::default() };
+        let model = Model::new(&robot, vec![Effect::ToolPoint]).unwrap();
+        let all: Vec<usize> = (0..data.len()).collect();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let with = |weight: Vec<f64>| {
+            let mut start = Start::new(model.initial(), vec![true; 3]);
+            start.prior = Some(Prior { centre: vec![0.3, 0.0, -0.4], weight });
+            fit_from(&robot, &model, &data, &all, &terms, &start).unwrap()
+        };
+        super::release_scratch();
+        let fresh = with(vec![2.0, 5.0, 0.0]);
+        // Two prior rows as well (the same shape), in columns 1 and 2, and other values everywhere.
+        let other = with(vec![0.0, 30.0, 70.0]);
+        assert_ne!(other.theta, fresh.theta);
+        let again = with(vec![2.0, 5.0, 0.0]);
+        assert_eq!(again.theta, fresh.theta);
+        assert_eq!(again.ssr.to_bits(), fresh.ssr.to_bits());
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&again.std), bits(&fresh.std));
     }
 }
