@@ -773,6 +773,7 @@ fn half_carried_by(d: &[f64], stride: usize) -> (usize, usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use thermokin_identify::JointIndex;
 
     /// Half a displacement's `‖d‖²` counted over the poses it is largest at: one pose holding most of it
     /// is one pose; equal poses take half of them; none moved, none.
@@ -823,6 +824,22 @@ mod tests {
         assert!(significantly_better(&even, &b, 2.0, &per_block));
     }
 
+    /// A simulated IRB 140 with every joint's row 0.1 mm off, 60 poses.
+    #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+    fn rows_off() -> (thermokin_chain::Robot, thermokin_chain::Dataset) {
+        use crate::{HiddenEffect, SimulationConfig, simulate};
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let robot = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap();
+        let hidden: Vec<HiddenEffect> = (0..6)
+            .map(|j| HiddenEffect {
+                effect: Effect::LinkDeviation(JointIndex::of(&robot, j).unwrap()),
+                values: vec![0.1, -0.1, 0.1, 0.0, 0.0, 0.0],
+            })
+            .collect();
+        let data = simulate(&robot, &hidden, &SimulationConfig { poses: 60, ..SimulationConfig::default() }).unwrap();
+        (robot, data)
+    }
+
     /// What a value traded with, on a simulated IRB 140 (every joint's row 0.1 mm off, 60 poses): a
     /// joint offset of 0.5° beside its link row, which holds the offset's direction (the row's rotation
     /// about the joint's axis, the parent's frame), gives a displacement that row spans entirely; a
@@ -830,18 +847,8 @@ mod tests {
     #[test]
     #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
     fn a_trade_names_the_block_that_spans_the_displacement() {
-        use crate::{Config, HiddenEffect, SimulationConfig, simulate};
-        use thermokin_identify::JointIndex;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let robot = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap();
+        let (robot, data) = rows_off();
         let joint = |j| JointIndex::of(&robot, j).unwrap();
-        let hidden: Vec<HiddenEffect> = (0..6)
-            .map(|j| HiddenEffect {
-                effect: Effect::LinkDeviation(joint(j)),
-                values: vec![0.1, -0.1, 0.1, 0.0, 0.0, 0.0],
-            })
-            .collect();
-        let data = simulate(&robot, &hidden, &SimulationConfig { poses: 60, ..SimulationConfig::default() }).unwrap();
         let config = Config::default();
         let scorer = Scorer::new(&robot, &data, &config);
         let all = scorer.all();
@@ -872,18 +879,8 @@ mod tests {
     #[test]
     #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
     fn what_a_scorer_keeps_between_fits_changes_no_fit() {
-        use crate::{Config, HiddenEffect, SimulationConfig, simulate};
-        use thermokin_identify::JointIndex;
-        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
-        let robot = thermokin_io::read_robot(&root.join("configs/irb140.toml")).unwrap();
+        let (robot, data) = rows_off();
         let joint = |j| JointIndex::of(&robot, j).unwrap();
-        let hidden: Vec<HiddenEffect> = (0..6)
-            .map(|j| HiddenEffect {
-                effect: Effect::LinkDeviation(joint(j)),
-                values: vec![0.1, -0.1, 0.1, 0.0, 0.0, 0.0],
-            })
-            .collect();
-        let data = simulate(&robot, &hidden, &SimulationConfig { poses: 60, ..SimulationConfig::default() }).unwrap();
         let config = Config::default();
         let effects: Vec<Effect> = [Effect::Registration, Effect::ToolPoint]
             .into_iter()

@@ -583,6 +583,21 @@ mod prior {
     use super::{Prior, Start, fit_from};
     use crate::{Effect, Model, PoseTerms, residuals_and_jacobian};
 
+    /// Table 9's IRB 140 carrying a tool point `tool` (mm from the flange), measured at `poses` seeded
+    /// configurations with 0.05 mm of noise.
+    fn tool_point_data(seed: u64, poses: usize, tool: Vector3<f64>) -> (Robot, Dataset) {
+        let chain = irb140_table9();
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let measurements: Vec<Measurement> = (0..poses)
+            .map(|_| {
+                let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
+                let pose = chain.tool_pose(&q).unwrap();
+                measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
+            })
+            .collect();
+        (Robot::new("IRB 140", chain), Dataset { measurements, ..Dataset::default() })
+    }
+
     /// The shrunk fit against the closed form of ridge regression: the tool point's position enters the
     /// prediction affinely (`p = R(q)·t + p₀(q)`), so the penalised least squares has the solution
     /// `θ* = θ₀ + (JᵀJ + W)⁻¹ (Jᵀ r₀ + W (c − θ₀))` (`W = diag(wₖ²)`, `r₀` the residuals at `θ₀`),
@@ -590,18 +605,8 @@ mod prior {
     /// data; an overwhelming one holds it at the prior's mean.
     #[test]
     fn the_prior_gives_the_ridge_solution_of_an_affine_problem() {
-        let chain = irb140_table9();
-        let robot = Robot::new("IRB 140", chain.clone());
-        let mut rng = ChaCha8Rng::seed_from_u64(17);
         let tool = Vector3::new(0.8, -0.5, 1.2);
-        let measurements: Vec<Measurement> = (0..25)
-            .map(|_| {
-                let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
-                let pose = chain.tool_pose(&q).unwrap();
-                measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
-            })
-            .collect();
-        let data = Dataset { measurements, ..Dataset::default() };
+        let (robot, data) = tool_point_data(17, 25, tool);
         let model = Model::new(&robot, vec![Effect::ToolPoint]).unwrap();
         let all: Vec<usize> = (0..data.len()).collect();
         let terms = PoseTerms::of(&robot, &data, 0.0);
@@ -650,18 +655,7 @@ mod prior {
     /// next prior does not shrink — reaches the next fit.
     #[test]
     fn a_fit_is_the_same_whatever_the_last_fit_left_in_its_jacobian() {
-        let chain = irb140_table9();
-        let robot = Robot::new("IRB 140", chain.clone());
-        let mut rng = ChaCha8Rng::seed_from_u64(29);
-        let tool = Vector3::new(0.4, 0.2, -0.9);
-        let measurements: Vec<Measurement> = (0..40)
-            .map(|_| {
-                let q: Vec<f64> = (0..6).map(|_| 2.0 * gauss(&mut rng).clamp(-1.2, 1.2)).collect();
-                let pose = chain.tool_pose(&q).unwrap();
-                measured_point(q, (pose * nalgebra::Point3::from(tool)).coords, 0.05, &mut rng)
-            })
-            .collect();
-        let data = Dataset { measurements, ..Dataset::default() };
+        let (robot, data) = tool_point_data(29, 40, Vector3::new(0.4, 0.2, -0.9));
         let model = Model::new(&robot, vec![Effect::ToolPoint]).unwrap();
         let all: Vec<usize> = (0..data.len()).collect();
         let terms = PoseTerms::of(&robot, &data, 0.0);
