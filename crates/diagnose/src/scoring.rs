@@ -39,6 +39,23 @@ type ColumnSquares = (Vec<f64>, usize);
 /// A kept identifiability decision's key: the model's effects, its row set, whether the fit had a prior.
 type IdentifiedKey = (Vec<Effect>, RowSet, bool);
 
+/// The value `map` keeps under `key`, or `compute`'s, then kept there (a poisoned lock only loses the
+/// keeping: the value is deterministic).
+fn kept_or<K: std::hash::Hash + Eq, V: Clone, E>(
+    map: &Mutex<HashMap<K, V>>,
+    key: K,
+    compute: impl FnOnce() -> Result<V, E>,
+) -> Result<V, E> {
+    if let Some(known) = map.lock().ok().and_then(|m| m.get(&key).cloned()) {
+        return Ok(known);
+    }
+    let found = compute()?;
+    if let Ok(mut m) = map.lock() {
+        m.insert(key, found.clone());
+    }
+    Ok(found)
+}
+
 /// One model's fits on the folds, fold by fold: its parameters, which of them were free, and whether
 /// the fit ended by its own test.
 pub(crate) type FoldFits = Arc<Vec<(Vec<f64>, Vec<bool>, bool)>>;
@@ -187,17 +204,7 @@ impl<'a> Scorer<'a> {
         if !(key.1 || key.2) {
             return Ok(m);
         }
-        let known = self.starts.lock().ok().and_then(|s| s.get(&key).copied());
-        let start = match known {
-            Some(s) => s,
-            None => {
-                let s = initial_frames(self.robot, self.data, rows, effects)?;
-                if let Ok(mut starts) = self.starts.lock() {
-                    starts.insert(key, s);
-                }
-                s
-            }
-        };
+        let start = kept_or(&self.starts, key, || initial_frames(self.robot, self.data, rows, effects))?;
         Ok(m.with_start(start))
     }
 
@@ -508,16 +515,11 @@ impl Scorer<'_> {
         rows: &[usize],
         set: Option<RowSet>,
     ) -> Result<(Vec<f64>, usize), DiagnoseError> {
-        let Some(set) = set else { return self.column_squares(model, &model.initial(), rows) };
-        let key = (model.effects().to_vec(), set);
-        if let Some(known) = self.squares.lock().ok().and_then(|m| m.get(&key).cloned()) {
-            return Ok(known);
+        let squares = || self.column_squares(model, &model.initial(), rows);
+        match set {
+            Some(set) => kept_or(&self.squares, (model.effects().to_vec(), set), squares),
+            None => squares(),
         }
-        let found = self.column_squares(model, &model.initial(), rows)?;
-        if let Ok(mut m) = self.squares.lock() {
-            m.insert(key, found.clone());
-        }
-        Ok(found)
     }
 
     /// The squared norm of each column of the Jacobian of `model` at `theta` on `rows`, and its number of
