@@ -477,6 +477,7 @@ pub fn diagnose(
             rms_mm: p.plan.promise.planned_rms_mm,
             noise_mm: p.plan.promise.noise_mm,
             poses: p.plan.promise.poses_of_use,
+            at_nearest: p.plan.promise.planned_at_nearest,
         }),
         ..defaults
     };

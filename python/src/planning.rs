@@ -112,11 +112,12 @@ pub(crate) fn configurations(
 /// catalogue's that some choice of the candidates can make eligible — the others are in
 /// `to_dict()["left_out"]`); `region`: the poses of use ((N, dof) degrees: the program the robot will
 /// run, `thermokin plan --for`) — the plan then chooses for the predicted error there and states its
-/// promise there (`to_dict()["promise"]`); `poses`: a count or `"auto"`; `criterion` (`"parameters"`:
+/// promise there (`to_dict()["promise"]`); `beyond_arcs` (`"nearest"`, the default: a pose of use beyond
+/// the candidates' arcs planned for at its nearest candidate; `"as-given"`, as `--beyond-arcs`); `poses`: a count or `"auto"`; `criterion` (`"parameters"`:
 /// D-optimal, `"prediction"`: I-optimal, the default),
 /// `frame`, `tool` as `diagnose`; `noise_mm` for the predicted σ. Runs without the GIL.
 #[pyfunction]
-#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=None, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None, region=None))]
+#[pyo3(signature = (robot, candidates=None, *, poses=None, measured=None, samples=None, r#box=None, effects=None, noise_mm=None, criterion=None, frame=None, tool=None, seed=None, region=None, beyond_arcs=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn plan(
     py: Python<'_>,
@@ -133,6 +134,7 @@ pub fn plan(
     tool: Option<&str>,
     seed: Option<u64>,
     region: Option<PyArrayLikeDyn<'_, f64, AllowTypeChange>>,
+    beyond_arcs: Option<&str>,
 ) -> PyResult<PyPlan> {
     let samples = samples.unwrap_or(thermokin_planner::DEFAULT_SAMPLES);
     let defaults = Params::default();
@@ -153,6 +155,7 @@ pub fn plan(
         noise_mm: noise_mm.unwrap_or(defaults.noise_mm),
         criterion: choice("criterion", criterion, defaults.criterion)?,
         region,
+        beyond_arcs: choice("beyond_arcs", beyond_arcs, defaults.beyond_arcs)?,
         frame: choice("frame", frame, defaults.frame)?,
         tool: choice("tool", tool, defaults.tool)?,
         effects,

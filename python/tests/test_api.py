@@ -375,6 +375,23 @@ def test_plan_for_the_poses_of_use(irb140):
         thermokin.plan(irb140, q, poses="many")
 
 
+def test_plan_for_poses_beyond_the_candidates_arcs(irb140):
+    """Poses of use beyond the candidates' arcs: planned for at their nearest candidates by default, the
+    promise stated there and beside it what the poses as given would be promised; `beyond_arcs="as-given"`
+    plans for them as given."""
+    q = configurations(irb140, 300, 3)
+    q[:, 0] = np.clip(q[:, 0], -90.0, 90.0)
+    use = q[:12].copy()
+    use[:6, 0] = 120.0
+    promise = thermokin.plan(irb140, q, poses=20, region=use, seed=1).to_dict()["promise"]
+    assert promise["planned_at_nearest"] == 6
+    assert promise["planned_as_given_rms_mm"] > 0.0
+    given = thermokin.plan(irb140, q, poses=20, region=use, seed=1, beyond_arcs="as-given").to_dict()["promise"]
+    assert given["planned_at_nearest"] == 0 and given["planned_as_given_rms_mm"] is None
+    with pytest.raises(InputError, match="beyond_arcs"):
+        thermokin.plan(irb140, q, poses=20, region=use, beyond_arcs="somewhere")
+
+
 @pytest.mark.parametrize(
     "kwargs,message",
     [

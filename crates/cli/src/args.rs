@@ -9,7 +9,7 @@ use thermokin_deform::{SemanticsKind, TimeProfile};
 use thermokin_diagnose::{Config, Extrapolation, FoldGrouping, Masses, Outliers, Shrinkage, SimulationConfig};
 use thermokin_identify::{FrameMode, ToolMode};
 use thermokin_io::{JointUnits, PositionUnits};
-use thermokin_planner::{Criterion, Params};
+use thermokin_planner::{BeyondArcs, Criterion, Params};
 
 /// A value parser for a library setting with named values (its `CHOICES`): `--help` lists each name with
 /// its help, and the name parses into the library's own value.
@@ -484,6 +484,12 @@ pub struct PlanArgs {
     /// promises there against random poses. Without it the poses of use are the candidates.
     #[arg(long = "for", value_name = "FILE")]
     pub region: Option<PathBuf>,
+    /// What a plan --for makes of a pose of use beyond the candidates' arcs (by more than a degree on a
+    /// joint, a millimetre on a slide): plan for it at its nearest candidate, where a measurement can
+    /// check the prediction — the promise is then stated there, and beside it what the plan would
+    /// promise at the poses as given — or as given: the model's extrapolation taken as the robot there.
+    #[arg(long, value_parser = choice(BeyondArcs::CHOICES), default_value_t = Params::default().beyond_arcs)]
+    pub beyond_arcs: BeyondArcs,
     /// Plan for these effects only, `KIND[:JOINT]` (repeat); default: every pose-dependent effect of the
     /// diagnosis' catalogue that some choice of the candidates can make eligible (a gear ratio or cyclic
     /// error whose joint no candidate moves far enough is left out, and the report says so).

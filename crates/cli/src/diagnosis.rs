@@ -142,7 +142,14 @@ fn promised(path: &Path, poses: usize) -> Result<thermokin_diagnose::Promised, F
             path.display()
         )));
     }
-    Ok(thermokin_diagnose::Promised { rms_mm: field("planned_rms_mm")?, noise_mm: field("noise_mm")?, poses: made_for })
+    // Absent from a plan written before stand-ins existed: none then.
+    let at_nearest = json["promise"]["planned_at_nearest"].as_u64().map_or(0, |n| n as usize);
+    Ok(thermokin_diagnose::Promised {
+        rms_mm: field("planned_rms_mm")?,
+        noise_mm: field("noise_mm")?,
+        poses: made_for,
+        at_nearest,
+    })
 }
 
 pub fn diagnose(a: DiagnoseArgs) -> Result<u8, Failure> {

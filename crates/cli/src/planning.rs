@@ -49,6 +49,7 @@ pub fn plan(a: PlanArgs) -> Result<u8, Failure> {
         noise_mm: a.noise,
         criterion: a.criterion,
         region,
+        beyond_arcs: a.beyond_arcs,
         frame: a.frame,
         tool: a.tool,
         lateral: a.lateral,

@@ -64,6 +64,7 @@ pub(crate) fn at_use(
         resolution: heldout_resolution(frame.len(), poses.len()),
         measured_rms_mm: None,
         promised_rms_mm: None,
+        promised_at_nearest: 0,
     }))
 }
 

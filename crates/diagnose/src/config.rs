@@ -96,6 +96,9 @@ pub struct Promised {
     /// How many poses of use it was made for: [`crate::Config::poses_of_use`] must hold as many (the
     /// promise is of those poses, not of others).
     pub poses: usize,
+    /// Of them, how many the plan took at their nearest candidate (beyond the candidates' arcs:
+    /// `thermokin_planner::BeyondArcs`): its promise is stated at those stand-ins.
+    pub at_nearest: usize,
 }
 
 /// An accelerometer or inclinometer declared on a link (`--accelerometer NAME=LINK`): its columns

@@ -424,6 +424,7 @@ fn predicted_at_use(
             a.measured_rms_mm = Some(s.selected.heldout_rms_mm);
         }
         a.promised_rms_mm = config.promised.map(|p| p.rms_mm * a.residual_scale_mm / p.noise_mm);
+        a.promised_at_nearest = config.promised.map_or(0, |p| p.at_nearest);
         a
     }))
 }

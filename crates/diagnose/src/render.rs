@@ -380,9 +380,13 @@ fn at_use(f: &mut std::fmt::Formatter<'_>, a: &crate::report::AtUse) -> std::fmt
     )?;
     if let Some(p) = a.promised_rms_mm {
         let against = a.measured_rms_mm.map_or(String::new(), |m| format!(": measured {:.2} × of it", m / p));
+        let stand_ins = match a.promised_at_nearest {
+            0 => String::new(),
+            n => format!(", {n} of the poses taken at their nearest candidate as the plan was made"),
+        };
         writeln!(
             f,
-            "  the plan promised {p:.4} mm there at this residual scale (its figure at the tracker's noise, scaled by the scale found){against}"
+            "  the plan promised {p:.4} mm there at this residual scale (its figure at the tracker's noise, scaled by the scale found{stand_ins}){against}"
         )?;
     }
     if let Some(m) = a.measured_rms_mm {

@@ -396,6 +396,9 @@ pub struct AtUse {
     /// residual scale this fit found: the plan's figure times `residual_scale_mm / its noise` (the
     /// promise scales with the noise it was stated at), mm.
     pub promised_rms_mm: Option<f64>,
+    /// Of the poses of use, how many the plan's promise took at their nearest candidate
+    /// ([`crate::Promised::at_nearest`]).
+    pub promised_at_nearest: usize,
 }
 
 /// The final model (fitted on all measurements) and the nominal one on an explicit hold-out set.

@@ -14,7 +14,7 @@ use thermokin_identify::{
 };
 
 use crate::error::PlanError;
-use crate::params::{Params, Region};
+use crate::params::{BeyondArcs, Params, Region};
 use crate::report::LeftOut;
 
 /// Poses per chunk of the Jacobian's parallel evaluation.
@@ -37,13 +37,21 @@ pub(crate) struct Design {
     pub measured: Mat<f64>,
     /// Nominal tool positions of the candidates, mm (the robot's base frame).
     pub positions: Vec<Vector3<f64>>,
-    /// `W`: the mean over the poses of use ([`crate::Region`]) of `M̃ᵢᵀ M̃ᵢ`, `M̃` their rows with the
+    /// `W`: the mean over the poses of use ([`crate::Region`]; one beyond the candidates' arcs taken at
+    /// its nearest candidate unless [`BeyondArcs::AsGiven`]) of `M̃ᵢᵀ M̃ᵢ`, `M̃` their rows with the
     /// frame a test re-measures projected out ([`thermokin_identify::frame_refitted_weight`]) — so that `trace(W Σ)` is the mean
     /// squared error of the predicted tool position over the poses of use, once that frame is fitted
     /// there, of a parameter covariance `Σ` (scaled columns).
     pub use_weight: Mat<f64>,
+    /// [`Design::use_weight`] of the poses of use as given, where some reach beyond the candidates' arcs
+    /// and `use_weight` takes them at their nearest candidates ([`BeyondArcs::Nearest`]): what the model
+    /// planned for, taken as the robot there too, would promise at them.
+    pub as_given_weight: Option<Mat<f64>>,
     /// The poses of use.
     pub region_poses: usize,
+    /// How many poses of use reach beyond the candidates' arcs and are planned for at their nearest
+    /// candidate or measured pose ([`BeyondArcs::Nearest`]).
+    pub at_nearest: usize,
     /// The free columns of the frame a test re-measures (registration, unknown tool), fitted again on
     /// the poses of use: what their fit takes of a test's own noise.
     pub refitted: usize,
@@ -110,6 +118,57 @@ fn effects(
 /// The lowest and highest value of joint `j` over the configurations `qs`.
 pub(crate) fn arc<'a>(qs: impl Iterator<Item = &'a [f64]>, j: usize) -> (f64, f64) {
     qs.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), q| (l.min(q[j]), h.max(q[j])))
+}
+
+/// How far a pose of use may reach beyond the candidates' arc on a joint and still count as within it,
+/// degrees (millimetres on a slide): the rounding of a taught program's joints, not an arc of its own.
+pub(crate) const ARC_MARGIN: f64 = 1.0;
+
+/// Per joint, the lowest and highest value over the candidates and the measured poses.
+fn arcs(robot: &Robot, candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    (0..robot.chain().dof()).map(|j| arc(candidates.iter().chain(measured).map(Vec::as_slice), j)).collect()
+}
+
+/// Whether `q` reaches beyond `arcs` ([`arcs`]) on some joint by more than [`ARC_MARGIN`].
+fn reaches_beyond(robot: &Robot, arcs: &[(f64, f64)], q: &[f64]) -> bool {
+    robot.chain().joints().iter().zip(arcs).zip(q).any(|((joint, &(lo, hi)), &v)| {
+        let ext = |x: f64| units::joint_value_out(joint.kind, x);
+        ext(lo) - ext(v) > ARC_MARGIN || ext(v) - ext(hi) > ARC_MARGIN
+    })
+}
+
+/// The configurations a plan for prediction chooses for, one per pose of use: the pose itself, or —
+/// where it reaches beyond the candidates' arcs and `beyond` is [`BeyondArcs::Nearest`] — the nearest
+/// candidate or measured pose, joint differences in fractions of each joint's travel (a slide's
+/// millimetres and a wrist's radians weigh by how much of their range they are). With how many were
+/// replaced.
+fn stand_ins(
+    robot: &Robot,
+    poses: &[Vec<f64>],
+    candidates: &[Vec<f64>],
+    measured: &[Vec<f64>],
+    beyond: BeyondArcs,
+) -> (Vec<Vec<f64>>, usize) {
+    if beyond == BeyondArcs::AsGiven {
+        return (poses.to_vec(), 0);
+    }
+    let arcs = arcs(robot, candidates, measured);
+    let travel: Vec<f64> = (0..robot.chain().dof()).map(|j| travel(robot, j).max(f64::MIN_POSITIVE)).collect();
+    let distance =
+        |a: &[f64], b: &[f64]| a.iter().zip(b).zip(&travel).map(|((x, y), t)| ((x - y) / t).powi(2)).sum::<f64>();
+    let mut replaced = 0;
+    let out = poses
+        .iter()
+        .map(|q| {
+            if !reaches_beyond(robot, &arcs, q) {
+                return q.clone();
+            }
+            replaced += 1;
+            let nearest = candidates.iter().chain(measured).min_by(|a, b| distance(a, q).total_cmp(&distance(b, q)));
+            nearest.unwrap_or(q).clone()
+        })
+        .collect();
+    (out, replaced)
 }
 
 /// Why no choice of the candidates can make `e` eligible for the diagnosis: its joint's arc over every
@@ -186,21 +245,28 @@ impl Design {
         let reduce = |j: &Mat<f64>| Mat::from_fn(j.nrows(), free.len(), |r, k| j[(r, free[k])] / scale[k]);
         let candidates_rows = reduce(&jac_pool);
         let refitted = thermokin_identify::refitted_frame(&model, &free);
-        let (use_weight, region_poses) = match &params.region {
-            Region::Candidates => (frame_refitted_weight(&candidates_rows, &refitted), candidates.len()),
+        let weight_at = |poses: &[Vec<f64>]| -> Result<Mat<f64>, PlanError> {
+            let rows = reduce(&jacobian(robot, &model, &nominal_set(robot, poses)?)?);
+            Ok(frame_refitted_weight(&rows, &refitted))
+        };
+        let (use_weight, as_given_weight, region_poses, at_nearest) = match &params.region {
+            Region::Candidates => (frame_refitted_weight(&candidates_rows, &refitted), None, candidates.len(), 0),
             Region::Poses(poses) => {
                 for (i, q) in poses.iter().enumerate() {
                     crate::candidates::check(robot, q, "pose of use", i + 1)?;
                 }
-                let rows = reduce(&jacobian(robot, &model, &nominal_set(robot, poses)?)?);
-                (frame_refitted_weight(&rows, &refitted), poses.len())
+                let (chosen_for, at_nearest) = stand_ins(robot, poses, candidates, measured, params.beyond_arcs);
+                let as_given = (at_nearest > 0).then(|| weight_at(poses)).transpose()?;
+                (weight_at(&chosen_for)?, as_given, poses.len(), at_nearest)
             }
         };
         Ok(Self {
             left_out,
             not_identifiable: model.fixed_parameters(&ident.fixed),
             use_weight,
+            as_given_weight,
             region_poses,
+            at_nearest,
             refitted: refitted.len(),
             candidates: candidates_rows,
             measured: reduce(&jac_done),
@@ -225,4 +291,37 @@ pub(crate) fn product(a: faer::MatRef<'_, f64>, b: faer::MatRef<'_, f64>) -> Mat
     let mut out = Mat::zeros(a.nrows(), b.ncols());
     matmul(out.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
     out
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use super::{BeyondArcs, stand_ins};
+
+    /// A pose of use within the candidates' arcs (or beyond them by less than a degree) is planned for as
+    /// given; one beyond them on a joint is planned for at the candidate nearest to it, in fractions of
+    /// each joint's travel — not the candidate nearest in raw radians; `AsGiven` keeps every pose.
+    #[test]
+    fn a_pose_of_use_beyond_the_candidates_arcs_stands_in_at_its_nearest_candidate() {
+        let robot = thermokin_io::read_robot(&thermokin_testdata::workspace("configs/irb140.toml")).unwrap();
+        let deg = |v: [f64; 6]| v.iter().map(|x| x.to_radians()).collect::<Vec<f64>>();
+        let candidates = vec![
+            deg([-90.0, -30.0, -40.0, -100.0, -60.0, -150.0]),
+            deg([90.0, 30.0, 40.0, 100.0, 60.0, 150.0]),
+            deg([0.0, 0.0, 0.0, 0.0, 0.0, 0.0]),
+        ];
+        let inside = deg([10.0, 5.0, -5.0, 20.0, 0.0, 30.0]);
+        let barely = deg([90.5, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        // Beyond joint 1's arc by 30°; nearest to the second candidate once each joint's travel weighs
+        // in (joint 6's 150° is a small part of its travel), nearest to the third in raw radians.
+        let beyond = deg([120.0, 20.0, 30.0, 60.0, 40.0, 0.0]);
+        let poses = vec![inside.clone(), barely.clone(), beyond.clone()];
+        let (out, replaced) = stand_ins(&robot, &poses, &candidates, &[], BeyondArcs::Nearest);
+        assert_eq!(replaced, 1);
+        assert_eq!(out, vec![inside, barely, candidates[1].clone()]);
+        let raw = |a: &[f64]| a.iter().zip(&beyond).map(|(x, y)| (x - y).powi(2)).sum::<f64>();
+        assert!(raw(&candidates[2]) < raw(&candidates[1]), "the case must tell the two distances apart");
+        let (out, replaced) = stand_ins(&robot, &poses, &candidates, &[], BeyondArcs::AsGiven);
+        assert_eq!((out, replaced), (poses, 0));
+    }
 }

@@ -32,7 +32,7 @@ use thermokin_chain::{Robot, units};
 
 pub use candidates::{Candidates, DEFAULT_SAMPLES};
 pub use error::PlanError;
-pub use params::{Criterion, Params, Poses, Region, WorkspaceBox};
+pub use params::{BeyondArcs, Criterion, Params, Poses, Region, WorkspaceBox};
 pub use report::{
     Beyond, Comparison, CountRule, JointCoverage, LeftOut, Motion, ParameterPrecision, Plan, PlannedPose, PosesOfUse,
     Promise,
@@ -149,8 +149,8 @@ fn helps(design: &Design, reduced: &[f64]) -> Vec<String> {
     out
 }
 
-/// The joints along which the poses of use reach more than a degree (a slide: a millimetre) beyond
-/// every candidate's and measured pose's arc.
+/// The joints along which the poses of use reach more than [`design::ARC_MARGIN`] (a degree; a slide: a
+/// millimetre) beyond every candidate's and measured pose's arc.
 fn beyond(robot: &Robot, poses: &[Vec<f64>], candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<Beyond> {
     let ext = |j: usize, v: f64| units::joint_value_out(robot.chain().joints()[j].kind, v);
     (0..robot.chain().dof())
@@ -158,7 +158,7 @@ fn beyond(robot: &Robot, poses: &[Vec<f64>], candidates: &[Vec<f64>], measured: 
             let (lo, hi) = design::arc(poses.iter().map(Vec::as_slice), j);
             let (c_lo, c_hi) = design::arc(candidates.iter().chain(measured).map(Vec::as_slice), j);
             let out = (ext(j, c_lo) - ext(j, lo)).max(ext(j, hi) - ext(j, c_hi));
-            (out > 1.0).then(|| Beyond {
+            (out > design::ARC_MARGIN).then(|| Beyond {
                 joint: j + 1,
                 use_arc: [ext(j, lo), ext(j, hi)],
                 candidates_arc: [ext(j, c_lo), ext(j, c_hi)],
@@ -176,6 +176,8 @@ fn promise(design: &Design, params: &Params, planned: &Precision, random: &[Prec
             Region::Poses(_) => PosesOfUse::Given,
         },
         poses_of_use: design.region_poses,
+        planned_at_nearest: design.at_nearest,
+        planned_as_given_rms_mm: planned.variance_as_given.map(rms).filter(|r| r.is_finite()),
         refitted: design.refitted,
         noise_mm: params.noise_mm,
         planned_rms_mm: rms(planned.variance),

@@ -18,6 +18,9 @@ pub(crate) struct Precision {
     /// `trace(W B)`, `B = (δI + MᵀM)⁻¹`: the mean squared error of the predicted tool position over
     /// the poses of use per unit of noise variance ([`thermokin_identify::frame_refitted_weight`]).
     pub variance: f64,
+    /// The same at the poses of use as given where some were taken at their nearest candidates
+    /// ([`Design::as_given_weight`]).
+    pub variance_as_given: Option<f64>,
     /// Per free column of the design, its predicted standard deviation in model units (mm, radians, …)
     /// at noise 1 mm; `None` where these poses cannot identify it.
     pub sigma_per_mm: Vec<Option<f64>>,
@@ -30,9 +33,13 @@ pub(crate) struct Precision {
 /// The precision of candidates `rows` after the measured poses.
 pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
     let m = design.rows_with_measured(rows);
-    let (criterion, variance) = match log_det_inverse(&information(&m)) {
-        Some((d, b)) => (d, thermokin_identify::trace_of_product(&design.use_weight, &b)),
-        None => (f64::NEG_INFINITY, f64::INFINITY),
+    let (criterion, variance, variance_as_given) = match log_det_inverse(&information(&m)) {
+        Some((d, b)) => (
+            d,
+            thermokin_identify::trace_of_product(&design.use_weight, &b),
+            design.as_given_weight.as_ref().map(|w| thermokin_identify::trace_of_product(w, &b)),
+        ),
+        None => (f64::NEG_INFINITY, f64::INFINITY, design.as_given_weight.as_ref().map(|_| f64::INFINITY)),
     };
     let ident = identifiable(m.as_ref(), &vec![true; m.ncols()]);
     let cols: Vec<usize> = (0..m.ncols()).filter(|&c| ident.free[c]).collect();
@@ -62,6 +69,7 @@ pub(crate) fn precision(design: &Design, rows: &[usize]) -> Precision {
     Precision {
         criterion,
         variance,
+        variance_as_given,
         sigma_per_mm,
         not_identifiable: design.model.fixed_parameters(&fixed),
         observability: observability(&m, &vec![true; m.ncols()]),

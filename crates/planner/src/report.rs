@@ -101,6 +101,13 @@ pub struct Promise {
     pub region: PosesOfUse,
     /// How many poses of use.
     pub poses_of_use: usize,
+    /// Of them, how many reach beyond the candidates' arcs and were planned for at their nearest candidate
+    /// or measured pose ([`crate::BeyondArcs::Nearest`]): the figures here are then at those stand-ins,
+    /// where a measurement can check them.
+    pub planned_at_nearest: usize,
+    /// With stand-ins, the planned poses' predicted held-out RMS at the poses of use as given, mm: the
+    /// model planned for taken as the robot beyond the candidates' arcs too.
+    pub planned_as_given_rms_mm: Option<f64>,
     /// Frame parameters fitted again on the poses of use (registration, unknown tool).
     pub refitted: usize,
     /// The noise the figures are stated at, mm per axis.
@@ -291,6 +298,10 @@ impl Plan {
     fn promise_text(&self) -> String {
         let p = &self.promise;
         let region = match p.region {
+            PosesOfUse::Given if p.planned_at_nearest > 0 => format!(
+                "the {} poses of use given ({} taken at their nearest candidate: below)",
+                p.poses_of_use, p.planned_at_nearest
+            ),
             PosesOfUse::Given => format!("the {} poses of use given", p.poses_of_use),
             PosesOfUse::Candidates => format!("the {} candidates (the poses of use: no --for)", p.poses_of_use),
         };
@@ -314,6 +325,14 @@ impl Plan {
                 "warning: the poses of use leave the candidates' arcs — {}: there the model is extrapolated, its error there is not what any variance promises, and a model that is not the robot may do worse than the promise; candidates that cover those arcs would measure it\n",
                 joints.join(", ")
             ));
+            if p.planned_at_nearest > 0 {
+                out.push_str(&format!(
+                    "  {} of the {} poses of use reach beyond those arcs: planned for, and the figures above stated, at the nearest candidate each, where a measurement can check the prediction (--beyond-arcs as-given plans for them as given); at the poses as given, the model planned for taken as the robot there, the planned poses would promise {}\n",
+                    p.planned_at_nearest,
+                    p.poses_of_use,
+                    p.planned_as_given_rms_mm.map_or("nothing finite".into(), |r| format!("{r:.4} mm"))
+                ));
+            }
         }
         if let Some(c) = &self.count {
             match c.stopped {

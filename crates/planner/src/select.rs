@@ -6,7 +6,8 @@
 //! of the parameters — a Bayesian design — that keeps it finite while fewer poses than parameters leave
 //! directions unseen, so small that each pose first adds the directions nothing has seen yet).
 //! - **Prediction (I-optimal, the default):** minimise `trace(W B)`, `W` the mean of `M̃ᵢᵀM̃ᵢ` over the
-//!   poses of use (`Region`: the poses given, the program to be compensated, or else the candidates),
+//!   poses of use (`Region`: the poses given, the program to be compensated, or else the candidates;
+//!   one beyond the candidates' arcs taken at its nearest candidate, `BeyondArcs`),
 //!   `M̃` their rows with the frame a test re-measures (a tracker's registration, an unknown tool)
 //!   projected out over all of them ([`thermokin_identify::frame_refitted_weight`]): the mean squared
 //!   error of the predicted tool position where the robot will work, once that frame is fitted there.
@@ -328,7 +329,9 @@ mod tests {
             measured: Mat::from_fn(3 * p, p, |_, _| rng.random_range(-1.0..1.0)),
             positions: vec![],
             use_weight: w,
+            as_given_weight: None,
             region_poses: n,
+            at_nearest: 0,
             refitted: 0,
             left_out: vec![],
         }

@@ -51,6 +51,17 @@ fn said(out: &mut String, plan: &Plan) {
             "<p class=\"warn\">The poses of use leave the candidates' arcs — {}: there the model is extrapolated, and no variance bounds its error.</p>",
             escape(&joints.join(", "))
         );
+        let p = &plan.promise;
+        if p.planned_at_nearest > 0 {
+            let as_given = p.planned_as_given_rms_mm.map_or("nothing finite".into(), |r| format!("{r:.4} mm"));
+            let _ = write!(
+                out,
+                "<p>{} of the {} poses of use reach beyond those arcs: the plan is made, and its promise stated, at the nearest candidate to each, where a measurement can check the prediction (<code>--beyond-arcs as-given</code> plans for them as given). At the poses as given, the model planned for taken as the robot there, the planned poses would promise {}.</p>",
+                p.planned_at_nearest,
+                p.poses_of_use,
+                escape(&as_given)
+            );
+        }
     }
     if let Some(c) = &plan.count {
         let why = match c.stopped {

@@ -179,10 +179,16 @@ fn plan_and_diagnose_for_the_poses_of_use() {
     assert!(html.contains("predicted held-out RMS at the 20 poses of use"), "the page's promise row");
     assert!(html.contains("a test at the poses of use can show"), "the page's count rule");
     assert!(text.contains("Predicted held-out RMS at the 20 poses of use given"), "{text}");
+    // Three of the 20 reach beyond the grid's arcs (by more than a degree): planned for at their nearest
+    // grid poses, and said so.
+    assert!(text.contains("3 of the 20 poses of use reach beyond those arcs"), "{text}");
+    assert!(html.contains("3 of the 20 poses of use reach beyond those arcs"), "the page's stand-ins");
     assert!(text.contains("a test at the poses of use can show"), "{text}");
     let report: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let promise = &report["promise"];
     assert!(promise["planned_rms_mm"].as_f64().unwrap() < promise["random_rms_mm"].as_f64().unwrap());
+    assert_eq!(promise["planned_at_nearest"].as_u64(), Some(3));
+    assert!(promise["planned_as_given_rms_mm"].as_f64().unwrap() > 0.0);
     let stopped = report["count"]["stopped"].as_array().unwrap();
     assert!(stopped[0].as_f64().unwrap() < stopped[1].as_f64().unwrap());
     // The planned poses' rows of the grid, measured, diagnosed for the same poses of use.

@@ -49,7 +49,7 @@ fn the_hold_out_error_at_the_poses_of_use_is_what_the_fit_predicts() {
         tool: ToolMode::Unknown,
         validation: Validation::SelectionOnly,
         poses_of_use: test.measurements.iter().map(|m| m.q.clone()).collect(),
-        promised: Some(Promised { rms_mm: 0.04, noise_mm: 0.02, poses: 120 }),
+        promised: Some(Promised { rms_mm: 0.04, noise_mm: 0.02, poses: 120, at_nearest: 0 }),
         ..Config::default()
     };
     let report = diagnose(&robot, &data, Some(&test), &config).unwrap();
@@ -68,7 +68,10 @@ fn the_hold_out_error_at_the_poses_of_use_is_what_the_fit_predicts() {
     let alone = Config { poses_of_use: Vec::new(), ..config.clone() };
     assert!(diagnose(&robot, &data, None, &alone).is_err());
     // ... and as many of them: a promise made for 60 poses is not one of these 120.
-    let other = Config { promised: Some(Promised { rms_mm: 0.04, noise_mm: 0.02, poses: 60 }), ..config.clone() };
+    let other = Config {
+        promised: Some(Promised { rms_mm: 0.04, noise_mm: 0.02, poses: 60, at_nearest: 0 }),
+        ..config.clone()
+    };
     let refused = diagnose(&robot, &data, None, &other).unwrap_err().to_string();
     assert!(refused.contains("promised.poses"), "{refused}");
     // Printed, with the measured figure beside it.

@@ -133,12 +133,17 @@ fn planned_for(robot: &Robot, pool: &Dataset, test: &Dataset, poses: usize) -> (
     (held.heldout_mean_mm, held.heldout_rms_mm, at.predicted_rms_mm, per_noise * at.residual_scale_mm)
 }
 
-/// The promise rule: planned for the poses of use, the predicted error there within a factor 1.5
-/// of the measured one — the diagnosis's own prediction, and the plan's promise at the residual scale the
-/// diagnosis found — on the WAM (30 of the grid for its 20 random poses) and the UR10 (60 of series C for
-/// series B). Measured 2026-11-28: WAM held-out RMS 2.749 mm against 2.333 predicted (1.18 ×) and 2.628
-/// promised (1.05 ×); UR10 0.669 against 0.490 (1.37 ×) and 0.712 (0.94 ×). The held-out means, 2.635 and
-/// 0.608 mm, miss the bounds (docs/planner.md, "Planned for the poses of use").
+/// The rules for `plan --for`: planned for the poses of use, the held-out mean no worse than the
+/// issue's bounds — the WAM (30 of the grid for its 20 random poses) ≤ 1.1 × the whole grid's
+/// independent 2.361 mm or ≤ 0.85 × the random median (2.824 here: `wam_thirty_planned_poses_...`), the
+/// UR10 (60 of series C for series B) no worse than the 0.480 of the day — and the predicted error
+/// there within a factor 1.5 of the measured one: the diagnosis's own prediction, and the plan's promise
+/// at the residual scale the diagnosis found. Measured 2026-11-29, the poses of use beyond the
+/// candidates' arcs planned for at their nearest candidates (`BeyondArcs::Nearest`: 3 of the WAM's 20,
+/// 1,494 of series B's 1,495): WAM 2.5151 mm, held-out RMS 2.612 against 2.231 predicted (1.17 ×) and
+/// 2.414 promised (1.08 ×); UR10 0.4588, RMS 0.509 against 0.624 (0.82 ×) and 0.538 (0.95 ×). Planned for
+/// them as given (`BeyondArcs::AsGiven`, the rule until then) the means were 2.6354 and 0.6078 — both
+/// over the bounds (docs/planner.md, "Planned for the poses of use").
 #[test]
 fn the_promise_at_the_poses_of_use_is_within_half_again_of_what_is_measured() {
     let options = thermokin_io::RobotOptions::default();
@@ -155,6 +160,8 @@ fn the_promise_at_the_poses_of_use_is_within_half_again_of_what_is_measured() {
         eprintln!(
             "{name}: mean {mean:.4}, RMS {rms:.4}, predicted {predicted:.4}, promised at its scale {promised:.4}"
         );
+        let bound = if name == "WAM" { 1.1 * 2.361 } else { 0.480 };
+        assert!(mean <= bound, "{name}: held-out mean {mean} over the issue's {bound}");
         for (what, p) in [("predicted", predicted), ("promised", promised)] {
             assert!((1.0 / 1.5..=1.5).contains(&(rms / p)), "{name}: measured {rms} vs {what} {p}");
         }
