@@ -257,6 +257,7 @@ def plan(
     tool: str | None = None,
     seed: int | None = None,
     region: _Array | None = None,
+    beyond_arcs: str | None = None,
 ) -> Plan: ...
 def compensate(
     robot: Robot,
