@@ -125,7 +125,7 @@ pub(crate) fn arc<'a>(qs: impl Iterator<Item = &'a [f64]>, j: usize) -> (f64, f6
 pub(crate) const ARC_MARGIN: f64 = 1.0;
 
 /// Per joint, the lowest and highest value over the candidates and the measured poses.
-fn arcs(robot: &Robot, candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<(f64, f64)> {
+pub(crate) fn arcs(robot: &Robot, candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<(f64, f64)> {
     (0..robot.chain().dof()).map(|j| arc(candidates.iter().chain(measured).map(Vec::as_slice), j)).collect()
 }
 

@@ -153,10 +153,11 @@ fn helps(design: &Design, reduced: &[f64]) -> Vec<String> {
 /// millimetre) beyond every candidate's and measured pose's arc.
 fn beyond(robot: &Robot, poses: &[Vec<f64>], candidates: &[Vec<f64>], measured: &[Vec<f64>]) -> Vec<Beyond> {
     let ext = |j: usize, v: f64| units::joint_value_out(robot.chain().joints()[j].kind, v);
+    let arcs = design::arcs(robot, candidates, measured);
     (0..robot.chain().dof())
         .filter_map(|j| {
             let (lo, hi) = design::arc(poses.iter().map(Vec::as_slice), j);
-            let (c_lo, c_hi) = design::arc(candidates.iter().chain(measured).map(Vec::as_slice), j);
+            let (c_lo, c_hi) = arcs[j];
             let out = (ext(j, c_lo) - ext(j, lo)).max(ext(j, hi) - ext(j, c_hi));
             (out > design::ARC_MARGIN).then(|| Beyond {
                 joint: j + 1,
