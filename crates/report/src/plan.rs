@@ -80,6 +80,10 @@ fn comparison(out: &mut String, plan: &Plan) {
     out.push_str("<h2>Against random poses</h2>");
     let promise = &plan.promise;
     let at = match promise.region {
+        thermokin_planner::PosesOfUse::Given if promise.planned_at_nearest > 0 => format!(
+            "the {} poses of use ({} at their nearest candidate)",
+            promise.poses_of_use, promise.planned_at_nearest
+        ),
         thermokin_planner::PosesOfUse::Given => format!("the {} poses of use", promise.poses_of_use),
         thermokin_planner::PosesOfUse::Candidates => format!("the {} candidates", promise.poses_of_use),
     };
