@@ -59,13 +59,42 @@ pub fn lateral_gravity_moments_into(
     })
 }
 
+/// Adds to `out` — a branch's functions on revolute joint `joint` when the branch [carries
+/// masses](crate::Branch::carries_masses): one about the axis, or two across it (`across`) — the gravity torque
+/// (the two moments) of the measured chain's own links about that joint, `masses` one per joint, N·m, as
+/// [`crate::Robot::gravity_torques`] and [`crate::lateral_gravity_moments_into`] give them: with the
+/// masses known, a branch's load is on the joint's compliance under everything the joint carries, and
+/// one compliance multiplies the sum. `out` of another length is left as it is.
+pub fn add_chain_load(
+    chain: &Chain,
+    masses: &[Option<LinkMass>],
+    q: &[f64],
+    down: &Unit<Vector3<f64>>,
+    (joint, across): (usize, bool),
+    out: &mut [f64],
+) -> Result<(), ChainError> {
+    if across && out.len() == 2 {
+        let mut moments = Vec::with_capacity(chain.dof());
+        lateral_gravity_moments_into(chain, masses, q, None, down, &mut moments)?;
+        if let Some(m) = moments.get(joint) {
+            out[0] += m[0];
+            out[1] += m[1];
+        }
+    } else if !across && out.len() == 1 {
+        let mut torques = Vec::with_capacity(chain.dof());
+        crate::gravity_torques_into(chain, masses, q, None, down, &mut torques)?;
+        out[0] += torques.get(joint).copied().unwrap_or(0.0);
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 #[allow(clippy::unwrap_used)] // Tests unwrap to fail.
 mod tests {
     use nalgebra::{Rotation3, Unit, Vector3};
 
     use super::*;
-    use crate::robot::STANDARD_GRAVITY;
+    use crate::link_mass::STANDARD_GRAVITY;
     use crate::{FixedRow, Joint, LinkMass};
 
     /// A column (prismatic, tilted a little off vertical) carrying three revolute links with masses off

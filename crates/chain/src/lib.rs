@@ -14,13 +14,14 @@ mod error_params;
 mod factors;
 mod frame;
 mod gravity_loads;
+mod link_mass;
 mod measurements;
 mod robot;
 mod so3;
 mod trig;
 pub mod units;
 
-pub use bending::{lateral_directions, lateral_gravity_moments_into};
+pub use bending::{add_chain_load, lateral_directions, lateral_gravity_moments_into};
 pub use branches::{
     Branch, branch_lateral_basis_into, branch_lateral_basis_len, branch_load_basis_into, branch_load_basis_len,
 };
@@ -34,12 +35,11 @@ pub use factors::JointFactor;
 pub use gravity_loads::{
     gravity_load_basis_into, gravity_load_basis_len, lateral_load_basis_into, lateral_load_basis_len,
 };
+pub use link_mass::LinkMass;
 pub use measurements::{
     Approach, BranchColumns, Dataset, Measurement, MeasuringOrder, STILL_MOVE, TiltSensor, time_order,
 };
-pub use robot::{
-    JointRatings, LinkMass, LinkSensor, OperatingState, Robot, Target, gravity_torques, gravity_torques_into,
-};
+pub use robot::{JointRatings, LinkSensor, OperatingState, Robot, Target, gravity_torques, gravity_torques_into};
 pub use so3::{quaternion_wxyz, rotation_angle, rotation_log};
 
 /// Errors of the kinematic core.

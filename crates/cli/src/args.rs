@@ -146,7 +146,8 @@ pub struct RobotArgs {
     pub base: Option<String>,
     /// URDF tip link (default: the single leaf). In a tree (a torso with two arms) the chains beside the
     /// path to it are the robot's branches: a measurements column named as a branch joint is its position
-    /// (degrees; mm for a slide), and what the branch carries loads the joints below it.
+    /// (degrees; mm for a slide), and what the branch carries loads the joints below it — the torque of
+    /// its links' `<inertial>` masses when the file gives them, lumped otherwise.
     #[arg(long, value_name = "LINK")]
     pub tip: Option<String>,
     /// A tool behind the robot file's tool frame (the URDF's --tip link, a TOML's `[tool]`): the TCP in that

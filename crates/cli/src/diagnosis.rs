@@ -304,8 +304,13 @@ fn say_sensors(
     };
     for s in &data.sensor_names {
         if let Some(b) = branch_of(s) {
+            let known = if b.carries_masses() {
+                "the torque of its links' masses, as the robot file gives them"
+            } else {
+                "lumped, the robot file giving no masses on it"
+            };
             eprintln!(
-                "note: {}: column `{s}` read as the position of joint `{s}` of branch `{}` (degrees; mm for a slide): what the branch carries loads the joints below link {}",
+                "note: {}: column `{s}` read as the position of joint `{s}` of branch `{}` (degrees; mm for a slide): what the branch carries loads the joints below link {} ({known})",
                 path.display(),
                 b.name,
                 b.link

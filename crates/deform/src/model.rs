@@ -131,18 +131,20 @@ pub fn lateral_row_error(
 }
 
 /// The load of one of the robot's branches ([`thermokin_chain::Branch`]) on joint `joint`'s gravity
-/// compliance, known without masses: `Δq_joint += Σ θ_b g_b(q, q_branch)` over the functions of
+/// compliance: `Δq_joint += Σ θ_b g_b(q, q_branch)` over the functions of
 /// [`thermokin_chain::branch_load_basis_into`] at the commanded joints and the branch's joint values —
 /// read from the operating state by the branch joints' names (degrees; mm for a slide), as a
-/// measurement file logs them. The weights lump the joint's stiffness with the branch links' unknown
-/// first moments (radians).
+/// measurement file logs them. Known without masses, the weights lump the joint's stiffness with the
+/// branch links' unknown first moments (radians); when the branch carries masses
+/// ([`thermokin_chain::Branch::carries_masses`]) the one function is their torque (N·m) and the weight
+/// a compliance (radians per N·m) — across the axis, one per lateral direction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BranchLoad {
     /// The loaded joint, 0-based.
     pub joint: usize,
     /// The branch's name.
     pub branch: String,
-    /// The weights, radians.
+    /// The weights, radians (radians per N·m for a branch that carries masses).
     pub weights: Vec<f64>,
     /// Whether the load tilts the joint's row across its axis — a bearing under the branch's moment:
     /// [`lumped_lateral_row_error`]'s one set over [`thermokin_chain::branch_lateral_basis_into`]'s
@@ -935,6 +937,9 @@ impl RobotModel {
             let plain = self.robot.chain();
             let (j, down) = (l.joint, &self.down);
             thermokin_chain::branch_lateral_basis_into(plain, branch, commanded, &branch_q, down, j, &mut basis)?;
+            if branch.carries_masses() {
+                thermokin_chain::add_chain_load(plain, &self.masses_in(state), commanded, down, (j, true), &mut basis)?;
+            }
             let bend = lumped_lateral_row_on(plain, j, &basis, &l.weights, commanded[j]);
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
@@ -1011,6 +1016,10 @@ impl RobotModel {
             thermokin_chain::branch_load_basis_into(
                 chain, branch, commanded, &branch_q, &self.down, l.joint, &mut basis,
             )?;
+            if branch.carries_masses() {
+                let masses = self.masses_in(state);
+                thermokin_chain::add_chain_load(chain, &masses, commanded, &self.down, (l.joint, false), &mut basis)?;
+            }
             actual[l.joint] += basis.iter().zip(&l.weights).map(|(f, w)| f * w).sum::<f64>();
         }
         Ok(actual)

@@ -93,6 +93,12 @@ fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<BranchFunctions> {
                     false => thermokin_chain::branch_load_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
                     true => thermokin_chain::branch_lateral_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
                 };
+                let found = found.and_then(|()| match branch.carries_masses() {
+                    true => {
+                        thermokin_chain::add_chain_load(chain, robot.masses(), &m.q, &down, (j, across), &mut basis)
+                    }
+                    false => Ok(()),
+                });
                 if found.is_ok() {
                     values.extend_from_slice(&basis);
                 }

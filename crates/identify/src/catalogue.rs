@@ -285,8 +285,31 @@ impl Setup {
             c.extend(joints.iter().map(|&j| Effect::ThermalDrift(j, DriftShape::Temperature)));
         }
         c.extend(sensor_candidates(robot, data, &joints, self.lateral));
+        if !massless {
+            under_the_whole_load(&mut c);
+        }
         Ok(c)
     }
+}
+
+/// A logged branch that carries masses loads a joint below it by their torque: with the file's masses on
+/// the chain too, its load is the joint's compliance under everything the joint carries
+/// (`BranchAt::masses`, one compliance for the sum) and replaces, in `c`, the joint's own under the
+/// chain's masses alone (across the axis: its lateral compliance) — the two would be one stiffness
+/// fitted twice, their columns nearly alike.
+fn under_the_whole_load(c: &mut Vec<Effect>) {
+    let whole: Vec<(JointIndex, bool)> = c
+        .iter()
+        .filter_map(|e| match e {
+            Effect::BranchLoad(j, _, at) if at.masses => Some((*j, at.lateral)),
+            _ => None,
+        })
+        .collect();
+    c.retain(|e| match e {
+        Effect::JointCompliance(j) => !whole.contains(&(*j, false)),
+        Effect::LateralCompliance(j, _) => !whole.contains(&(*j, true)),
+        _ => true,
+    });
 }
 
 /// The candidates of the set's sensor columns: a declared accelerometer's tilt turning the row of the
@@ -314,7 +337,12 @@ fn sensor_candidates(robot: &Robot, data: &Dataset, joints: &[JointIndex], later
             let kinds = [(about, false), (if lateral == Lateral::Joints { across } else { 0 }, true)];
             for (n, lateral) in kinds {
                 if let Ok(count) = u8::try_from(n).map_err(|_| ()).and_then(|n| if n > 0 { Ok(n) } else { Err(()) }) {
-                    c.push(Effect::BranchLoad(j, first, crate::effect::BranchAt { branch: index, count, lateral }));
+                    let masses = branch.carries_masses();
+                    c.push(Effect::BranchLoad(
+                        j,
+                        first,
+                        crate::effect::BranchAt { branch: index, count, lateral, masses },
+                    ));
                 }
             }
         }

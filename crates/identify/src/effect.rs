@@ -257,6 +257,13 @@ pub struct BranchAt {
     /// functions of [`thermokin_chain::branch_lateral_basis_into`], a half per lateral direction, beside
     /// the joint's own lateral compliance without masses) rather than turning the joint about it.
     pub lateral: bool,
+    /// Whether the robot file gives the branch's link masses ([`thermokin_chain::Branch::carries_masses`]):
+    /// the functions are then the torque about the joint (one) or the moments across it (one per lateral
+    /// direction), N·m, of everything the joint carries — the chain's own links with the file's masses
+    /// and the branch's ([`thermokin_chain::add_chain_load`]) — and the weights compliances (radians per
+    /// N·m): the joint's compliance under the whole load, offered instead of its
+    /// [`Effect::JointCompliance`] (across: [`Effect::LateralCompliance`]) — not lumped with first moments.
+    pub masses: bool,
 }
 
 /// What a measured tilt is taken over ([`Effect::Tilt`]).
@@ -502,9 +509,10 @@ impl Effect {
             Effect::LumpedCompliance(..) | Effect::LumpedLateralCompliance(..) => " (no masses)",
             Effect::FrameStep(at) => return format!("frame_step ({})", at.describe()),
             Effect::SensorDrift(j, s) => return format!("sensor_drift[{}] (driven by {})", j.number(), s.name()),
-            Effect::BranchLoad(j, s, _) => {
+            Effect::BranchLoad(j, s, at) => {
                 let kind = self.kind_name();
-                return format!("{kind}[{}] (the branch from joint {}, no masses)", j.number(), s.name());
+                let masses = if at.masses { "with masses" } else { "no masses" };
+                return format!("{kind}[{}] (the branch from joint {}, {masses})", j.number(), s.name());
             }
             Effect::Tilt(j, s, _) => {
                 // Its columns are `NAME.tilt_x`, …: the sensor's name.
@@ -529,6 +537,10 @@ impl Effect {
             Effect::JointOffset(_) => vec![format!("{prefix}.offset_deg")],
             Effect::JointCompliance(_) => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::LumpedCompliance(_, n) => (1..=*n as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
+            Effect::BranchLoad(.., at) if at.masses && at.lateral => {
+                (1..=at.count as usize).map(|k| format!("{prefix}.tilt{k}_deg_per_Nm")).collect()
+            }
+            Effect::BranchLoad(.., at) if at.masses => vec![format!("{prefix}.k_deg_per_Nm")],
             Effect::BranchLoad(.., at) if at.lateral => {
                 let half = (at.count as usize / 2).max(1);
                 (0..at.count as usize)

@@ -664,6 +664,10 @@ fn branch_basis(
     } else {
         thermokin_chain::branch_load_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
     }
+    if at.masses {
+        // The joint's compliance under everything it carries: the chain's own links' load beside the branch's.
+        thermokin_chain::add_chain_load(chain, robot.masses(), q, down, (j, at.lateral), &mut cached.basis)?;
+    }
     let used = cached.basis.len().min(n);
     cached.loads[o..o + used].copy_from_slice(&cached.basis[..used]);
     Ok(())

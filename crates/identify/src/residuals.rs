@@ -220,6 +220,7 @@ mod tests {
                 thermokin_chain::Joint::revolute("b1", Vector3::new(0.0, 200.0, 100.0), Vector3::y_axis()),
                 thermokin_chain::Joint::revolute("b2", Vector3::new(0.0, 0.0, -300.0), Vector3::x_axis()),
             ],
+            masses: Vec::new(),
         };
         let robot = Robot::new("IRB 140", irb140_table9()).with_branches(vec![branch]).unwrap();
         let mut data = eight_poses(seed);
@@ -234,7 +235,7 @@ mod tests {
     fn a_branch_loads_jacobian_is_the_finite_differences() {
         let (robot, data) = second_arm(9);
         let joint = JointIndex::of(&robot, 1).unwrap();
-        let at = crate::BranchAt { branch: 0, count: 4, lateral: false };
+        let at = crate::BranchAt { branch: 0, count: 4, lateral: false, masses: false };
         let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
         let model =
             Model::new(&robot, vec![Effect::named(&robot, "joint_compliance", Some(1)).unwrap(), load]).unwrap();
@@ -255,7 +256,7 @@ mod tests {
         let joint = JointIndex::of(&robot, 0).unwrap();
         let count = thermokin_chain::branch_lateral_basis_len(robot.chain(), &robot.branches()[0], 0) as u8;
         assert_eq!(count, 8);
-        let at = crate::BranchAt { branch: 0, count, lateral: true };
+        let at = crate::BranchAt { branch: 0, count, lateral: true, masses: false };
         let load = Effect::BranchLoad(joint, crate::SensorId::of(&data, 0).unwrap(), at);
         let own = Effect::named(&robot, "lateral_compliance", Some(0)).unwrap();
         let model = Model::new(&robot, vec![own, load]).unwrap();
@@ -263,6 +264,49 @@ mod tests {
         let theta: Vec<f64> = (0..model.len()).map(|k| 2e-4 * ((k as f64 * 0.9).cos() + 0.2)).collect();
         let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
         for k in model.len() - count as usize..model.len() {
+            assert!(jac.col(k).norm_max() > 1e-3, "column {k} is zero");
+        }
+    }
+
+    /// The analytic Jacobians of a branch's load about and across a joint when the branch and the chain
+    /// carry masses (`BranchAt::masses`: one compliance under the torque of everything the joint carries,
+    /// one per direction across) against central differences; every weight moves the poses.
+    #[test]
+    fn a_branch_with_masses_loads_jacobian_is_the_finite_differences() {
+        let (robot, data) = second_arm(13);
+        let mut branch = robot.branches()[0].clone();
+        branch.masses = vec![
+            Some(thermokin_chain::LinkMass { mass_kg: 5.0, com_mm: Vector3::new(20.0, 0.0, -80.0) }),
+            Some(thermokin_chain::LinkMass { mass_kg: 3.0, com_mm: Vector3::new(0.0, 30.0, -150.0) }),
+        ];
+        // The chain's own links carry masses too: the load is the joint's under everything it carries.
+        let link =
+            |kg: f64, x: f64| Some(thermokin_chain::LinkMass { mass_kg: kg, com_mm: Vector3::new(x, 10.0, 40.0) });
+        let masses = vec![
+            link(20.0, 50.0),
+            link(12.0, 180.0),
+            link(8.0, 60.0),
+            link(4.0, 120.0),
+            link(2.0, 0.0),
+            link(1.0, 30.0),
+        ];
+        let robot = Robot::new("IRB 140", irb140_table9())
+            .with_masses(masses)
+            .and_then(|r| r.with_branches(vec![branch]))
+            .unwrap();
+        let first = crate::SensorId::of(&data, 0).unwrap();
+        let about = crate::BranchAt { branch: 0, count: 1, lateral: false, masses: true };
+        let across = crate::BranchAt { branch: 0, count: 2, lateral: true, masses: true };
+        let effects = vec![
+            Effect::BranchLoad(JointIndex::of(&robot, 1).unwrap(), first, about),
+            Effect::BranchLoad(JointIndex::of(&robot, 0).unwrap(), first, across),
+        ];
+        let model = Model::new(&robot, effects).unwrap();
+        assert_eq!(model.len(), 3);
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let theta = [2e-4, -3e-4, 1.5e-4];
+        let jac = jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-7);
+        for k in 0..3 {
             assert!(jac.col(k).norm_max() > 1e-3, "column {k} is zero");
         }
     }

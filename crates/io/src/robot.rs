@@ -62,7 +62,7 @@ struct RobotFile {
     /// The rest of the robot's tree: serial chains hanging from its links.
     #[serde(default)]
     branch: Vec<Spanned<BranchSpec>>,
-    /// The loads of branches on joints' gravity compliance, known without masses.
+    /// The loads of branches on joints' gravity compliance (lumped without masses, a compliance with them).
     #[serde(default)]
     branch_load: Vec<Spanned<BranchLoadSpec>>,
 }
@@ -77,7 +77,8 @@ struct BranchSpec {
     joint: Vec<BranchJointSpec>,
 }
 
-/// `[[branch.joint]]`: a branch joint's name, axis, offset from the previous joint (mm), type and zero.
+/// `[[branch.joint]]`: a branch joint's name, axis, offset from the previous joint (mm), type and zero,
+/// and the mass of the link it moves (`mass_kg`, `com_mm` in its frame, as a `[[joint]]` row's).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BranchJointSpec {
@@ -88,12 +89,15 @@ struct BranchJointSpec {
     kind: KindSpec,
     #[serde(default)]
     zero: f64,
+    mass_kg: Option<f64>,
+    com_mm: Option<[f64; 3]>,
 }
 
 /// `[[branch_load]]`: branch `branch`'s load on joint `joint`'s (1-based) gravity compliance, the
 /// weights of `thermokin_chain::branch_load_basis_into`'s functions in degrees — or, with `lateral =
 /// true`, on its lateral compliance (its bearing's tilt across the axis), the weights of
-/// `thermokin_chain::branch_lateral_basis_into`'s.
+/// `thermokin_chain::branch_lateral_basis_into`'s. A branch whose joints carry masses has one function
+/// per direction, their torque or moment in N·m: its weight is then a compliance in degrees per N·m.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BranchLoadSpec {
@@ -338,8 +342,10 @@ fn with_branches(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Res
     for (b, spanned) in file.branch.iter().enumerate() {
         let (line, spec) = (Some(line_of(text, spanned.span().start)), spanned.get_ref());
         let mut joints = Vec::with_capacity(spec.joint.len());
+        let mut masses = Vec::with_capacity(spec.joint.len());
         for (i, j) in spec.joint.iter().enumerate() {
             let field = |f: &str| format!("branch[{}].joint[{}].{f}", b + 1, i + 1);
+            masses.push(link_mass(path, line, &field, (j.mass_kg, j.com_mm))?);
             let axis = axis(&j.axis).map_err(|m| IoError::input(path, line, field("axis"), m))?;
             finite(path, line, &field("offset_mm"), &j.offset_mm)?;
             finite(path, line, &field("zero"), &[j.zero])?;
@@ -351,7 +357,8 @@ fn with_branches(path: &Path, text: &str, file: &RobotFile, robot: Robot) -> Res
             joint.zero = units::joint_value_in(joint.kind, j.zero);
             joints.push(joint);
         }
-        branches.push(thermokin_chain::Branch { name: spec.name.clone(), link: spec.link, joints });
+        let masses = if masses.iter().any(Option::is_some) { masses } else { Vec::new() };
+        branches.push(thermokin_chain::Branch { name: spec.name.clone(), link: spec.link, joints, masses });
         let checked = Robot::new("check", robot.chain().clone()).with_branches(branches.clone());
         checked.map_err(|e| IoError::input(path, line, format!("branch[{}]", b + 1), e.to_string()))?;
     }
@@ -447,8 +454,20 @@ fn extended_joint(
         velocity: positive("max_velocity", spec.max_velocity)?.map(|v| units::joint_value_in(kind, v)),
         effort: positive("max_effort", spec.max_effort)?,
     };
-    let mass = match (spec.mass_kg, spec.com_mm) {
-        (None, None) => None,
+    let mass = link_mass(path, line, &field, (spec.mass_kg, spec.com_mm))?;
+    Ok((joint, rating, mass))
+}
+
+/// A row's link mass from its `mass_kg` and `com_mm` (`field` names a key of the row): none without
+/// either, the centre at the joint's origin without `com_mm`; an error naming the key otherwise.
+fn link_mass(
+    path: &Path,
+    line: Option<usize>,
+    field: &dyn Fn(&str) -> String,
+    (mass_kg, com_mm): (Option<f64>, Option<[f64; 3]>),
+) -> Result<Option<LinkMass>, IoError> {
+    match (mass_kg, com_mm) {
+        (None, None) => Ok(None),
         (Some(m), com) => {
             let com = com.unwrap_or_default();
             finite(path, line, &field("com_mm"), &com)?;
@@ -460,11 +479,10 @@ fn extended_joint(
                     format!("must be a finite mass ≥ 0, got {m}"),
                 ));
             }
-            Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) })
+            Ok(Some(LinkMass { mass_kg: m, com_mm: Vector3::from(com) }))
         }
-        (None, Some(_)) => return Err(IoError::input(path, line, field("com_mm"), "com_mm needs mass_kg")),
-    };
-    Ok((joint, rating, mass))
+        (None, Some(_)) => Err(IoError::input(path, line, field("com_mm"), "com_mm needs mass_kg")),
+    }
 }
 
 /// The chain of a classic or modified DH table's `[[dh]]` rows (converted exactly); DH rows carry no
@@ -1057,8 +1075,11 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
             n = b.name,
             l = b.link
         ));
-        for j in &b.joints {
+        for (i, j) in b.joints.iter().enumerate() {
             joint_geometry_toml(s, "[[branch.joint]]", j);
+            if let Some(m) = b.masses.get(i).copied().flatten() {
+                s.push_str(&format!("mass_kg = {}\ncom_mm = {}\n", num(m.mass_kg), fmt3(&m.com_mm)));
+            }
         }
     }
     for l in model.branch_loads() {
@@ -1068,8 +1089,14 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
         } else {
             ("compliance", "")
         };
+        let masses = model.robot().branches().iter().any(|b| b.name == l.branch && b.carries_masses());
+        let known = if masses {
+            "with its masses: the compliance under their torque (moments), degrees per N·m"
+        } else {
+            "without masses: the weights of its load functions"
+        };
         s.push_str(&format!(
-            "\n# The load of branch {b:?} on joint {j}'s {on}, without masses: the weights of its load functions (give the branch's joint positions at run time).\n[[branch_load]]\njoint = {j}\nbranch = {b:?}\n{lateral}load_deg = [{}]\n",
+            "\n# The load of branch {b:?} on joint {j}'s {on}, {known} (give the branch's joint positions at run time).\n[[branch_load]]\njoint = {j}\nbranch = {b:?}\n{lateral}load_deg = [{}]\n",
             deg.join(", "),
             b = l.branch,
             j = l.joint + 1

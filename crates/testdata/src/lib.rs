@@ -261,7 +261,9 @@ mod rocking {
 pub use rocking::rocking_lift_session;
 
 mod torso;
-pub use torso::{Elastic, elastic_torso_session, two_armed_torso_session, two_armed_torso_urdf};
+pub use torso::{
+    Elastic, elastic_torso_session, two_armed_torso_session, two_armed_torso_urdf, two_armed_torso_urdf_with_masses,
+};
 
 mod construction;
 pub use construction::{Session, construction_robot_toml, construction_session};

@@ -71,12 +71,41 @@ const TOOL: [f64; 3] = [0.0, 0.0, -0.1];
 /// link `right_tool`, the left in `left_hand`. With `left_arm` false, the left arm is left out (a robot
 /// file of the measured chain alone).
 pub fn two_armed_torso_urdf(left_arm: bool) -> String {
+    torso_urdf(left_arm, Inertials::None)
+}
+
+/// [`two_armed_torso_urdf`] with every link's `<inertial>`: the masses and centres the sessions' truth
+/// sags under (a small sphere's inertia beside them, which no static load reads).
+pub fn two_armed_torso_urdf_with_masses(left_arm: bool) -> String {
+    torso_urdf(left_arm, Inertials::TheTruths)
+}
+
+/// Which `<inertial>` elements the URDF writes.
+#[derive(Clone, Copy, PartialEq)]
+enum Inertials {
+    None,
+    TheTruths,
+}
+
+fn torso_urdf(left_arm: bool, inertials: Inertials) -> String {
     let t = tree();
     let link = |i: Option<usize>| i.map_or("base".to_string(), |i| format!("{}_link", t[i].name));
     let mut s = String::from("<robot name=\"two_armed_torso\">\n  <link name=\"base\"/>\n");
     for (i, j) in t.iter().enumerate().filter(|(i, _)| left_arm || !LOGGED.contains(i)) {
+        if inertials == Inertials::TheTruths {
+            let (m, c) = j.mass;
+            s.push_str(&format!(
+                "  <link name=\"{}\"><inertial><origin xyz=\"{} {} {}\"/><mass value=\"{m}\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" izz=\"0.01\"/></inertial></link>\n",
+                link(Some(i)),
+                c[0],
+                c[1],
+                c[2]
+            ));
+        } else {
+            s.push_str(&format!("  <link name=\"{}\"/>\n", link(Some(i))));
+        }
         s.push_str(&format!(
-            "  <link name=\"{child}\"/>\n  <joint name=\"{n}\" type=\"revolute\"><parent link=\"{p}\"/><child link=\"{child}\"/><origin xyz=\"{} {} {}\"/><axis xyz=\"{} {} {}\"/><limit lower=\"{}\" upper=\"{}\" effort=\"100\" velocity=\"1\"/></joint>\n",
+            "  <joint name=\"{n}\" type=\"revolute\"><parent link=\"{p}\"/><child link=\"{child}\"/><origin xyz=\"{} {} {}\"/><axis xyz=\"{} {} {}\"/><limit lower=\"{}\" upper=\"{}\" effort=\"100\" velocity=\"1\"/></joint>\n",
             j.origin[0],
             j.origin[1],
             j.origin[2],

@@ -129,13 +129,7 @@ pub fn import_urdf(text: &str, source_name: &str, options: &ImportOptions) -> Re
     }
     let described = |source: ChainError| UrdfError::Chain { source_name: src.clone(), source };
     let chain = Chain::from_factors(&folded.factors, &folded.pending).map_err(described)?;
-    let frames = chain.joint_frames(&vec![0.0; chain.dof()]).map_err(described)?;
-    let masses = folded
-        .mass_acc
-        .iter()
-        .zip(&frames)
-        .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
-        .collect();
+    let masses = link_masses(&folded, &chain).map_err(described)?;
     let branches = tree.branches(&path);
     let imported = Robot::new(robot.name.clone(), chain)
         .with_masses(masses)
@@ -287,7 +281,8 @@ impl<'r> Tree<'r> {
     /// (the base's too), each joint leading off the path starts one, followed down its tree (at a fork,
     /// into the child with the most moving joints below it, then the first by name) and cut before a
     /// mimic joint; folded like the measured chain along the path to it, so that its joints are in the
-    /// same-orientation table's terms. A branch of no moving joint is none.
+    /// same-orientation table's terms, and its links' `<inertial>` masses with them (as the chain's own;
+    /// none when no link of it has one). A branch of no moving joint is none.
     fn branches(&self, path: &[&'r urdf_rs::Joint]) -> Vec<thermokin_chain::Branch> {
         let on_path: HashSet<&str> = path.iter().map(|j| j.child.link.as_str()).collect();
         let moving = |j: &urdf_rs::Joint| !matches!(j.joint_type, urdf_rs::JointType::Fixed);
@@ -334,10 +329,13 @@ impl<'r> Tree<'r> {
                 // A side branch the model cannot read (a zero axis) leaves the measured chain as it was.
                 let Ok(folded) = fold(self.robot, &full, &self.src) else { continue };
                 let Ok(chain) = Chain::from_factors(&folded.factors, &folded.pending) else { continue };
+                let Ok(masses) = link_masses(&folded, &chain) else { continue };
+                let masses = &masses[shared.min(masses.len())..];
                 out.push(thermokin_chain::Branch {
                     name: first.child.link.clone(),
                     link: shared,
                     joints: chain.joints()[shared..].to_vec(),
+                    masses: if masses.iter().any(Option::is_some) { masses.to_vec() } else { Vec::new() },
                 });
             }
         }
@@ -373,6 +371,19 @@ impl<'r> Tree<'r> {
 }
 
 /// A serial path folded into joint factors: each moving joint with the fixed transforms before it, its
+/// Per joint of `chain` (folded as `folded`), the mass of the link it moves, its centre in the joint's
+/// same-orientation frame: at the zero configuration every joint frame keeps the base's orientation, so
+/// the centre is the accumulated world centre less the frame's origin there.
+fn link_masses(folded: &Folded, chain: &Chain) -> Result<Vec<Option<LinkMass>>, ChainError> {
+    let frames = chain.joint_frames(&vec![0.0; chain.dof()])?;
+    Ok(folded
+        .mass_acc
+        .iter()
+        .zip(&frames)
+        .map(|((m, mc), f)| (*m > 0.0).then(|| LinkMass { mass_kg: *m, com_mm: mc / *m - f.translation.vector }))
+        .collect())
+}
+
 /// ratings, the fixed transform after the last one, and the links' masses accumulated per joint.
 struct Folded {
     factors: Vec<JointFactor>,

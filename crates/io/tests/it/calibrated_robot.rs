@@ -272,3 +272,33 @@ fn a_sensor_row_takes_its_reading_as_exported_and_as_the_command_line_gives_it()
     let e = model.check_state(&reading("temp_other", 1.0), false, false).unwrap_err().to_string();
     assert!(e.contains("temp_other") && e.contains("acc_col_x"), "{e}");
 }
+
+/// A branch whose joints carry masses (a second arm on the IRB 140's upper arm) and its load on joint 2:
+/// read, written and read back to the same text and the same forward model, the masses kept; the load
+/// moves the tool with the branch's joints, given by name; a branch's mass that is not a finite one is
+/// refused naming its file, line and key.
+#[test]
+fn a_branch_with_masses_and_its_load_are_written_and_read_back() {
+    let text = std::fs::read_to_string(workspace("configs/irb140.toml")).unwrap();
+    let branch = "\n[[branch]]\nname = \"second\"\nlink = 2\n[[branch.joint]]\nname = \"b1\"\naxis = \"y\"\noffset_mm = [0, 200, 100]\nmass_kg = 5\ncom_mm = [20, 0, -80]\n[[branch.joint]]\nname = \"b2\"\naxis = \"x\"\noffset_mm = [0, 0, -300]\nmass_kg = 3\ncom_mm = [0, 30, -150]\n";
+    let load = "\n[[branch_load]]\njoint = 2\nbranch = \"second\"\nload_deg = [0.01]\n";
+    let model = parse_robot_model_toml("branch.toml".as_ref(), &format!("{text}{branch}{load}")).unwrap();
+    let b = &model.robot().branches()[0];
+    assert!(b.carries_masses() && b.masses.len() == 2, "{b:?}");
+    let written = robot_model_to_toml(&model);
+    assert!(written.contains("with its masses"), "{written}");
+    let back = parse_robot_model_toml("back.toml".as_ref(), &written).unwrap();
+    assert_eq!(robot_model_to_toml(&back), written);
+    assert_eq!(back.robot().branches(), model.robot().branches());
+    let q = [0.3, -0.4, 0.2, 0.1, 0.5, -0.2];
+    let state = |b1: f64, b2: f64| OperatingState {
+        temperatures_c: vec![("b1".into(), b1), ("b2".into(), b2)],
+        ..Default::default()
+    };
+    let at = |m: &RobotModel, b1, b2| m.tool_pose(&q, &state(b1, b2)).unwrap().translation.vector;
+    assert!((at(&model, 30.0, -20.0) - at(&back, 30.0, -20.0)).norm() < 1e-9);
+    assert!((at(&model, 30.0, -20.0) - at(&model, -60.0, 40.0)).norm() > 0.05);
+    let bad = format!("{text}{}", branch.replace("mass_kg = 3", "mass_kg = -3"));
+    let e = parse_robot_model_toml("bad.toml".as_ref(), &bad).unwrap_err().to_string();
+    assert!(e.starts_with("bad.toml:") && e.contains("branch[1].joint[2].mass_kg: must be a finite mass"), "{e}");
+}
