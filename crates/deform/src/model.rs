@@ -136,8 +136,10 @@ pub fn lateral_row_error(
 /// read from the operating state by the branch joints' names (degrees; mm for a slide), as a
 /// measurement file logs them. Known without masses, the weights lump the joint's stiffness with the
 /// branch links' unknown first moments (radians); when the branch carries masses
-/// ([`thermokin_chain::Branch::carries_masses`]) the one function is their torque (N·m) and the weight
-/// a compliance (radians per N·m) — across the axis, one per lateral direction.
+/// ([`thermokin_chain::Branch::carries_masses`]) the one function is the torque (N·m) of everything the
+/// joint carries — the chain's links with the model's masses and payload, and the branch's
+/// ([`thermokin_chain::add_chain_load`]) — and the weight the joint's compliance (radians per N·m);
+/// across the axis, one per lateral direction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BranchLoad {
     /// The loaded joint, 0-based.

@@ -235,9 +235,11 @@ pub enum Effect {
     /// The load of one of the robot's branches ([`thermokin_chain::Branch`], a second arm on a torso) on
     /// revolute joint `j`'s gravity compliance, without masses: `Δq_j = Σ θ_b g_b(q, q_branch)`, the
     /// functions of [`thermokin_chain::branch_load_basis_into`] whose span holds the torque of any masses
-    /// on the branch, the weights lumping the joint's stiffness with them (radians). The branch's joint
-    /// readings are the sensor columns from `SensorId` on, one per branch joint (degrees; mm for a slide),
-    /// as [`thermokin_chain::Dataset::branch_columns`] places them.
+    /// on the branch, the weights lumping the joint's stiffness with them (radians) — or, when the robot
+    /// file gives the branch's masses ([`BranchAt::masses`]), `Δq_j = k (τ_chain,j + τ_branch,j)`: the
+    /// joint's one compliance under everything it carries. The branch's joint readings are the sensor
+    /// columns from `SensorId` on, one per branch joint (degrees; mm for a slide), as
+    /// [`thermokin_chain::Dataset::branch_columns`] places them.
     BranchLoad(JointIndex, SensorId, BranchAt),
     /// A step of the measurement frame — the tracker knocked, its stand or the robot's base moved — at
     /// a point of the measuring order: the poses from there on are measured in the frame moved by a

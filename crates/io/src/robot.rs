@@ -96,8 +96,9 @@ struct BranchJointSpec {
 /// `[[branch_load]]`: branch `branch`'s load on joint `joint`'s (1-based) gravity compliance, the
 /// weights of `thermokin_chain::branch_load_basis_into`'s functions in degrees — or, with `lateral =
 /// true`, on its lateral compliance (its bearing's tilt across the axis), the weights of
-/// `thermokin_chain::branch_lateral_basis_into`'s. A branch whose joints carry masses has one function
-/// per direction, their torque or moment in N·m: its weight is then a compliance in degrees per N·m.
+/// `thermokin_chain::branch_lateral_basis_into`'s. For a branch whose joints carry masses the function
+/// (one per direction) is the torque (moment) of everything the joint carries — the chain's links with
+/// the file's masses and the branch's — in N·m, and the weight the joint's compliance in degrees per N·m.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BranchLoadSpec {
@@ -1091,7 +1092,7 @@ fn branches_toml(s: &mut String, model: &RobotModel) {
         };
         let masses = model.robot().branches().iter().any(|b| b.name == l.branch && b.carries_masses());
         let known = if masses {
-            "with its masses: the compliance under their torque (moments), degrees per N·m"
+            "with its masses: the joint's compliance under everything it carries, the branch included, degrees per N·m"
         } else {
             "without masses: the weights of its load functions"
         };
