@@ -59,13 +59,38 @@ pub fn lateral_gravity_moments_into(
     })
 }
 
-/// Adds to `out` — a branch's functions on revolute joint `joint` when the branch [carries
-/// masses](crate::Branch::carries_masses): one about the axis, or two across it (`across`) — the gravity torque
-/// (the two moments) of the measured chain's own links about that joint, `masses` one per joint, N·m, as
-/// [`crate::Robot::gravity_torques`] and [`crate::lateral_gravity_moments_into`] give them: with the
-/// masses known, a branch's load is on the joint's compliance under everything the joint carries, and
-/// one compliance multiplies the sum. `out` of another length is left as it is.
-pub fn add_chain_load(
+/// The functions of a branch's load on revolute joint `joint` into `out`, one piece for every place that
+/// evaluates it (the fit, the plausibility scale, the robot model): about the axis
+/// ([`crate::branch_load_basis_into`]) or, `across`, along its two lateral directions
+/// ([`crate::branch_lateral_basis_into`]) — and, when the branch [carries
+/// masses](crate::Branch::carries_masses), the load of the measured chain's own links (`masses`, one per
+/// joint) added to the branch's torque or moments: with the masses known a branch's load is on the joint's
+/// compliance under everything the joint carries, and one compliance multiplies the sum.
+pub fn branch_load_functions_into(
+    chain: &Chain,
+    masses: &[Option<LinkMass>],
+    branch: &crate::Branch,
+    (q, branch_q): (&[f64], &[f64]),
+    down: &Unit<Vector3<f64>>,
+    (joint, across): (usize, bool),
+    out: &mut Vec<f64>,
+) -> Result<(), ChainError> {
+    if across {
+        crate::branch_lateral_basis_into(chain, branch, q, branch_q, down, joint, out)?;
+    } else {
+        crate::branch_load_basis_into(chain, branch, q, branch_q, down, joint, out)?;
+    }
+    if branch.carries_masses() {
+        add_chain_load(chain, masses, q, down, (joint, across), out)?;
+    }
+    Ok(())
+}
+
+/// Adds to `out` (one entry about the axis, or two across it) the gravity torque (the two moments) of the
+/// measured chain's own links about revolute joint `joint`, `masses` one per joint, N·m, as
+/// [`crate::Robot::gravity_torques`] and [`lateral_gravity_moments_into`] give them. `out` of another
+/// length is left as it is.
+fn add_chain_load(
     chain: &Chain,
     masses: &[Option<LinkMass>],
     q: &[f64],

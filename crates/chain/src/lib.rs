@@ -21,7 +21,7 @@ mod so3;
 mod trig;
 pub mod units;
 
-pub use bending::{add_chain_load, lateral_directions, lateral_gravity_moments_into};
+pub use bending::{branch_load_functions_into, lateral_directions, lateral_gravity_moments_into};
 pub use branches::{
     Branch, branch_lateral_basis_into, branch_lateral_basis_len, branch_load_basis_into, branch_load_basis_len,
 };

@@ -138,7 +138,7 @@ pub fn lateral_row_error(
 /// branch links' unknown first moments (radians); when the branch carries masses
 /// ([`thermokin_chain::Branch::carries_masses`]) the one function is the torque (N·m) of everything the
 /// joint carries — the chain's links with the model's masses and payload, and the branch's
-/// ([`thermokin_chain::add_chain_load`]) — and the weight the joint's compliance (radians per N·m);
+/// ([`thermokin_chain::branch_load_functions_into`]) — and the weight the joint's compliance (radians per N·m);
 /// across the axis, one per lateral direction.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BranchLoad {
@@ -938,10 +938,8 @@ impl RobotModel {
             let branch_q = branch_joint_values(branch, state)?;
             let plain = self.robot.chain();
             let (j, down) = (l.joint, &self.down);
-            thermokin_chain::branch_lateral_basis_into(plain, branch, commanded, &branch_q, down, j, &mut basis)?;
-            if branch.carries_masses() {
-                thermokin_chain::add_chain_load(plain, &self.masses_in(state), commanded, down, (j, true), &mut basis)?;
-            }
+            let (masses, joints) = (self.masses_in(state), (commanded, branch_q.as_slice()));
+            thermokin_chain::branch_load_functions_into(plain, &masses, branch, joints, down, (j, true), &mut basis)?;
             let bend = lumped_lateral_row_on(plain, j, &basis, &l.weights, commanded[j]);
             let row = chain.joints()[j].error.add(&bend);
             chain.set_joint_error(j, row)?;
@@ -1015,13 +1013,9 @@ impl RobotModel {
             let Some(branch) = branch else { continue };
             let branch_q = branch_joint_values(branch, state)?;
             let chain = self.robot.chain();
-            thermokin_chain::branch_load_basis_into(
-                chain, branch, commanded, &branch_q, &self.down, l.joint, &mut basis,
-            )?;
-            if branch.carries_masses() {
-                let masses = self.masses_in(state);
-                thermokin_chain::add_chain_load(chain, &masses, commanded, &self.down, (l.joint, false), &mut basis)?;
-            }
+            let (masses, joints) = (self.masses_in(state), (commanded, branch_q.as_slice()));
+            let at = (l.joint, false);
+            thermokin_chain::branch_load_functions_into(chain, &masses, branch, joints, &self.down, at, &mut basis)?;
             actual[l.joint] += basis.iter().zip(&l.weights).map(|(f, w)| f * w).sum::<f64>();
         }
         Ok(actual)

@@ -89,16 +89,16 @@ fn branch_loads_of(robot: &Robot, data: &Dataset) -> Vec<BranchFunctions> {
             for (m, r) in data.measurements.iter().zip(&data.sensor_values) {
                 let Some(readings) = r.get(columns.column..columns.column + columns.len) else { continue };
                 let bq: Vec<f64> = readings.iter().enumerate().map(|(i, v)| branch.joint_value(i, *v)).collect();
-                let found = match across {
-                    false => thermokin_chain::branch_load_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
-                    true => thermokin_chain::branch_lateral_basis_into(chain, branch, &m.q, &bq, &down, j, &mut basis),
-                };
-                let found = found.and_then(|()| match branch.carries_masses() {
-                    true => {
-                        thermokin_chain::add_chain_load(chain, robot.masses(), &m.q, &down, (j, across), &mut basis)
-                    }
-                    false => Ok(()),
-                });
+                let (masses, joints) = (robot.masses(), (m.q.as_slice(), bq.as_slice()));
+                let found = thermokin_chain::branch_load_functions_into(
+                    chain,
+                    masses,
+                    branch,
+                    joints,
+                    &down,
+                    (j, across),
+                    &mut basis,
+                );
                 if found.is_ok() {
                     values.extend_from_slice(&basis);
                 }

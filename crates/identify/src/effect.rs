@@ -262,7 +262,7 @@ pub struct BranchAt {
     /// Whether the robot file gives the branch's link masses ([`thermokin_chain::Branch::carries_masses`]):
     /// the functions are then the torque about the joint (one) or the moments across it (one per lateral
     /// direction), N·m, of everything the joint carries — the chain's own links with the file's masses
-    /// and the branch's ([`thermokin_chain::add_chain_load`]) — and the weights compliances (radians per
+    /// and the branch's ([`thermokin_chain::branch_load_functions_into`]) — and the weights compliances (radians per
     /// N·m): the joint's compliance under the whole load, offered instead of its
     /// [`Effect::JointCompliance`] (across: [`Effect::LateralCompliance`]) — not lumped with first moments.
     pub masses: bool,

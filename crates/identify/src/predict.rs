@@ -659,15 +659,16 @@ fn branch_basis(
     };
     cached.branch_q.clear();
     cached.branch_q.extend(readings.iter().enumerate().map(|(i, r)| branch.joint_value(i, *r)));
-    if at.lateral {
-        thermokin_chain::branch_lateral_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
-    } else {
-        thermokin_chain::branch_load_basis_into(chain, branch, q, &cached.branch_q, down, j, &mut cached.basis)?;
-    }
-    if at.masses {
-        // The joint's compliance under everything it carries: the chain's own links' load beside the branch's.
-        thermokin_chain::add_chain_load(chain, robot.masses(), q, down, (j, at.lateral), &mut cached.basis)?;
-    }
+    let (masses, joints) = (robot.masses(), (q, cached.branch_q.as_slice()));
+    thermokin_chain::branch_load_functions_into(
+        chain,
+        masses,
+        branch,
+        joints,
+        down,
+        (j, at.lateral),
+        &mut cached.basis,
+    )?;
     let used = cached.basis.len().min(n);
     cached.loads[o..o + used].copy_from_slice(&cached.basis[..used]);
     Ok(())
