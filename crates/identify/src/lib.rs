@@ -36,7 +36,7 @@ pub use effect::{
 };
 pub use error::IdentifyError;
 pub use fit::{
-    CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from,
+    CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Settle, Start, fit, fit_from,
     release_scratch,
 };
 pub use identifiability::{
