@@ -8,7 +8,7 @@ use thermokin_chain::{Dataset, Robot};
 
 use crate::error::IdentifyError;
 use crate::identifiability::{FixedParameter, Identifiable, column_norms, identifiable, inert_columns};
-use crate::lm::{Lm, REUSE_JACOBIAN, Rates, SPECULATE, converged_gain, residuals_settled_gain};
+use crate::lm::{Lm, REUSE_JACOBIAN, Rates, SPECULATE, Settle, converged_gain, residuals_settled_gain};
 use crate::model::Model;
 use crate::residuals::weighted;
 use crate::terms::PoseTerms;
@@ -92,25 +92,6 @@ pub struct Start {
     pub identified: Option<Identifiable>,
     /// What the fit must settle before it stops: its parameters (the default) or only its residuals.
     pub settle: Settle,
-}
-
-/// What a fit must settle before it stops ([`Start::settle`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub enum Settle {
-    /// The parameters, to a tenth of their standard deviation (`SETTLED` in `lm.rs`): every fit whose values
-    /// are reported, compared or carried on.
-    #[default]
-    Parameters,
-    /// The residuals only: a step predicted to gain less than `relative_gain` of the cost ends the fit
-    /// too. A gain `g` of the cost `m·σ̂²` moves the `m` residual rows by `√g·σ̂` in RMS, so `1e-6` stops
-    /// where the next step would move the rows by a thousandth of their scale — what a fit whose
-    /// residuals alone are used (the gross-error screen's, judged against a few σ̂) needs, where the
-    /// parameters' own rule asks for a tenth of their σ, which shrinks as `1/√m`: a week of 100,000 poses
-    /// creeps along its flat valleys for steps the residuals do not see (issue #60).
-    Residuals {
-        /// The cost's relative gain below which a predicted step ends the fit.
-        relative_gain: f64,
-    },
 }
 
 /// A test of a fit's parameters after each accepted step from the `after_steps`-th of a pass on

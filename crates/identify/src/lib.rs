@@ -36,13 +36,14 @@ pub use effect::{
 };
 pub use error::IdentifyError;
 pub use fit::{
-    CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Settle, Start, fit, fit_from,
+    CorrelatedPair, Fit, GiveUp, GiveUpTest, MAX_ITERATIONS, NEARLY_DEPENDENT, Prior, Start, fit, fit_from,
     release_scratch,
 };
 pub use identifiability::{
     DEPENDENT, Dependence, DependsOn, FixedParameter, Identifiable, Observability, identifiable, observability,
     project_out,
 };
+pub use lm::Settle;
 pub use model::{EQUIVALENT_COS, Model, StartFrames};
 pub use predict::{ChainCache, PoseInputs};
 pub use registration::{initial_frames, kabsch};

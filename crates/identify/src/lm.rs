@@ -7,7 +7,6 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Accum, Mat, Par};
 
 use crate::effect::TAU_RANGE_MIN;
-use crate::fit::Settle;
 
 /// Relative cost gain below which a Levenberg–Marquardt step counts as converged (predicted from the
 /// linearised model, before the step is evaluated), whatever the data's size.
@@ -77,6 +76,25 @@ pub(crate) const SPECULATE: f64 = 2.0;
 /// 60 columns: 1.4 MB), whatever the poses: a copy of the whole Jacobian was a week's largest allocation
 /// after the Jacobian itself.
 const NORMAL_BLOCK_ROWS: usize = 3000;
+
+/// What a fit must settle before it stops ([`crate::Start::settle`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Settle {
+    /// The parameters, to a tenth of their standard deviation (or a gain of 1e-9 of the cost): every fit
+    /// whose values are reported, compared or carried on.
+    #[default]
+    Parameters,
+    /// The residuals only: a step predicted to gain less than `relative_gain` of the cost ends the fit
+    /// too. A gain `g` of the cost `m·σ̂²` moves the `m` residual rows by `√g·σ̂` in RMS, so `1e-6` stops
+    /// where the next step would move the rows by a thousandth of their scale — what a fit whose
+    /// residuals alone are used (the gross-error screen's, judged against a few σ̂) needs, where the
+    /// parameters' own rule asks for a tenth of their σ, which shrinks as `1/√m`: a week of 100,000 poses
+    /// creeps along its flat valleys for steps the residuals do not see (issue #60).
+    Residuals {
+        /// The cost's relative gain below which a predicted step ends the fit.
+        relative_gain: f64,
+    },
+}
 
 /// The state of one Levenberg–Marquardt pass: the column-scaled normal matrix of the current Jacobian
 /// (unit columns, so that mm, radians and minutes weigh alike), its scales and the damping. The scaled
