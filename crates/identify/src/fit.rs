@@ -151,6 +151,8 @@ struct Problem<'a> {
     rows: &'a [usize],
     terms: &'a PoseTerms,
     prior: Option<&'a Prior>,
+    /// What the fit settles before it stops ([`Start::settle`]).
+    settle: Settle,
 }
 
 impl Problem<'_> {
@@ -247,7 +249,7 @@ pub fn fit_from(
     start: &Start,
 ) -> Result<Fit, IdentifyError> {
     check_prior(model, start.prior.as_ref())?;
-    let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref() };
+    let problem = Problem { robot, model, data, rows, terms, prior: start.prior.as_ref(), settle: start.settle };
     let rates = Rates { columns: model.time_constants() };
     let mut jac = SPARE_JACOBIAN.with(|spare| std::mem::replace(&mut *spare.borrow_mut(), Mat::new()));
     // The first evaluation writes every entry (each data row whole, the prior's rows cleared and set):
@@ -366,7 +368,7 @@ fn iterate(
     let mut taken = 0;
     for _ in 0..start.max_iterations {
         let g = lm.gradient(&it.jac, &it.r);
-        match damped_step(problem, rates, lm, it, &g, start.settle)? {
+        match damped_step(problem, rates, lm, it, &g)? {
             StepOutcome::Converged => return Ok(PassEnd::Converged),
             StepOutcome::Taken => {
                 taken += 1;
@@ -406,10 +408,9 @@ fn damped_step(
     lm: &mut Lm,
     it: &mut Iterate,
     g: &Mat<f64>,
-    settle: Settle,
 ) -> Result<StepOutcome, IdentifyError> {
     let mut speculation = Speculation::Intact;
-    let outcome = damped_trials(problem, rates, lm, it, (g, settle), &mut speculation)?;
+    let outcome = damped_trials(problem, rates, lm, it, g, &mut speculation)?;
     if let Speculation::Spoiled { at } = speculation {
         problem.residuals(&at, Some(&mut it.jac))?;
     }
@@ -430,7 +431,7 @@ fn damped_trials(
     rates: &Rates,
     lm: &mut Lm,
     it: &mut Iterate,
-    (g, settle): (&Mat<f64>, Settle),
+    g: &Mat<f64>,
     speculation: &mut Speculation,
 ) -> Result<StepOutcome, IdentifyError> {
     while lm.lambda < 1e12 {
@@ -444,7 +445,7 @@ fn damped_trials(
         // damping further only shortens the step.
         let prior_cost = ssr(&it.r[problem.data_rows().min(it.r.len())..]);
         let settled = converged_gain(it.cost, prior_cost, problem.data_rows(), lm.cols.len());
-        if predicted <= settled.max(residuals_settled_gain(it.cost, prior_cost, settle)) {
+        if predicted <= settled.max(residuals_settled_gain(it.cost, prior_cost, problem.settle)) {
             return Ok(StepOutcome::NoGain);
         }
         let mut trial = it.theta.clone();

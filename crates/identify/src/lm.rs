@@ -34,7 +34,7 @@ pub(crate) const SETTLED: f64 = 0.1;
 /// parameter) leaves the data's noise as it is, and its fit creeps along the same flat valleys as least
 /// squares.
 pub(crate) fn converged_gain(cost: f64, prior_cost: f64, rows: usize, free: usize) -> f64 {
-    if prior_cost > 0.01 * cost {
+    if strong_prior(cost, prior_cost) {
         return CONVERGED * cost;
     }
     let dof = (rows as f64 - free as f64).max(1.0);
@@ -49,9 +49,15 @@ pub(crate) fn converged_gain(cost: f64, prior_cost: f64, rows: usize, free: usiz
 /// fit 0.13 % of its residual scale early.
 pub(crate) fn residuals_settled_gain(cost: f64, prior_cost: f64, settle: Settle) -> f64 {
     match settle {
-        Settle::Residuals { relative_gain } if prior_cost <= 0.01 * cost => relative_gain * (cost - prior_cost),
+        Settle::Residuals { relative_gain } if !strong_prior(cost, prior_cost) => relative_gain * (cost - prior_cost),
         _ => 0.0,
     }
+}
+
+/// Whether the prior's rows hold a hundredth of the cost or more: their tension against the data is then
+/// no noise to measure a move by ([`converged_gain`], [`residuals_settled_gain`]).
+fn strong_prior(cost: f64, prior_cost: f64) -> bool {
+    prior_cost > 0.01 * cost
 }
 
 /// Relative cost gain below which the step's Jacobian is reused for the next (chord) step. Near the
