@@ -2,7 +2,9 @@
 //! joint offset, a link deviation, gravity compliance and a linear thermal drift, measured at 3,000 and
 //! 12,000 poses (and 100,000: issue #60's linear growth) over a 240-minute warm-up with two joint temperature columns, diagnosed with nested
 //! validation (5 outer folds, the default). Timed once per size (minutes of work do not fit criterion's
-//! sampling); the process's peak resident memory is read after each size. Then the real sets as a user
+//! sampling; `THERMOKIN_BENCH_REPEAT` keeps the fastest of several runs, `THERMOKIN_BENCH_SIZES` picks
+//! the sizes), with the phase table of the run kept; the process's peak resident memory is read after
+//! each size. Then the real sets as a user
 //! runs them, each timed once: the Barrett WAM (grid, the random poses held out; issue #36's goal ≤ 5 s)
 //! and the UR10 (series C, series B held out). Written to `target/criterion/diagnose_scale.json` for
 //! `cargo xtask bench`.
@@ -10,7 +12,7 @@
 
 use std::time::Instant;
 
-use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, simulate};
+use thermokin_diagnose::{Config, HiddenEffect, SimulationConfig, diagnose, diagnose_profiled, simulate};
 use thermokin_identify::{DriftShape, Effect, FrameMode, JointIndex, ToolMode};
 
 fn main() {
@@ -33,7 +35,20 @@ fn main() {
         },
     ];
     // 100,000 poses (issue #60): the cost must grow with the poses and nothing else.
-    let sizes: &[usize] = if full { &[3_000, 12_000, 100_000] } else { &[300] };
+    // `THERMOKIN_BENCH_SIZES=12000,100000` runs those sizes only (a profile of one size, or the ratio
+    // of two); `THERMOKIN_BENCH_REPEAT=3` times each size that many times and keeps the fastest run: the
+    // ratio of two sizes on a machine whose runs differ by ±10 % from one to the next.
+    let chosen_sizes: Option<Vec<usize>> = std::env::var("THERMOKIN_BENCH_SIZES")
+        .ok()
+        .map(|v| v.split(',').map(|s| s.trim().parse().expect("THERMOKIN_BENCH_SIZES: pose counts")).collect());
+    let repeat: usize = std::env::var("THERMOKIN_BENCH_REPEAT")
+        .ok()
+        .map_or(1, |v| v.trim().parse().expect("THERMOKIN_BENCH_REPEAT: a count"));
+    let sizes: &[usize] = match &chosen_sizes {
+        Some(s) if full => s,
+        _ if full => &[3_000, 12_000, 100_000],
+        _ => &[300],
+    };
     let mut results = serde_json::Map::new();
     for &poses in sizes {
         let mut data = simulate(&robot, &hidden, &SimulationConfig { poses, ..SimulationConfig::default() }).unwrap();
@@ -43,9 +58,19 @@ fn main() {
             let t = m.time_min;
             m.temps = vec![22.0 + 8.0 * (1.0 - (-t / 30.0).exp()), 21.0 + 4.0 * t / 240.0];
         }
-        let t0 = Instant::now();
-        let report = diagnose(&robot, &data, None, &Config::default()).unwrap();
-        let seconds = t0.elapsed().as_secs_f64();
+        let mut fastest: Option<(f64, thermokin_diagnose::Report, thermokin_diagnose::Profile)> = None;
+        for run in 0..repeat.max(1) {
+            let t0 = Instant::now();
+            let (report, profile) = diagnose_profiled(&robot, &data, None, &Config::default()).unwrap();
+            let seconds = t0.elapsed().as_secs_f64();
+            if repeat > 1 {
+                println!("diagnose_scale {poses} poses, run {}: {seconds:.1} s", run + 1);
+            }
+            if fastest.as_ref().is_none_or(|f| seconds < f.0) {
+                fastest = Some((seconds, report, profile));
+            }
+        }
+        let Some((seconds, report, profile)) = fastest else { unreachable!("at least one run") };
         let rss = thermokin_testdata::peak_rss_mib();
         let chosen: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
         // Per pose: what linear growth keeps constant.
@@ -54,12 +79,30 @@ fn main() {
             "diagnose_scale {poses} poses: {seconds:.1} s nested ({ms_per_pose:.2} ms per pose), peak RSS {} MiB; chose {chosen:?}",
             rss.map_or("n/a".into(), |m| format!("{m:.1}"))
         );
+        // Where the time went, phase by phase: which phases grow faster than the poses.
+        for p in profile.phases.iter().filter(|p| p.seconds + p.outer_fold_seconds > 0.0) {
+            println!(
+                "  {:<14} {:>9.3} s on all poses, {:>9.3} s summed over the outer folds",
+                p.phase.name(),
+                p.seconds,
+                p.outer_fold_seconds
+            );
+        }
+        let phases: Vec<_> = profile
+            .phases
+            .iter()
+            .map(|p| serde_json::json!({"phase": p.phase.name(), "seconds": p.seconds, "outer_fold_seconds": p.outer_fold_seconds}))
+            .collect();
         results.insert(
             format!("{poses}"),
-            serde_json::json!({"seconds": seconds, "ms_per_pose": ms_per_pose, "peak_rss_mib": rss, "chosen": chosen}),
+            serde_json::json!({
+                "seconds": seconds, "ms_per_pose": ms_per_pose, "peak_rss_mib": rss, "chosen": chosen,
+                "runs": repeat.max(1), "phases": phases
+            }),
         );
     }
-    if full {
+    // The real sets with every size only: a run of chosen sizes leaves them out.
+    if full && chosen_sizes.is_none() {
         for (name, urdf, tip, train, test) in [
             ("wam", "fixtures/real/jacobi-wam/wam.urdf", None, "jacobi-wam/wam-grid.csv", "jacobi-wam/wam-random.csv"),
             ("ur10", "fixtures/urdf/ur10.urdf", Some("tool0"), "ur10-ipa/series_C.csv", "ur10-ipa/series_B.csv"),
@@ -80,6 +123,8 @@ fn main() {
             );
             results.insert(format!("real_{name}"), serde_json::json!({"seconds": seconds}));
         }
+    }
+    if full {
         let dir = root.join("target/criterion");
         let _ = std::fs::create_dir_all(&dir);
         let _ = std::fs::write(dir.join("diagnose_scale.json"), serde_json::Value::Object(results).to_string());
