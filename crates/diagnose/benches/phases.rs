@@ -46,19 +46,14 @@ fn main() {
             cpu.map_or("n/a".into(), |c| format!("{c:.2}")),
             rss.map_or("n/a".into(), |m| format!("{m:.1}")),
         );
-        println!("  {:<16} {:>10} {:>16}", "phase", "all data s", "outer folds Σ s");
-        for p in &profile.phases {
-            println!("  {:<16} {:>10.3} {:>16.3}", p.phase.name(), p.seconds, p.outer_fold_seconds);
-        }
+        print!("{}", profile.table());
         results.insert(
             name.into(),
             serde_json::json!({
                 "wall_s": wall, "cpu_s": cpu, "peak_rss_mib": rss, "nested_mean_mm": nested,
                 "holdout_mean_mm": holdout.map(|h| h.0), "holdout_same_frame_mean_mm": holdout.map(|h| h.1),
                 "chosen": chosen,
-                "phases": profile.phases.iter().map(|p| serde_json::json!({
-                    "phase": p.phase.name(), "seconds": p.seconds, "outer_fold_seconds": p.outer_fold_seconds
-                })).collect::<Vec<_>>(),
+                "phases": profile.phases,
             }),
         );
     }

@@ -80,24 +80,12 @@ fn main() {
             rss.map_or("n/a".into(), |m| format!("{m:.1}"))
         );
         // Where the time went, phase by phase: which phases grow faster than the poses.
-        for p in profile.phases.iter().filter(|p| p.seconds + p.outer_fold_seconds > 0.0) {
-            println!(
-                "  {:<14} {:>9.3} s on all poses, {:>9.3} s summed over the outer folds",
-                p.phase.name(),
-                p.seconds,
-                p.outer_fold_seconds
-            );
-        }
-        let phases: Vec<_> = profile
-            .phases
-            .iter()
-            .map(|p| serde_json::json!({"phase": p.phase.name(), "seconds": p.seconds, "outer_fold_seconds": p.outer_fold_seconds}))
-            .collect();
+        print!("{}", profile.table());
         results.insert(
             format!("{poses}"),
             serde_json::json!({
                 "seconds": seconds, "ms_per_pose": ms_per_pose, "peak_rss_mib": rss, "chosen": chosen,
-                "runs": repeat.max(1), "phases": phases
+                "runs": repeat.max(1), "phases": profile.phases
             }),
         );
     }

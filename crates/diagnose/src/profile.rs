@@ -12,8 +12,8 @@ use std::time::Instant;
 
 use serde::Serialize;
 
-/// A phase of the diagnosis ([`Profile`]).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+/// A phase of the diagnosis ([`Profile`]); serialised as its name in a table ([`Phase::name`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Phase {
     /// The screen for gross errors.
     Screen,
@@ -85,6 +85,12 @@ impl Phase {
     }
 }
 
+impl Serialize for Phase {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.name())
+    }
+}
+
 /// One phase's cost.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct PhaseCost {
@@ -104,6 +110,17 @@ pub struct Profile {
     pub phases: Vec<PhaseCost>,
     /// Wall seconds of the whole diagnosis.
     pub total_seconds: f64,
+}
+
+impl Profile {
+    /// The phases as a table: each phase's seconds on all measurements and summed over the outer folds.
+    pub fn table(&self) -> String {
+        let mut out = format!("  {:<16} {:>10} {:>16}\n", "phase", "all data s", "outer folds Σ s");
+        for p in &self.phases {
+            out += &format!("  {:<16} {:>10.3} {:>16.3}\n", p.phase.name(), p.seconds, p.outer_fold_seconds);
+        }
+        out
+    }
 }
 
 /// Seconds per phase, accumulated from any thread.
@@ -142,4 +159,28 @@ pub(crate) fn profile(main: &Clock, outer: &Clock, total_seconds: f64) -> Profil
         .map(|&p| PhaseCost { phase: p, seconds: m[p.index()], outer_fold_seconds: o[p.index()] })
         .collect();
     Profile { phases, total_seconds }
+}
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)] // Tests unwrap to fail.
+mod tests {
+    use super::{Phase, PhaseCost, Profile};
+
+    /// A phase's cost serialises with the phase's table name — what `cargo xtask bench` reads back from
+    /// the benches' JSON (`phase`, `seconds`, `outer_fold_seconds`) — and the table has a line per phase.
+    #[test]
+    fn a_profile_serialises_and_tabulates_its_phases_by_name() {
+        let cost = PhaseCost { phase: Phase::Nested, seconds: 1.5, outer_fold_seconds: 0.25 };
+        let json = serde_json::to_value(cost).unwrap();
+        assert_eq!(json, serde_json::json!({"phase": "nested folds", "seconds": 1.5, "outer_fold_seconds": 0.25}));
+        let profile = Profile { phases: vec![cost], total_seconds: 1.5 };
+        let table = profile.table();
+        assert_eq!(table.lines().count(), 2);
+        assert!(
+            table
+                .lines()
+                .nth(1)
+                .is_some_and(|l| l.contains("nested folds") && l.contains("1.500") && l.contains("0.250"))
+        );
+    }
 }
