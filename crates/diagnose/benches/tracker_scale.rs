@@ -59,10 +59,13 @@ fn main() {
             m.temps = vec![22.0 + 8.0 * (1.0 - (-t / 30.0).exp()), 21.0 + 4.0 * t / 240.0];
         }
         let mut fastest: Option<(f64, thermokin_diagnose::Report, thermokin_diagnose::Profile)> = None;
+        let mut rows = thermokin_identify::Evaluated::default();
         for run in 0..repeat.max(1) {
-            let t0 = Instant::now();
+            let (t0, before) = (Instant::now(), thermokin_identify::evaluated());
             let (report, profile) = diagnose_profiled(&robot, &data, None, &Config::default()).unwrap();
             let seconds = t0.elapsed().as_secs_f64();
+            // The rows the last run's fits evaluated.
+            rows = thermokin_identify::evaluated().since(before);
             if repeat > 1 {
                 println!("diagnose_scale {poses} poses, run {}: {seconds:.1} s", run + 1);
             }
@@ -79,13 +82,21 @@ fn main() {
             "diagnose_scale {poses} poses: {seconds:.1} s nested ({ms_per_pose:.2} ms per pose), peak RSS {} MiB; chose {chosen:?}",
             rss.map_or("n/a".into(), |m| format!("{m:.1}"))
         );
+        // What the fits evaluated per pose: constant where the work grows with the poses alone, larger
+        // where the fits iterate more.
+        let per_pose = |n: u64| n as f64 / poses as f64;
+        let (jacobian_per_pose, residual_per_pose) = (per_pose(rows.jacobian_rows), per_pose(rows.residual_rows));
+        println!(
+            "  the fits evaluated {jacobian_per_pose:.0} Jacobian rows and {residual_per_pose:.0} residual rows per pose"
+        );
         // Where the time went, phase by phase: which phases grow faster than the poses.
         print!("{}", profile.table());
         results.insert(
             format!("{poses}"),
             serde_json::json!({
                 "seconds": seconds, "ms_per_pose": ms_per_pose, "peak_rss_mib": rss, "chosen": chosen,
-                "runs": repeat.max(1), "phases": profile.phases
+                "runs": repeat.max(1), "phases": profile.phases,
+                "jacobian_rows_per_pose": jacobian_per_pose, "residual_rows_per_pose": residual_per_pose
             }),
         );
     }

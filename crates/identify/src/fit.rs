@@ -159,6 +159,7 @@ impl Problem<'_> {
     /// The weighted residuals at `theta` (the prior's rows after the data's), and the Jacobian into `jac`
     /// when given.
     fn residuals(&self, theta: &[f64], jac: Option<&mut Mat<f64>>) -> Result<Vec<f64>, IdentifyError> {
+        crate::tally::count(self.data_rows(), jac.is_some());
         let Some(prior) = self.prior else {
             return weighted(self.robot, self.model, theta, self.data, self.rows, self.terms, jac.map(Mat::as_mut));
         };

@@ -25,6 +25,7 @@ mod predict;
 mod registration;
 mod residuals;
 mod sampling;
+mod tally;
 mod terms;
 mod use_error;
 
@@ -49,5 +50,6 @@ pub use predict::{ChainCache, PoseInputs};
 pub use registration::{initial_frames, kabsch};
 pub use residuals::{norms, residuals, residuals_and_jacobian};
 pub use sampling::{normal, random_configuration};
+pub use tally::{Evaluated, evaluated};
 pub use terms::{PoseTerms, gravity_torques, max_gravity_torques, sensor_joint};
 pub use use_error::{frame_refitted_weight, heldout_resolution, heldout_rms, refitted_frame, trace_of_product};
