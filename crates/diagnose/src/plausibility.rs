@@ -407,15 +407,29 @@ impl Trade {
     }
 }
 
-/// The larger of the two deflections a coupling `c` of joint `a` and the next causes at the largest
-/// gravity torques, and the lever it moves the tool point at.
-fn coupled_deflection(scale: &RobotScale, a: usize, c: f64) -> (f64, f64) {
+/// What bounds a coupling (`v = [c]`) or a pair (`v = w`) of joint `a` and the next: the larger of the
+/// two deflections it causes at the largest gravity torques, its name, and the lever it moves the tool
+/// point at.
+fn coupled_deflection(scale: &RobotScale, effect: Effect, a: usize, v: &[f64]) -> (&'static str, f64, f64) {
     let b = a + 1;
+    if let Effect::CompliancePair(_) = effect {
+        // Each joint's deflection `w_k (w_a τ_a + w_b τ_b)` at the largest torques of both, at its own
+        // lever: the larger of the two.
+        let load = (v[0] * scale.max_torque_nm[a]).abs() + (v[1] * scale.max_torque_nm[b]).abs();
+        let (da, db) = ((v[0] * load).abs(), (v[1] * load).abs());
+        let (la, lb) = (scale.axis_lever_mm[a].max(1.0), scale.axis_lever_mm[b].max(1.0));
+        let (deflection, lever) = if da * la >= db * lb { (da, la) } else { (db, lb) };
+        return ("the pair's deflection at the largest gravity torques", deflection, lever);
+    }
+    // A coupling: the larger of the two deflections it causes, each at its own joint's lever (no sign
+    // rule: an off-diagonal compliance may take either).
+    let what = "the coupled deflection at the largest gravity torque";
+    let c = v[0];
     let moved = |from: usize, at: usize| (c * scale.max_torque_nm[from]).abs() * scale.axis_lever_mm[at].max(1.0);
     if moved(b, a) >= moved(a, b) {
-        (c * scale.max_torque_nm[b], scale.axis_lever_mm[a].max(1.0))
+        (what, c * scale.max_torque_nm[b], scale.axis_lever_mm[a].max(1.0))
     } else {
-        (c * scale.max_torque_nm[a], scale.axis_lever_mm[b].max(1.0))
+        (what, c * scale.max_torque_nm[a], scale.axis_lever_mm[b].max(1.0))
     }
 }
 
@@ -478,17 +492,9 @@ pub(crate) fn implausible(scale: &RobotScale, v: &[f64], effect: Effect, p: &Pla
         }
         // A knocked tracker or a moved base: bounded as a row's deviation at the arm's extent.
         Effect::FrameStep(_) => row_bound(v, 1.0, scale.extent_mm.max(1.0), ["its translation", "its rotation"], &over),
-        Effect::ComplianceCoupling(j) => {
-            // The larger of the two deflections it causes, each at its own joint's lever (no sign rule:
-            // an off-diagonal compliance may take either).
-            let (deflection, lever) = coupled_deflection(scale, j.index(), v[0]);
-            over(
-                "the coupled deflection at the largest gravity torque",
-                deg(deflection),
-                deflection.abs() * lever,
-                lever,
-                "°",
-            )
+        Effect::ComplianceCoupling(j) | Effect::CompliancePair(j) => {
+            let (what, deflection, lever) = coupled_deflection(scale, effect, j.index(), v);
+            over(what, deg(deflection), deflection.abs() * lever, lever, "°")
         }
         Effect::LateralCompliance(j, n) => {
             let (tilt, moved) = lateral_reach(scale, j.index(), n, v);

@@ -89,7 +89,7 @@ pub(crate) fn select(scorer: &Scorer<'_>, config: &Config, clock: &Clock) -> Res
     let beyond = clock.time(Phase::Extrapolation, || beyond_the_measured_poses(scorer, config, &mut selection))?;
     let eligible: Vec<Effect> = eligible.into_iter().filter(|e| !beyond.contains(e)).collect();
     clock.time(Phase::Completion, || complete(scorer, config, &mut selection, &eligible))?;
-    clock.time(Phase::Pairs, || physical_pairs(scorer, &mut selection, &eligible))?;
+    clock.time(Phase::Pairs, || physical_pairs(scorer, &mut selection, &eligible, config.gate_standard_errors))?;
     clock.time(Phase::Shrinkage, || shrink(scorer, config, &mut selection))?;
     Ok(Selected { selection, catalogue })
 }

@@ -18,6 +18,11 @@ pub const TAU_RANGE_MIN: (f64, f64) = (1e-3, MAX_TAU_MIN);
 /// Initial time constant of an exponential drift, minutes.
 pub(crate) const INITIAL_TAU_MIN: f64 = 60.0;
 
+/// Where a fit starts each element of a [`Effect::CompliancePair`]'s `w`, √(rad/N·m): `k = 1e-4` rad/N·m
+/// (0.006 °/N·m) on each joint, between a stiff industrial wrist (1e-6) and a cable-driven one (1e-1) — at
+/// `w = 0` the pair's columns vanish and nothing moves it.
+pub const PAIR_START: f64 = 1e-2;
+
 /// How a thermal drift grows with time — a family of [`TimeProfile`]s of `thermokin-deform`, whose law
 /// ([`TimeProfile::time_factor`]) the fit evaluates. The six amplitudes of a drift are its deviation at
 /// the reference time [`LINEAR_DRIFT_REFERENCE_MIN`] for every shape: `δ · f(t) / f(180)`.
@@ -210,6 +215,14 @@ pub enum Effect {
     /// share (a differential, a cable pair): `Δq_j += c · τ_{j+1}` and `Δq_{j+1} += c · τ_j`, the
     /// symmetric off-diagonal term of the two joints' compliance matrix (Maxwell–Betti reciprocity) (1).
     ComplianceCoupling(JointIndex),
+    /// The compliance matrix of joint `j` and the next made positive semidefinite at its boundary: one
+    /// elastic element both joints load — a cable or a differential they share — `K = w wᵀ`, so that
+    /// `Δq_j += w_j (w_j τ_j + w_{j+1} τ_{j+1})` and `Δq_{j+1} += w_{j+1} (w_j τ_j + w_{j+1} τ_{j+1})`:
+    /// `k_j = w_j²`, `k_{j+1} = w_{j+1}²`, `c = w_j w_{j+1}` (2, square roots of radians per N·m).
+    /// Where a coupling's least-squares pair is not positive semidefinite the least-squares pair that is
+    /// lies on the cone's boundary, which is this form (the cost is convex in `(k_j, c, k_{j+1})`). A
+    /// fit starts it at [`PAIR_START`] for each joint (at `w = 0` its columns vanish).
+    CompliancePair(JointIndex),
     /// A gear-ratio (scale) error of a revolute joint: Δq = s · q (1, dimensionless).
     JointScale(JointIndex),
     /// Backlash of a joint's gears: `Δq = b · s`, `s` = ±1 the direction the joint last moved in before
@@ -415,6 +428,7 @@ impl Effect {
             | Effect::LumpedLateralCompliance(j, ..)
             | Effect::Straightness(j)
             | Effect::ComplianceCoupling(j)
+            | Effect::CompliancePair(j)
             | Effect::JointScale(j)
             | Effect::Periodic(j)
             | Effect::Backlash(j)
@@ -436,7 +450,10 @@ impl Effect {
     pub fn validate(&self, dof: usize) -> Result<(), IdentifyError> {
         match self.joint() {
             Some(j) if j.index() >= dof => Err(IdentifyError::NoSuchJoint { joint: j.number(), dof }),
-            Some(j) if matches!(self, Effect::ComplianceCoupling(_)) && j.index() + 1 >= dof => {
+            Some(j)
+                if matches!(self, Effect::ComplianceCoupling(_) | Effect::CompliancePair(_))
+                    && j.index() + 1 >= dof =>
+            {
                 Err(IdentifyError::NoSuchJoint { joint: j.number() + 1, dof })
             }
             _ => Ok(()),
@@ -455,6 +472,7 @@ impl Effect {
             Effect::ThermalDrift(_, DriftShape::Exponential) => 7,
             Effect::ThermalDrift(..) => 6,
             Effect::ToolPoint | Effect::ToolRotation => 3,
+            Effect::CompliancePair(_) => 2,
             Effect::JointOffset(_)
             | Effect::JointCompliance(_)
             | Effect::ComplianceCoupling(_)
@@ -488,6 +506,7 @@ impl Effect {
             Effect::LinkDeviation(_) => "link_deviation",
             Effect::JointCompliance(_) | Effect::LumpedCompliance(..) => "joint_compliance",
             Effect::ComplianceCoupling(_) => "compliance_coupling",
+            Effect::CompliancePair(_) => "compliance_pair",
             Effect::LateralCompliance(..) | Effect::LumpedLateralCompliance(..) => "lateral_compliance",
             Effect::Straightness(_) => "straightness",
             Effect::JointScale(_) => "joint_scale",
@@ -551,6 +570,9 @@ impl Effect {
             }
             Effect::BranchLoad(.., at) => (1..=at.count as usize).map(|b| format!("{prefix}.load{b:02}_deg")).collect(),
             Effect::ComplianceCoupling(_) => vec![format!("{prefix}.c_deg_per_Nm")],
+            Effect::CompliancePair(j) => {
+                (0..2).map(|i| format!("{prefix}.w{}_sqrt_deg_per_Nm", j.number() + i)).collect()
+            }
             Effect::LateralCompliance(_, n) => [
                 "tilt1_deg_per_Nm",
                 "tilt2_deg_per_Nm",
@@ -630,6 +652,7 @@ impl Effect {
                 | Effect::LumpedLateralCompliance(..)
                 | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
+                | Effect::CompliancePair(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
                 | Effect::Backlash(_)
@@ -686,12 +709,21 @@ impl Effect {
     /// Parameter `k` from internal units (mm, radians, minutes, radians per N·m) to report units (mm,
     /// degrees, minutes, degrees per N·m).
     pub fn to_report_units(&self, k: usize, v: f64) -> f64 {
-        if self.is_angle(k) { units::degrees(v) } else { v }
+        match self {
+            // √(rad/N·m) to √(°/N·m).
+            Effect::CompliancePair(_) => v * units::degrees(1.0).sqrt(),
+            _ if self.is_angle(k) => units::degrees(v),
+            _ => v,
+        }
     }
 
     /// Parameter `k` from report units to internal units (the inverse of [`Effect::to_report_units`]).
     pub fn from_report_units(&self, k: usize, v: f64) -> f64 {
-        if self.is_angle(k) { units::radians(v) } else { v }
+        match self {
+            Effect::CompliancePair(_) => v * units::radians(1.0).sqrt(),
+            _ if self.is_angle(k) => units::radians(v),
+            _ => v,
+        }
     }
 }
 

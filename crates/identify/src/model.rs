@@ -6,7 +6,7 @@ use nalgebra::{Isometry3, Vector3};
 use thermokin_chain::{Chain, Dataset, ErrorParams, Measurement, ParameterRows, Robot};
 use thermokin_deform::{DriftLaw, DriftRow, JointCorrection, RobotModel, Row};
 
-use crate::effect::{DriftShape, Effect, INITIAL_TAU_MIN, TAU_RANGE_MIN, six_at};
+use crate::effect::{DriftShape, Effect, INITIAL_TAU_MIN, PAIR_START, TAU_RANGE_MIN, six_at};
 use crate::error::IdentifyError;
 use crate::identifiability::{Dependence, DependsOn, FixedParameter};
 use crate::terms::sensor_joint;
@@ -82,8 +82,10 @@ impl Model {
     pub fn initial(&self) -> Vec<f64> {
         let mut theta = vec![0.0; self.len];
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
-            if let Effect::ThermalDrift(_, DriftShape::Exponential) = e {
-                theta[o + 6] = INITIAL_TAU_MIN;
+            match e {
+                Effect::ThermalDrift(_, DriftShape::Exponential) => theta[o + 6] = INITIAL_TAU_MIN,
+                Effect::CompliancePair(_) => theta[o..o + 2].fill(PAIR_START),
+                _ => {}
             }
         }
         theta
@@ -208,6 +210,7 @@ impl Model {
                     own.iter_mut().zip(&theta[o..o + n as usize]).for_each(|(l, t)| *l += t);
                 }
                 Effect::ComplianceCoupling(j) => joints[j.index()].coupling_rad_per_nm += theta[o],
+                Effect::CompliancePair(j) => add_pair(&mut joints, j.index(), theta[o], theta[o + 1]),
                 Effect::BranchLoad(j, _, at) => branch_loads.push(branch_load(robot, j, at, &theta[o..])),
                 Effect::LateralCompliance(j, n) => {
                     for (c, t) in joints[j.index()].lateral.iter_mut().zip(&theta[o..o + n as usize]) {
@@ -312,6 +315,7 @@ impl Model {
                 | Effect::LumpedLateralCompliance(..)
                 | Effect::Straightness(_)
                 | Effect::ComplianceCoupling(_)
+                | Effect::CompliancePair(_)
                 | Effect::JointScale(_)
                 | Effect::Periodic(_)
                 | Effect::Backlash(_)
@@ -380,7 +384,7 @@ impl Model {
                 | Effect::JointScale(j)
                 | Effect::Periodic(j)
                 | Effect::Backlash(j) => rows.zeros[j.index()] = true,
-                Effect::ComplianceCoupling(j) => {
+                Effect::ComplianceCoupling(j) | Effect::CompliancePair(j) => {
                     rows.zeros[j.index()] = true;
                     rows.zeros[j.index() + 1] = true;
                 }
@@ -389,6 +393,14 @@ impl Model {
         }
         rows
     }
+}
+
+/// A [`Effect::CompliancePair`]'s `w = (a, b)` on joints `j` and `j + 1` as the robot file holds it: its
+/// matrix `w wᵀ`, `k_j = a²`, `k_{j+1} = b²` and the coupling `c = a·b`.
+fn add_pair(joints: &mut [JointCorrection], j: usize, a: f64, b: f64) {
+    joints[j].compliance_rad_per_nm += a * a;
+    joints[j + 1].compliance_rad_per_nm += b * b;
+    joints[j].coupling_rad_per_nm += a * b;
 }
 
 /// Where a model's frame blocks start ([`crate::initial_frames`]): the registration (identity in the base

@@ -182,6 +182,7 @@ impl Model {
                                 | Effect::LateralCompliance(..)
                                 | Effect::LumpedLateralCompliance(..)
                                 | Effect::ComplianceCoupling(_)
+                                | Effect::CompliancePair(_)
                         )
                     })
                     .then(|| (chain.clone(), self.gravity_down(&chain, robot)));
@@ -254,6 +255,14 @@ impl Model {
                     let j = j.index();
                     q[j] += theta[o] * cached.torques[j + 1];
                     q[j + 1] += theta[o] * cached.torques[j];
+                }
+                Effect::CompliancePair(j) => {
+                    // One element loaded by `wᵀτ`, moving each joint by its share `w`.
+                    let j = j.index();
+                    let (a, b) = (theta[o], theta[o + 1]);
+                    let load = a * cached.torques[j] + b * cached.torques[j + 1];
+                    q[j] += a * load;
+                    q[j + 1] += b * load;
                 }
                 Effect::JointScale(j) | Effect::Periodic(j) | Effect::Backlash(j) => {
                     let (j, s) = (j.index(), inputs.approach.get(j.index()).map_or(0.0, |a| a.sign()));
@@ -476,6 +485,7 @@ impl Model {
                         jac[(r, o)] = pj[(r, a)] * cached.torques[j + 1] + pj[(r, b)] * cached.torques[j];
                     }
                 }
+                Effect::CompliancePair(j) => pair_columns(j.index(), &layout, &theta[o..o + 2], cached, o, jac),
                 Effect::JointScale(j) | Effect::Periodic(j) | Effect::Backlash(j) => {
                     // Δq enters exactly as a zero offset does: ∂p/∂θ_k = ∂p/∂zero · basis_k(q, s).
                     let (j, s) = (j.index(), approach.get(j.index()).map_or(0.0, |a| a.sign()));
@@ -517,6 +527,28 @@ impl Model {
                 }
             }
         }
+    }
+}
+
+/// A [`Effect::CompliancePair`]'s two columns from the chain's: `Δq_j = w_j·L`, `Δq_{j+1} = w_{j+1}·L`
+/// with `L = w_j τ_j + w_{j+1} τ_{j+1}`, so `∂Δq_j/∂w_j = L + w_j τ_j`, `∂Δq_{j+1}/∂w_j = w_{j+1} τ_j`, and
+/// the same for `w_{j+1}`.
+fn pair_columns(
+    j: usize,
+    layout: &ParameterLayout,
+    w: &[f64],
+    cached: &ChainCache,
+    o: usize,
+    jac: &mut Matrix6xX<f64>,
+) {
+    let pj = &cached.pj;
+    let (zj, zn) = (layout.zero(j), layout.zero(j + 1));
+    let (a, b, tj, tn) = (w[0], w[1], cached.torques[j], cached.torques[j + 1]);
+    let load = a * tj + b * tn;
+    let (da, db) = ([load + a * tj, b * tj], [a * tn, load + b * tn]);
+    for r in 0..6 {
+        jac[(r, o)] = pj[(r, zj)] * da[0] + pj[(r, zn)] * da[1];
+        jac[(r, o + 1)] = pj[(r, zj)] * db[0] + pj[(r, zn)] * db[1];
     }
 }
 

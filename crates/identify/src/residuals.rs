@@ -333,6 +333,52 @@ mod tests {
         jacobian_is_the_differences(&robot, &model, &theta, &data, &terms, 1e-9);
     }
 
+    /// A compliance pair `K = w wᵀ` of joints 2 and 3: its analytic Jacobian against central differences
+    /// (at a `w` with both signs, so each column mixes both joints' torques), its residuals those of the
+    /// same matrix written as two compliances and their coupling (`k = w²`, `c = w₂ w₃`: another route
+    /// through the model), and its export the fit's prediction.
+    #[test]
+    fn a_compliance_pair_is_its_rank_one_matrix_and_matches_the_differences() {
+        let chain = irb140_table9();
+        let masses = (0..6)
+            .map(|j| Some(LinkMass { mass_kg: 10.0 - j as f64, com_mm: Vector3::new(50.0, 20.0 * j as f64, 100.0) }))
+            .collect();
+        let robot = Robot::new("IRB 140", chain).with_masses(masses).unwrap();
+        let data = eight_poses(6);
+        let joint = |j| JointIndex::of(&robot, j).unwrap();
+        let terms = PoseTerms::of(&robot, &data, 0.0);
+        let rows: Vec<usize> = (0..data.len()).collect();
+        let pair = Model::new(&robot, vec![Effect::CompliancePair(joint(1))]).unwrap();
+        assert_eq!(pair.len(), 2);
+        let w = vec![4e-3, -3e-3];
+        jacobian_is_the_differences(&robot, &pair, &w, &data, &terms, 1e-7);
+        let matrix = Model::new(
+            &robot,
+            vec![
+                Effect::JointCompliance(joint(1)),
+                Effect::JointCompliance(joint(2)),
+                Effect::ComplianceCoupling(joint(1)),
+            ],
+        )
+        .unwrap();
+        let k = vec![w[0] * w[0], w[1] * w[1], w[0] * w[1]];
+        let (a, b) = (
+            residuals(&robot, &pair, &w, &data, &rows, &terms).unwrap(),
+            residuals(&robot, &matrix, &k, &data, &rows, &terms).unwrap(),
+        );
+        let moved = residuals(&robot, &pair, &[0.0, 0.0], &data, &rows, &terms).unwrap();
+        assert!(a.iter().zip(&moved).any(|(x, y)| (x - y).abs() > 1e-3), "the pair moves the tool");
+        for (i, (x, y)) in a.iter().zip(&b).enumerate() {
+            assert!((x - y).abs() < 1e-9, "row {i}: {x} against {y}");
+        }
+        let exported = pair.robot_model(&robot, &w, &data).unwrap();
+        for (i, m) in data.measurements.iter().enumerate() {
+            let pose = exported.tool_pose(&m.q, &thermokin_chain::OperatingState::default()).unwrap();
+            let predicted = m.position_mm - Vector3::new(a[3 * i], a[3 * i + 1], a[3 * i + 2]);
+            assert!((pose.translation.vector - predicted).norm() < 1e-9, "pose {i}");
+        }
+    }
+
     /// A gravity compliance known without masses on joints 2 and 3 of an IRB 140 whose file carries no
     /// masses: the analytic Jacobian against central differences, and the exported robot's forward model
     /// against the fit's prediction at every measurement.
