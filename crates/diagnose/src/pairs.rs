@@ -15,13 +15,16 @@
 //! values fitted — fits it on the cone's boundary instead: the cost is convex in `(kⱼ, c, kⱼ₊₁)` (the
 //! deflections are linear in them), so where its minimum lies outside the cone the least-squares pair
 //! inside it lies on the boundary, the matrices of rank one `w wᵀ` — one elastic element both joints load
-//! ([`Effect::CompliancePair`], which replaces the coupling and both compliances). The free coupling is
-//! recorded as refused, with what replaced it. Nothing is gated here: the pair is what the coupling means,
-//! and the held-out figures are rescored.
+//! ([`Effect::CompliancePair`], which replaces the coupling and both compliances) where that passes the
+//! selection's gate against the model without the coupling — a single joint's sag lies on the boundary
+//! too, `w = (√k, 0)`, and there the second element is a parameter the poses do not ask for; otherwise the
+//! coupling leaves with the compliances it brought. The free coupling is recorded as refused either way,
+//! with what replaced it. The coupling itself is not gated here (the pair is what it means), and the
+//! held-out figures are rescored.
 //!
-//! (Until 2026-11-30 a pair that was not positive semidefinite was dropped with the compliances it
-//! brought: on the real WAM's grid, whose default folds choose `compliance_coupling[5]` at k5 = 5.29,
-//! k6 = 1.32, c = 5.85 °/N·m, that cost the random poses 2.33 → 2.52 mm refitted.)
+//! (Until 2026-11-30 a pair that was not positive semidefinite was always dropped: on the real WAM's grid,
+//! whose default folds choose `compliance_coupling[5]` (k5 = 5.29, k6 = 1.32, c = 3.68 °/N·m fitted
+//! beside it), the random poses went to 2.5234 mm refitted; on the boundary, 2.3489.)
 //!
 //! The pair is judged in the fit it would join: with the prior the completion chose for the model
 //! ([`crate::completion`]), kept. (Until issue #49 it was judged in the least-squares fit of the complete

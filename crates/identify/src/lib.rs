@@ -32,8 +32,8 @@ mod use_error;
 pub use catalogue::{FrameMode, Lateral, Setup, ToolMode, approach_counts, gravity_compliance};
 pub use coverage::{Eligibility, arc_needed, needed_arc, travel};
 pub use effect::{
-    BranchAt, DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, SensorId, StepAt,
-    Support, TAU_RANGE_MIN, TiltOver,
+    BranchAt, DriftShape, EFFECT_NAMES, Effect, JointBasis, JointIndex, LINEAR_DRIFT_REFERENCE_MIN, PAIR_START,
+    SensorId, StepAt, Support, TAU_RANGE_MIN, TiltOver,
 };
 pub use error::IdentifyError;
 pub use fit::{

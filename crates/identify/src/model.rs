@@ -78,7 +78,7 @@ impl Model {
         self.effects.contains(&Effect::Registration)
     }
 
-    /// The initial parameter vector (zeros, τ at its starting value).
+    /// The initial parameter vector (zeros; τ at its starting value, a compliance pair's `w` at [`PAIR_START`]).
     pub fn initial(&self) -> Vec<f64> {
         let mut theta = vec![0.0; self.len];
         for (e, &o) in self.effects.iter().zip(&self.offsets) {
