@@ -58,22 +58,23 @@ fn main() {
             let t = m.time_min;
             m.temps = vec![22.0 + 8.0 * (1.0 - (-t / 30.0).exp()), 21.0 + 4.0 * t / 240.0];
         }
-        let mut fastest: Option<(f64, thermokin_diagnose::Report, thermokin_diagnose::Profile)> = None;
-        let mut rows = thermokin_identify::Evaluated::default();
+        // The fastest run's time, report, phases and evaluated rows: every line printed for a size is one
+        // run's.
+        type Run = (f64, thermokin_diagnose::Report, thermokin_diagnose::Profile, thermokin_identify::Evaluated);
+        let mut fastest: Option<Run> = None;
         for run in 0..repeat.max(1) {
             let (t0, before) = (Instant::now(), thermokin_identify::evaluated());
             let (report, profile) = diagnose_profiled(&robot, &data, None, &Config::default()).unwrap();
             let seconds = t0.elapsed().as_secs_f64();
-            // The rows the last run's fits evaluated.
-            rows = thermokin_identify::evaluated().since(before);
+            let rows = thermokin_identify::evaluated().since(before);
             if repeat > 1 {
                 println!("diagnose_scale {poses} poses, run {}: {seconds:.1} s", run + 1);
             }
             if fastest.as_ref().is_none_or(|f| seconds < f.0) {
-                fastest = Some((seconds, report, profile));
+                fastest = Some((seconds, report, profile, rows));
             }
         }
-        let Some((seconds, report, profile)) = fastest else { unreachable!("at least one run") };
+        let Some((seconds, report, profile, rows)) = fastest else { unreachable!("at least one run") };
         let rss = thermokin_testdata::peak_rss_mib();
         let chosen: Vec<String> = report.effects.iter().map(|e| e.label.clone()).collect();
         // Per pose: what linear growth keeps constant.

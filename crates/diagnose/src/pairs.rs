@@ -74,8 +74,10 @@ pub(crate) fn physical_pairs(
             Ok(scorer.heldout_fits_with(&set, &scorer.folds, sel.shrinkage)?.errors)
         };
         if significantly_better(&errors(&bounded)?, &errors(&with)?, gate, &scorer.blocks) {
-            sel.refused.pop();
-            sel.refused.push(not_physical(j, n, kj, kn, c, true));
+            // The refusal just recorded (the sets above leave the refused coupling out) names the pair.
+            if let Some(last) = sel.refused.last_mut() {
+                *last = not_physical(j, n, kj, kn, c, true);
+            }
             bounded = with;
         }
     }
