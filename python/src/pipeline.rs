@@ -598,12 +598,15 @@ impl PyCompensation {
     }
 }
 
-/// Targets from a CSV file (`,X,Y,Z[,RX,RY,RZ][,time_min][,temp_*]`) or an `(N, 6)` array of x, y, z
-/// (mm) and the paper's X-Y-Z Euler angles (degrees).
-fn targets_of(value: &Bound<'_, PyAny>) -> PyResult<Vec<Target>> {
+/// Targets from a CSV file (`,X,Y,Z[,RX,RY,RZ][,time_min][,temp_*]`, and a column named as one of
+/// `model`'s sensors its reading: an accelerometer's `NAME_x`) or an `(N, 6)` array of x, y, z (mm) and
+/// the paper's X-Y-Z Euler angles (degrees).
+fn targets_of(value: &Bound<'_, PyAny>, model: &thermokin_deform::RobotModel) -> PyResult<Vec<Target>> {
     if let Ok(path) = value.extract::<PathBuf>() {
         must_exist(&path)?;
-        return thermokin_io::read_targets(&path).map_err(io);
+        let (_, sensors) = model.needs();
+        let read = thermokin_io::read_target_rows_for(&path, &sensors).map_err(io)?;
+        return read.rows.into_iter().collect::<Result<_, _>>().map_err(io);
     }
     let array: PyArrayLikeDyn<'_, f64, AllowTypeChange> = value.extract()?;
     let rows = Rows::read(&array, 6, "targets")?;
@@ -652,7 +655,7 @@ pub fn compensate(
     let step_min = step_min.unwrap_or(thermokin_compensate::Cycle::PAPER.step_min);
     let chain = robot.chain();
     let dof = chain.dof();
-    let program = targets_of(targets)?;
+    let program = targets_of(targets, &robot.model)?;
     let table = match &deformation {
         Some(p) => {
             must_exist(p)?;

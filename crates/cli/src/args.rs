@@ -181,7 +181,8 @@ pub struct RobotArgs {
     pub time: Option<f64>,
     /// Sensor readings, °C, for a robot file whose rows drift per kelvin: `temp_j2=35.1,temp_j3=30.2`
     /// (the names of the measurement files' temp_ columns; the prefix may be left out). A targets file's
-    /// `temp_*` columns override them per target.
+    /// `temp_*` columns, and its columns named as the robot's sensors (an accelerometer's `NAME_x`,
+    /// `NAME_y`, `NAME_z`), override them per target.
     #[arg(long, value_name = "NAME=C,...")]
     pub temperature: Option<String>,
     /// The direction each joint last moved in before the pose, for a robot file with a backlash

@@ -110,7 +110,7 @@ fn ik_rows(
     params: &Params,
     json: bool,
 ) -> Result<u8, Failure> {
-    let read = crate::input::target_rows(path, units)?;
+    let read = crate::input::target_rows(path, units, model)?;
     let dof = model.robot().chain().dof();
     let rows = thermokin_compensate::solve_rows(model, read.rows, flags, seed, params);
     crate::out::rows(&rows, json, &SolutionRow::csv_header(dof), |r| r.csv(dof))?;

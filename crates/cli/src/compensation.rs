@@ -52,7 +52,7 @@ pub fn compensate(a: CompensateArgs) -> Result<u8, Failure> {
             ))),
         };
     }
-    let prog = program(&a.targets, a.position_units)?;
+    let prog = program(&a.targets, a.position_units, &loaded.model)?;
     let run = match plan.cycle() {
         Some(cycle) => with_cycle_bar(cycle, |progress| plan.run(&request, &prog, &settings, progress))?,
         None => plan.run(&request, &prog, &settings, |_, _| {}),

@@ -120,18 +120,28 @@ pub fn warn_ignored(path: &Path, columns: &[String]) {
     }
 }
 
-/// Reads a targets file row by row, its positions in `units` ([`thermokin_io::TargetRows::settle_units`]);
-/// the columns nothing reads are said.
-pub fn target_rows(path: &Path, units: Option<PositionUnits>) -> Result<thermokin_io::TargetRows, Failure> {
-    let read = thermokin_io::read_target_rows(path).map_err(Failure::input)?.settle_units(path, units);
+/// Reads a targets file row by row, its positions in `units` ([`thermokin_io::TargetRows::settle_units`]),
+/// a column named as a sensor of `model` its reading ([`thermokin_io::read_target_rows_for`]); the columns
+/// nothing reads are said.
+pub fn target_rows(
+    path: &Path,
+    units: Option<PositionUnits>,
+    model: &thermokin_deform::RobotModel,
+) -> Result<thermokin_io::TargetRows, Failure> {
+    let (_, sensors) = model.needs();
+    let read = thermokin_io::read_target_rows_for(path, &sensors).map_err(Failure::input)?.settle_units(path, units);
     let read = read.map_err(units_error)?;
     warn_ignored(path, &read.ignored_columns);
     Ok(read)
 }
 
-/// Reads a targets file into a program ([`target_rows`]).
-pub fn program(path: &Path, units: Option<PositionUnits>) -> Result<Vec<Target>, Failure> {
-    target_rows(path, units)?.rows.into_iter().collect::<Result<_, _>>().map_err(Failure::input)
+/// Reads a targets file into a program for `model` ([`target_rows`]).
+pub fn program(
+    path: &Path,
+    units: Option<PositionUnits>,
+    model: &thermokin_deform::RobotModel,
+) -> Result<Vec<Target>, Failure> {
+    target_rows(path, units, model)?.rows.into_iter().collect::<Result<_, _>>().map_err(Failure::input)
 }
 
 /// A file's unit the numbers contradict, in the command line's words: the flag to state it.

@@ -39,8 +39,8 @@ pub use robot::{
     ur_kinematics_in_state, urdf_in_state,
 };
 pub use targets::{
-    DEFAULT_ORIENTATION_DEG, TargetReader, TargetRows, parse_target_rows, parse_targets, read_target_rows,
-    read_targets, sensor_name,
+    DEFAULT_ORIENTATION_DEG, TargetReader, TargetRows, parse_target_rows, parse_target_rows_for, parse_targets,
+    read_target_rows, read_target_rows_for, read_targets, sensor_name,
 };
 pub use units::Orientation;
 pub use write::{remove_temporaries, write_atomic, write_atomic_with};

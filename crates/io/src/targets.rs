@@ -7,8 +7,10 @@
 //! Without orientation columns every target gets X-Y-Z Euler (0, 90, 0), the orientation of Table 12.
 //!
 //! Optional state columns say when each target is reached: `time_min` (operating time of a warm-up,
-//! minutes) and `temp_<name>` (a sensor's reading, °C, named as in measurement files: `temp_j2`). A robot
-//! with thermal drift is solved as it is at that moment ([`Target::state`]).
+//! minutes) and `temp_<name>` (a sensor's reading, °C, named as in measurement files: `temp_j2`); read
+//! for a robot ([`read_target_rows_for`]), also every column named as one of its sensors (an
+//! accelerometer's `acc_top_x`, a branch's joint). A robot with thermal drift or a sensor row is solved as
+//! it is at that moment ([`Target::state`]).
 
 use std::io::BufRead;
 use std::path::{Path, PathBuf};
@@ -67,17 +69,31 @@ impl TargetRows {
 
 /// Reads a targets CSV row by row ([`TargetRows`]): a bad header is an error, a bad row that row's.
 pub fn read_target_rows(path: &Path) -> Result<TargetRows, IoError> {
+    read_target_rows_for(path, &[])
+}
+
+/// [`read_target_rows`] for a robot that reads the sensors `sensors` (the names its model carries, as
+/// the measurement files named them: `acc_top_x`, a branch's joint `b1`): a column of that name (any
+/// case) is that sensor's reading at the target, as a `temp_` column is — so that a program gives a
+/// reading under the name the diagnosis read it by, the name an error about a missing reading quotes.
+pub fn read_target_rows_for(path: &Path, sensors: &[String]) -> Result<TargetRows, IoError> {
     let text = read_text(path)?;
-    parse_target_rows(path, &text)
+    parse_target_rows_for(path, &text, sensors)
 }
 
 /// Parses a targets CSV's text row by row.
 pub fn parse_target_rows(path: &Path, text: &str) -> Result<TargetRows, IoError> {
+    parse_target_rows_for(path, text, &[])
+}
+
+/// Parses a targets CSV's text row by row, the columns named as `sensors` read as their readings
+/// ([`read_target_rows_for`]).
+pub fn parse_target_rows_for(path: &Path, text: &str, sensors: &[String]) -> Result<TargetRows, IoError> {
     let recs = records(path, text)?;
     let Some((header, rows)) = recs.split_first() else {
         return Err(IoError::input(path, Some(1), "header", "empty file: expected the header ,X,Y,Z"));
     };
-    let layout = Layout::of(path, header)?;
+    let layout = Layout::of(path, header, sensors)?;
     let out: Vec<Result<Target, IoError>> = rows.iter().enumerate().map(|(i, r)| layout.target(path, r, i)).collect();
     if out.is_empty() {
         return Err(IoError::input(path, Some(header.line + 1), "rows", "no targets after the header"));
@@ -115,7 +131,7 @@ impl<R: BufRead> TargetReader<R> {
                 break r;
             }
         };
-        let layout = Layout::of(path, &header)?;
+        let layout = Layout::of(path, &header, &[])?;
         Ok(Self { path: path.to_path_buf(), lines, line, layout, count: 0 })
     }
 
@@ -157,14 +173,15 @@ struct Layout {
     label: Option<usize>,
     /// `time_min`: the operating time at the target.
     time: Option<usize>,
-    /// `temp_<name>` columns: sensor readings at the target, °C (named with the prefix, `temp_j2`).
+    /// `temp_<name>` columns: sensor readings at the target, °C (named with the prefix, `temp_j2`); and
+    /// the columns named as a sensor the robot reads, by the robot's name for it.
     temps: Vec<(usize, String)>,
     /// Columns nothing reads: besides the label, only when an orientation is given (else refused).
     ignored: Vec<String>,
 }
 
 impl Layout {
-    fn of(path: &Path, header: &Record) -> Result<Self, IoError> {
+    fn of(path: &Path, header: &Record, sensors: &[String]) -> Result<Self, IoError> {
         let find = |name: &str| column(header, name);
         let mut position = [0; 3];
         for (slot, n) in position.iter_mut().zip(["X", "Y", "Z"]) {
@@ -202,12 +219,15 @@ impl Layout {
         }
         let orientation_cols: &[usize] = orientation.as_ref().map_or(&[], |(_, _, c)| c.as_slice());
         let time = find("time_min");
+        let robots = |c: &str| sensors.iter().find(|s| s.eq_ignore_ascii_case(c.trim())).cloned();
         let temps: Vec<(usize, String)> = header
             .cells
             .iter()
             .enumerate()
-            .filter(|(_, c)| sensor_suffix(c).is_some())
-            .map(|(i, c)| (i, sensor_name(c)))
+            .filter_map(|(i, c)| match sensor_suffix(c) {
+                Some(_) => Some((i, sensor_name(c))),
+                None => robots(c).map(|name| (i, name)),
+            })
             .collect();
         let state_col = |i: &usize| time == Some(*i) || temps.iter().any(|(c, _)| c == i);
         let unread: Vec<usize> = (0..header.cells.len())

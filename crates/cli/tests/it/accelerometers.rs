@@ -77,6 +77,74 @@ fn a_lifts_accelerometers_from_diagnose_to_fk() {
     let gap = (Vector3::new(p[0], p[1], p[2]) - other.measurements[0].position_mm).norm();
     // Where the other session measured it, to its noise (5 µm per axis: four σ of the 3-D distance).
     assert!(gap < 0.035, "{gap} mm");
+    // ik and compensate take the same readings: the pose fk gave, solved on the exported robot at them
+    // (ik with --temperature; compensate from a targets file's columns named as the measurements name
+    // them), lands there by fk at the same readings.
+    let euler = stdout(&o).lines().find(|l| l.starts_with("xyz_euler_deg")).unwrap().to_string();
+    let a: Vec<f64> = euler.split_whitespace().skip(1).take(3).map(|v| v.parse().unwrap()).collect();
+    let reached = |solved: &str| -> f64 {
+        let o = thermokin(&[
+            "fk",
+            "--robot",
+            out.to_str().unwrap(),
+            "--joints",
+            solved,
+            "--temperature",
+            &temperatures.join(","),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let line = stdout(&o).lines().find(|l| l.starts_with("position_mm")).unwrap().to_string();
+        let r: Vec<f64> = line.split_whitespace().skip(1).map(|v| v.parse().unwrap()).collect();
+        (Vector3::new(r[0], r[1], r[2]) - Vector3::new(p[0], p[1], p[2])).norm()
+    };
+    let pose = format!("{},{},{},{},{},{}", p[0], p[1], p[2], a[0], a[1], a[2]);
+    let o = thermokin(&[
+        "ik",
+        "--robot",
+        out.to_str().unwrap(),
+        "--pose",
+        &pose,
+        "--seed",
+        &joints.join(","),
+        "--temperature",
+        &temperatures.join(","),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let solved = stdout(&o)
+        .lines()
+        .find(|l| l.starts_with("joints_deg"))
+        .unwrap()
+        .split_whitespace()
+        .nth(1)
+        .unwrap()
+        .to_string();
+    // fk prints six decimals of a millimetre: the solution reproduces the pose to that.
+    assert!(reached(&solved) < 1e-4, "ik: {} mm", reached(&solved));
+    let targets = tmp("rocking-targets.csv");
+    let names: Vec<&str> = other.sensor_names.iter().map(String::as_str).collect();
+    let values: Vec<String> = readings.iter().map(|v| format!("{v}")).collect();
+    let text = format!(",X,Y,Z,RX,RY,RZ,{}\nP1,{pose},{}\n", names.join(","), values.join(","));
+    std::fs::write(&targets, text).unwrap();
+    let solved_csv = tmp("rocking-solved.csv");
+    let o = thermokin(&[
+        "compensate",
+        "--robot",
+        out.to_str().unwrap(),
+        "--targets",
+        targets.to_str().unwrap(),
+        "--seed",
+        &joints.join(","),
+        "--format",
+        "joints",
+        "--out",
+        solved_csv.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let written = std::fs::read_to_string(&solved_csv).unwrap();
+    let row = written.lines().find(|l| l.contains("P1")).unwrap().to_string();
+    let cells: Vec<&str> = row.split(',').collect();
+    let solved = cells[2..2 + joints.len()].join(",");
+    assert!(reached(&solved) < 1e-4, "compensate: {} mm ({row})", reached(&solved));
     // Without the readings, fk names what it needs.
     let o = thermokin(&["fk", "--robot", out.to_str().unwrap(), "--joints", &joints.join(",")]);
     assert!(!o.status.success() && stderr(&o).contains("acc_"), "{}", stderr(&o));

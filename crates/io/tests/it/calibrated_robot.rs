@@ -271,6 +271,18 @@ fn a_sensor_row_takes_its_reading_as_exported_and_as_the_command_line_gives_it()
     assert!((at("acc_col_x", 1.1) - at("acc_col_x", 0.1)).norm() > 1.0);
     let e = model.check_state(&reading("temp_other", 1.0), false, false).unwrap_err().to_string();
     assert!(e.contains("temp_other") && e.contains("acc_col_x"), "{e}");
+    // A targets file gives the reading under the measurements' name too, read for this robot (any case);
+    // without the robot's sensors that column is one nothing reads.
+    let (_, sensors) = model.needs();
+    let text = ",X,Y,Z,RX,RY,RZ,ACC_col_x\nP1,400,0,600,0,90,0,1.1\n";
+    let read = thermokin_io::parse_target_rows_for("t.csv".as_ref(), text, &sensors).unwrap();
+    let target = read.rows[0].as_ref().unwrap();
+    assert_eq!(target.state.temperatures_c, vec![("acc_col_x".to_string(), 1.1)]);
+    assert!(read.ignored_columns.is_empty(), "{:?}", read.ignored_columns);
+    model.check_state(&target.state, false, false).unwrap();
+    let plain = thermokin_io::parse_target_rows("t.csv".as_ref(), text).unwrap();
+    assert!(plain.rows[0].as_ref().unwrap().state.temperatures_c.is_empty());
+    assert_eq!(plain.ignored_columns, vec!["ACC_col_x".to_string()]);
 }
 
 /// A branch whose joints carry masses (a second arm on the IRB 140's upper arm) and its load on joint 2:
