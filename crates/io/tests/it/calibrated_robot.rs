@@ -310,6 +310,11 @@ fn a_branch_with_masses_and_its_load_are_written_and_read_back() {
     let at = |m: &RobotModel, b1, b2| m.tool_pose(&q, &state(b1, b2)).unwrap().translation.vector;
     assert!((at(&model, 30.0, -20.0) - at(&back, 30.0, -20.0)).norm() < 1e-9);
     assert!((at(&model, 30.0, -20.0) - at(&model, -60.0, 40.0)).norm() > 0.05);
+    // A program gives the branch's joints per target in columns named as the joints, as measurements do.
+    let (_, sensors) = model.needs();
+    let program = ",X,Y,Z,RX,RY,RZ,b1,b2\nP1,400,0,600,0,90,0,30,-20\n";
+    let read = thermokin_io::parse_target_rows_for("t.csv".as_ref(), program, &sensors).unwrap();
+    assert_eq!(read.rows[0].as_ref().unwrap().state, state(30.0, -20.0));
     let bad = format!("{text}{}", branch.replace("mass_kg = 3", "mass_kg = -3"));
     let e = parse_robot_model_toml("bad.toml".as_ref(), &bad).unwrap_err().to_string();
     assert!(e.starts_with("bad.toml:") && e.contains("branch[1].joint[2].mass_kg: must be a finite mass"), "{e}");
