@@ -284,6 +284,28 @@ def test_the_warm_up_loop_from_measurements(irb140, tmp_path):
     np.testing.assert_allclose(reached[:, :3, 3], targets[:, :3], rtol=0, atol=1e-6)
 
 
+def test_a_programs_sensor_columns_are_read_by_the_robots_names(root, tmp_path):
+    # A robot whose joint-2 row turns with a sensor that is no temperature (an accelerometer's column, as
+    # the diagnosis exports it): a targets file gives its reading under that name, and the compensated
+    # joints put the robot at that reading on the target; without the column the reading is asked for.
+    text = (root / "configs" / "irb140.toml").read_text()
+    text += '\n[[drift]]\nrow = 2\nerror = [0, 0, 0, 0, 0.5, 0]\nper_kelvin = { sensors = ["acc_col_x"], reference_c = [0.1] }\n'
+    path = tmp_path / "sensor.toml"
+    path.write_text(text)
+    robot = thermokin.Robot.from_file(path)
+    targets = tmp_path / "program.csv"
+    targets.write_text(",X,Y,Z,RX,RY,RZ,acc_col_x\nP1,600,0,400,0,90,0,1.1\nP2,500,200,500,0,90,0,0.4\n")
+    run = thermokin.compensate(robot, targets, seed=SEED)
+    assert run.status == ["Converged", "Converged"]
+    for q, reading, goal in zip(run.joints, [1.1, 0.4], [[600, 0, 400], [500, 200, 500]]):
+        reached = robot.fk(q, temps={"acc_col_x": reading})
+        np.testing.assert_allclose(reached[:3, 3], goal, rtol=0, atol=1e-6)
+    targets.write_text(",X,Y,Z,RX,RY,RZ\nP1,600,0,400,0,90,0\n")
+    with pytest.raises(ThermokinError) as e:
+        thermokin.compensate(robot, targets, seed=SEED)
+    assert "acc_col_x" in str(e.value), str(e.value)
+
+
 def test_dataframes_when_pandas_is_installed(irb140, root):
     pd = pytest.importorskip("pandas")
     scene = thermokin.Robot.from_file(root / "configs" / "irb140-scene.toml")
