@@ -265,7 +265,9 @@ pub struct IkArgs {
 pub struct CompensateArgs {
     #[command(flatten)]
     pub robot: RobotArgs,
-    /// Program of targets: CSV `,X,Y,Z` (mm) with optional `RX,RY,RZ` (degrees; default 0,90,0).
+    /// Program of targets: CSV `,X,Y,Z` (mm) with optional `RX,RY,RZ` (degrees; default 0,90,0), and for
+    /// a calibrated robot each target's state: `time_min`, `temp_*` and the robot's other sensors by the
+    /// names its measurements gave them (an accelerometer's `NAME_x`, `NAME_y`, `NAME_z`).
     #[arg(long, value_name = "FILE")]
     pub targets: PathBuf,
     /// Unit of the targets' positions (default: millimetres, refused when ten or more targets all lie
