@@ -126,6 +126,11 @@ fn package() -> Result<()> {
     }
     let mut cmd = cargo();
     cmd.args(["package", "--workspace", "--locked", "--target-dir"]).arg(verify);
+    // The verification compiles every package and its dependencies from scratch (its own target
+    // directory, the default dev profile) to learn whether the packaged sources build, which debug
+    // information does not decide: without it the step took 220 s instead of 254 on 2 cores (AMD EPYC,
+    // 2026-11-30), a tenth of CI's half hour.
+    cmd.env("CARGO_PROFILE_DEV_DEBUG", "0").env("CARGO_INCREMENTAL", "0");
     for name in unpublished()? {
         cmd.args(["--exclude", &name]);
     }
