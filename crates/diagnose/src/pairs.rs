@@ -66,7 +66,7 @@ pub(crate) fn physical_pairs(
         // The free coupling is refused either way; the pair goes on the boundary where it passes the
         // selection's gate against the model without it, as any effect joins (a single joint's sag is on
         // the boundary too, `w = (√k, 0)`: there the second element is a parameter the poses do not ask for).
-        sel.refused.push(not_physical(j, n, kj, kn, c, false));
+        sel.refused.push(not_physical(j, n, kj, kn, c, None));
         let mut with = bounded.clone();
         with.push((j, n));
         let errors = |b: &[(JointIndex, JointIndex)]| -> Result<Vec<f64>, DiagnoseError> {
@@ -76,7 +76,7 @@ pub(crate) fn physical_pairs(
         if significantly_better(&errors(&bounded)?, &errors(&with)?, gate, &scorer.blocks) {
             // The refusal just recorded (the sets above leave the refused coupling out) names the pair.
             if let Some(last) = sel.refused.last_mut() {
-                *last = not_physical(j, n, kj, kn, c, true);
+                *last = not_physical(j, n, kj, kn, c, Some(Effect::CompliancePair(j)));
             }
             bounded = with;
         }
@@ -121,14 +121,12 @@ fn refused(sel: &Selection, e: Effect) -> bool {
     matches!(e, Effect::ComplianceCoupling(_)) && sel.refused.iter().any(|r| r.effect == e.label())
 }
 
-/// The refusal of a coupling whose pair's compliance matrix is not positive semidefinite.
-fn not_physical(j: JointIndex, n: JointIndex, kj: f64, kn: f64, c: f64, boundary: bool) -> Refusal {
+/// The refusal of a coupling whose pair's compliance matrix is not positive semidefinite, naming the
+/// pair fitted on the cone's boundary `instead` where there is one.
+fn not_physical(j: JointIndex, n: JointIndex, kj: f64, kn: f64, c: f64, instead: Option<Effect>) -> Refusal {
     let deg = |x: f64| format!("{:.3e}", units::degrees(x));
-    let instead = if boundary {
-        format!(" — the pair is fitted on the boundary instead, {}", Effect::CompliancePair(j).label())
-    } else {
-        String::new()
-    };
+    let instead =
+        instead.map_or(String::new(), |e| format!(" — the pair is fitted on the boundary instead, {}", e.label()));
     Refusal {
         effect: Effect::ComplianceCoupling(j).label(),
         reason: format!(
